@@ -1,0 +1,66 @@
+"""Packing lattice indices into sortable int64 keys, and back.
+
+3D: 21 bits per axis (indices in [-2**20, 2**20), about +-1 million cells per axis);
+2D: 31 bits per axis. Keys sort lexicographically by (i, j, k), so a sorted key array is
+also a sorted index list. Works inside numba kernels (``pack3``/``unpack3`` are jitted).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from planner.errors import MapError
+
+BITS = {2: 31, 3: 21}
+__all__ = ["BITS", "index_limit", "pack", "unpack", "pack3", "unpack3"]
+
+
+def index_limit(dim: int) -> int:
+    """Indices must lie in ``[-limit, limit)`` on every axis to be packable."""
+    return 1 << (BITS[dim] - 1)
+
+
+def pack(indices: np.ndarray) -> np.ndarray:
+    """Pack (N, d) int64 indices into (N,) int64 keys; raises MapError when out of range."""
+    w = np.asarray(indices, dtype=np.int64)
+    if w.ndim != 2 or w.shape[1] not in BITS:
+        raise MapError(f"indices must have shape (N, 2) or (N, 3), got {w.shape}")
+    d = w.shape[1]
+    bits, lim = BITS[d], index_limit(d)
+    if len(w) and (w.min() < -lim or w.max() >= lim):
+        raise MapError(
+            f"lattice indices exceed +-{lim} cells per axis; use a larger cell volume"
+        )
+    key = np.zeros(len(w), dtype=np.int64)
+    for j in range(d):
+        key = (key << bits) | (w[:, j] + lim)
+    return key
+
+
+def unpack(keys: np.ndarray, dim: int) -> np.ndarray:
+    """Inverse of :func:`pack`: (N,) int64 keys -> (N, dim) int64 indices."""
+    k = np.asarray(keys, dtype=np.int64)
+    bits, lim = BITS[dim], index_limit(dim)
+    mask = (1 << bits) - 1
+    out = np.empty((len(k), dim), dtype=np.int64)
+    for j in range(dim - 1, -1, -1):
+        out[:, j] = (k & mask) - lim
+        k = k >> bits
+    return out
+
+
+_B3 = 21
+_L3 = 1 << 20
+_M3 = (1 << 21) - 1
+
+
+@njit(cache=True, inline="always")
+def pack3(i, j, k):  # pragma: no cover - compiled
+    """Key of one 3D index (no range check: callers stay inside the map's bounds)."""
+    return (((i + _L3) << 42) | ((j + _L3) << 21)) | (k + _L3)
+
+
+@njit(cache=True, inline="always")
+def unpack3(key):  # pragma: no cover - compiled
+    return ((key >> 42) & _M3) - _L3, ((key >> 21) & _M3) - _L3, (key & _M3) - _L3
