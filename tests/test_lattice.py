@@ -1,0 +1,248 @@
+"""Lattices: exact quantization, adjacency derived from geometry, radii, bad input."""
+
+import itertools
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from planner import Lattice, LatticeError
+from planner.lattice import NAMED_LATTICES, PAPER_DELTAS
+
+NAMES = list(NAMED_LATTICES)
+
+
+def brute_force_nearest(lattice: Lattice, x: np.ndarray) -> np.ndarray:
+    """Nearest lattice point by exhaustive search over a box that provably contains it.
+
+    Rounding in the given basis errs by at most half the longest diagonal of its
+    parallelepiped, so the nearest point lies within twice that of the rounded one.
+    """
+    g = lattice.generator
+    d = lattice.dim
+    signs = np.array(list(itertools.product((-1.0, 1.0), repeat=d)))
+    reach = np.linalg.norm(signs @ g.T, axis=1).max()
+    k = np.ceil(reach * np.linalg.norm(np.linalg.inv(g), axis=1)).astype(int)
+    box = np.stack(
+        np.meshgrid(*[np.arange(-b, b + 1) for b in k], indexing="ij"), axis=-1
+    ).reshape(-1, d)
+    w0 = np.rint(x @ np.linalg.inv(g).T).astype(np.int64)
+    best = np.full(len(x), np.inf)
+    out = w0.copy()
+    for off in box:
+        w = w0 + off
+        dist = np.sum((w @ g.T - x) ** 2, axis=1)
+        better = dist < best
+        best[better] = dist[better]
+        out[better] = w[better]
+    return out
+
+
+def assert_nearest(lattice: Lattice, x: np.ndarray, w: np.ndarray) -> None:
+    """w is a nearest lattice point of x (ties on cell boundaries accepted)."""
+    ref = brute_force_nearest(lattice, x)
+    g = lattice.generator
+    d_got = np.linalg.norm(w @ g.T - x, axis=1)
+    d_ref = np.linalg.norm(ref @ g.T - x, axis=1)
+    scale = lattice.cell_volume ** (1 / lattice.dim)
+    assert np.all(d_got <= d_ref + 1e-9 * scale)
+    # Away from ties the answer is the unique nearest point.
+    assert np.mean(np.all(w == ref, axis=1)) > 0.999
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_named_lattices_have_the_requested_cell_volume(name):
+    for v in (1.0, 0.125, 1e-3, 7.5):
+        lat = Lattice.named(name, cell_volume=v)
+        assert lat.cell_volume == pytest.approx(v, rel=1e-12)
+        assert lat.dim == 3
+        assert lat.name == name
+
+
+def test_generators_match_the_paper_to_printed_precision():
+    paper = {
+        "bcc": [[1.2599, 0, 0.6300], [0, 1.2599, 0.6300], [0, 0, 0.6300]],
+        "fcc": [[1.5874, 0.7937, 0], [0, -0.7937, 0.7937], [0, 0, -0.7937]],
+        "mcc": [[1.0987, -0.4551, -0.1885], [0, 1, -0.5858], [0, 0, 0.9102]],
+        "hex": [[1.1776, -0.5888, 0], [0, 1.0198, 0], [0, 0, 0.8327]],
+    }
+    for name, g in paper.items():
+        assert np.allclose(Lattice.named(name).generator, g, atol=1e-4)
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    name=st.sampled_from(NAMES),
+    log_volume=st.floats(-9, 6),
+    far=st.booleans(),
+    seed=st.integers(0, 2**31),
+)
+def test_quantize_is_exact_for_every_lattice_and_scale(name, log_volume, far, seed):
+    lat = Lattice.named(name, cell_volume=10.0**log_volume)
+    size = lat.cell_volume ** (1 / 3)
+    rng = np.random.default_rng(seed)
+    centre = rng.uniform(-1, 1, 3) * (1e4 * size if far else 0.0)
+    x = centre + rng.uniform(-5, 5, (2000, 3)) * size
+    assert_nearest(lat, x, lat.quantize(x))
+    assert_nearest(lat, x, lat.quantize_generic(x))
+
+
+@settings(max_examples=40, deadline=None)
+@given(dim=st.sampled_from([2, 3]), seed=st.integers(0, 2**31))
+def test_quantize_is_exact_for_user_generators(dim, seed):
+    rng = np.random.default_rng(seed)
+    g = rng.normal(size=(dim, dim))
+    if np.linalg.cond(g) > 30:  # keep the brute-force box small; exactness is not the issue
+        g = g + 3 * np.eye(dim)
+    lat = Lattice(g)
+    x = rng.uniform(-20, 20, (3000, dim))
+    assert_nearest(lat, x, lat.quantize(x))
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_cell_centres_quantize_to_themselves(name):
+    lat = Lattice.named(name, cell_volume=0.01)
+    w = np.random.default_rng(1).integers(-10**5, 10**5, (10000, 3))
+    assert np.array_equal(lat.quantize(lat.to_world(w)), w)
+
+
+@pytest.mark.parametrize(
+    ("name", "face", "full"),
+    [("cubic", 6, 26), ("bcc", 14, 14), ("fcc", 12, 18), ("mcc", 14, 14), ("hex", 8, 20)],
+)
+def test_neighbour_counts_match_the_known_polyhedra(name, face, full):
+    lat = Lattice.named(name)
+    assert lat.neighbors("face").shape == (face, 3)
+    assert lat.neighbors("full").shape == (full, 3)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_neighbours_are_symmetric_and_face_is_a_subset_of_full(name):
+    lat = Lattice.named(name)
+    face = {tuple(v) for v in lat.neighbors("face")}
+    full = {tuple(v) for v in lat.neighbors("full")}
+    assert face <= full
+    for s in (face, full):
+        assert {tuple(-np.array(v)) for v in s} == s
+
+
+def test_fcc_face_neighbours_are_twelve_equidistant():
+    lat = Lattice.named("fcc")
+    dist = np.linalg.norm(lat.to_world(lat.neighbors("face")), axis=1)
+    assert np.ptp(dist) < 1e-12
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_neighbours_touch_in_the_way_their_kind_says(name):
+    """Full neighbours' cells touch (v/2 on the cell boundary); face neighbours share a
+    facet: points just around v/2 in the bisecting plane quantize to 0 or v only."""
+    lat = Lattice.named(name)
+    g = lat.generator
+    for v in lat.neighbors("full"):
+        mid = (g @ v) / 2
+        w = lat.quantize(np.stack([mid * (1 - 1e-9), mid * (1 + 1e-9)]))
+        assert np.array_equal(w[0], [0, 0, 0])
+        assert np.array_equal(w[1], v)
+    for v in lat.neighbors("face"):
+        mid = (g @ v) / 2
+        n = g @ v / np.linalg.norm(g @ v)
+        t = np.linalg.svd(n[None, :])[2][1:]  # two directions in the bisecting plane
+        ring = mid + 1e-3 * lat.packing_radius * np.array(
+            [np.cos(a) * t[0] + np.sin(a) * t[1] for a in np.linspace(0, 2 * np.pi, 12)]
+        )
+        inside = lat.quantize(ring - 1e-6 * n)
+        assert np.all(inside == 0)
+
+
+def test_2d_square_and_hexagonal_lattices():
+    square = Lattice(np.eye(2))
+    assert len(square.neighbors("face")) == 4
+    assert len(square.neighbors("full")) == 8
+    hexa = Lattice([[1.0, 0.5], [0.0, np.sqrt(3) / 2]], name="hex2d")
+    assert len(hexa.neighbors("face")) == 6
+    assert len(hexa.neighbors("full")) == 6
+    assert hexa.covering_radius == pytest.approx(1 / np.sqrt(3))
+    assert square.normalized_second_moment == pytest.approx(1 / 12)
+    assert hexa.normalized_second_moment == pytest.approx(5 / (36 * np.sqrt(3)))
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_covering_and_packing_radius_bound_the_cell(name):
+    lat = Lattice.named(name, cell_volume=0.3)
+    x = np.random.default_rng(2).uniform(-3, 3, (200000, 3))
+    err = np.linalg.norm(lat.to_world(lat.quantize(x)) - x, axis=1)
+    assert err.max() <= lat.covering_radius + 1e-12
+    assert err.max() > 0.95 * lat.covering_radius
+    verts = lat.voronoi_vertices
+    assert np.allclose(np.linalg.norm(verts, axis=1).max(), lat.covering_radius)
+    nearest = np.linalg.norm(lat.to_world(lat.neighbors("face")), axis=1).min()
+    assert lat.packing_radius == pytest.approx(nearest / 2)
+
+
+def test_exact_second_moments_match_known_values():
+    known = {"cubic": 1 / 12, "bcc": 0.0785433, "fcc": 0.0787451, "mcc": 0.0786696}
+    for name, value in known.items():
+        assert Lattice.named(name).normalized_second_moment == pytest.approx(value, abs=2e-7)
+
+
+def test_the_papers_off_by_one_sets_miss_offsets_for_fcc_and_hex():
+    """Eq. (2) with the paper's Delta sets is exact only where they contain every needed
+    offset; FCC and hex lack +-(1,0,0), and a point exists where eq. (2) is then wrong."""
+    for name in NAMES:
+        lat = Lattice.named(name)
+        needed = {tuple(v) for v in lat.rounding_offsets("given")}
+        paper = {tuple(v) for v in PAPER_DELTAS[name]} | {(0, 0, 0)}
+        missing = needed - paper
+        if name in ("fcc", "hex"):
+            assert missing == {(1, 0, 0), (-1, 0, 0)}
+        else:
+            assert not missing
+    fcc = Lattice.named("fcc")
+    x = np.random.default_rng(3).uniform(-5, 5, (200000, 3))
+    g = fcc.generator
+    w0 = np.rint(x @ np.linalg.inv(g).T).astype(np.int64)
+    cand = np.concatenate([np.zeros((1, 3), np.int64), PAPER_DELTAS["fcc"]])
+    dist = np.stack([np.linalg.norm((w0 + c) @ g.T - x, axis=1) for c in cand])
+    paper_w = w0 + cand[np.argmin(dist, axis=0)]
+    wrong = np.any(paper_w != fcc.quantize(x), axis=1)
+    assert wrong.any()
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (([[1, 0], [0, 1], [0, 0]],), "square"),
+        (([[1, 2], [2, 4]],), "singular"),
+        (([[1, np.nan], [0, 1]],), "NaN"),
+        ((np.eye(4),), "2D and 3D"),
+        (("abc",), "numeric"),
+    ],
+)
+def test_bad_generators_raise_lattice_error(args, message):
+    with pytest.raises(LatticeError, match=message):
+        Lattice(*args)
+
+
+def test_bad_names_volumes_and_points_raise_lattice_error():
+    with pytest.raises(LatticeError, match="unknown lattice"):
+        Lattice.named("diamond")
+    for v in (0, -1, float("nan"), float("inf"), "big"):
+        with pytest.raises(LatticeError, match="cell_volume"):
+            Lattice.named("fcc", cell_volume=v)
+    lat = Lattice.named("bcc")
+    with pytest.raises(LatticeError, match="shape"):
+        lat.quantize(np.zeros((4, 2)))
+    with pytest.raises(LatticeError, match="NaN or infinite"):
+        lat.quantize(np.array([[0, 0, 0], [np.inf, 0, 0]]))
+    with pytest.raises(LatticeError, match="neighbour kind"):
+        lat.neighbors("diagonal")
+    assert issubclass(LatticeError, ValueError)
+
+
+def test_extended_neighbour_shells_add_the_next_ring():
+    cubic = Lattice.named("cubic")
+    assert len(cubic.neighbors("face+1")) == 6 + 12
+    assert len(cubic.neighbors("full+1")) == 26 + 6  # the (2,0,0) ring
+    fcc = Lattice.named("fcc")
+    assert len(fcc.neighbors("face+1")) == 12 + 6
