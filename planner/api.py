@@ -1,0 +1,323 @@
+"""The user-facing pipeline: points -> lattice indices -> voxel list -> world -> search -> path.
+
+``plan`` is the one-call entry point; ``build_world`` is the build-once, query-many step.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from planner.errors import MapError, PlanError
+from planner.lattice import Lattice
+
+__all__ = ["PlanResult", "build_world", "default_cell_volume", "plan", "as_obstacles"]
+
+# Default planning resolution for raw clouds: about this many cells in the bounding box.
+_DEFAULT_CELLS = 2_000_000
+
+
+@dataclass
+class PlanResult:
+    """Outcome of one planning query.
+
+    Attributes
+    ----------
+    found : bool
+    path : ndarray, shape (K, 3)
+        World coordinates (metres), start point first, goal point last; empty if not found.
+    cells : ndarray, shape (K-2, 3), int64
+        Lattice indices of the cells visited between start and goal.
+    length : float
+        Path length in metres (``inf`` when not found).
+    cell_checks, expansions, generated : int
+        Occupancy lookups, node expansions and generated nodes of the search.
+    seconds : float
+        Search wall time (excludes building the world).
+    """
+
+    found: bool
+    path: np.ndarray
+    cells: np.ndarray
+    length: float
+    cell_checks: int
+    expansions: int
+    generated: int
+    seconds: float
+    lattice: str
+    cell_volume: float
+    method: str
+    neighbors: str
+    reason: str = ""
+    peak_bytes: int = 0
+    build_seconds: float = 0.0
+    extra: dict = field(default_factory=dict)
+
+    def to_dict(self) -> dict:
+        """JSON-ready dict (arrays as nested lists, inf as None)."""
+        d = asdict(self)
+        d["path"] = self.path.tolist()
+        d["cells"] = self.cells.tolist()
+        d["length"] = self.length if math.isfinite(self.length) else None
+        return d
+
+    def to_json(self) -> str:
+        return json.dumps(self.to_dict())
+
+
+def as_obstacles(source):
+    """Obstacles from a file path, an (N, 3) point array or an Obstacles instance."""
+    from planner import io
+
+    if isinstance(source, io.Obstacles):
+        return source
+    if isinstance(source, str | Path):
+        return io.load_obstacles(source)
+    pts = np.asarray(source, dtype=float)
+    if pts.ndim != 2 or pts.shape[1] != 3:
+        raise MapError(f"obstacle points must have shape (N, 3), got {pts.shape}")
+    if not len(pts):
+        raise MapError("obstacle point cloud is empty")
+    if not np.isfinite(pts).all():
+        raise MapError("obstacle points contain NaN or infinite coordinates")
+    return io.Obstacles(
+        points=pts, boxes=np.zeros((0, 3)), box_size=0.0, bounds=None, resolution=None,
+        source="<array>",
+    )
+
+
+def _sidecar(source) -> dict:
+    """Bundled maps carry a JSON sidecar with bounds and suggested resolution."""
+    if isinstance(source, str | Path):
+        side = Path(source).with_suffix(".json")
+        if side.is_file():
+            try:
+                return json.loads(side.read_text())
+            except (OSError, ValueError):
+                return {}
+    return {}
+
+
+def _obstacle_bounds(obst) -> np.ndarray:
+    parts = [p for p in (obst.points, obst.boxes) if len(p)]
+    allp = np.concatenate(parts)
+    return np.stack([allp.min(axis=0), allp.max(axis=0)])
+
+
+def default_cell_volume(obst, bounds: np.ndarray | None = None) -> float:
+    """Native resolution cubed where the map has one, else ~2 million cells in its box (m^3)."""
+    if obst.resolution:
+        return float(obst.resolution) ** 3
+    b = _obstacle_bounds(obst) if bounds is None else np.asarray(bounds, dtype=float)
+    vol = float(np.prod(np.maximum(b[1] - b[0], 1e-3)))
+    return vol / _DEFAULT_CELLS
+
+
+def build_world(
+    source,
+    lattice: str | Lattice = "fcc",
+    *,
+    cell_volume: float | None = None,
+    radius: float = 0.0,
+    bounds: np.ndarray | None = None,
+):
+    """Build the planning world once; query it many times with :func:`plan`.
+
+    Parameters
+    ----------
+    source : str, Path, ndarray (N, 3) or Obstacles
+        Map file (any format :func:`planner.io.load_obstacles` reads) or obstacle points (m).
+    lattice : str or Lattice
+        Lattice name (``cubic``, ``bcc``, ``fcc``, ``mcc``, ``hex``) or a Lattice instance
+        (its own scale is then used and ``cell_volume`` must be None).
+    cell_volume : float, optional
+        Cell volume in m^3. Default: the map's native resolution cubed (OctoMap, .3dmap),
+        the bundled map's suggestion, or about two million cells over the map's box.
+    radius : float
+        Robot radius (m): cells a robot centre must not enter are blocked (see
+        :meth:`planner.voxels.OccupiedVoxelList.inflate` for the guarantee).
+    bounds : array_like, shape (2, 3), optional
+        World box [min, max] (m) the robot centre must stay in. Default: the map's own
+        bounds (.3dmap grid box, bundled map sidecar) or the obstacles' bounding box.
+
+    Returns
+    -------
+    World
+    """
+    from planner.voxels import OccupiedVoxelList
+    from planner.world import World
+
+    t0 = time.perf_counter()
+    side = _sidecar(source)
+    obst = as_obstacles(source)
+    if bounds is None:
+        if obst.bounds is not None:
+            bounds = obst.bounds
+        elif "bounds" in side:
+            bounds = side["bounds"]
+        else:
+            bounds = _obstacle_bounds(obst)
+    bounds = np.asarray(bounds, dtype=float)
+    if bounds.shape != (2, 3) or not np.isfinite(bounds).all() or np.any(bounds[1] < bounds[0]):
+        raise MapError(f"bounds must be [[xmin, ymin, zmin], [xmax, ymax, zmax]], got {bounds}")
+    if not math.isfinite(radius) or radius < 0:
+        raise PlanError(f"radius must be a non-negative number of metres, got {radius}")
+    if isinstance(lattice, Lattice):
+        if cell_volume is not None:
+            lat = lattice.scaled(cell_volume)
+        else:
+            lat = lattice
+    else:
+        if cell_volume is None:
+            cell_volume = side.get("cell_volume") or default_cell_volume(obst, bounds)
+        lat = Lattice.named(lattice, cell_volume=cell_volume)
+    occupied = OccupiedVoxelList.from_obstacles(obst, lat)
+    blocked = occupied.inflate(radius) if radius > 0 else occupied
+    world = World(lat, blocked.indices, bounds)
+    world.radius = float(radius)
+    world.source = obst.source
+    world.obstacles = obst
+    world.build_seconds = time.perf_counter() - t0
+    return world
+
+
+def _point(p, what: str) -> np.ndarray:
+    try:
+        a = np.asarray(p, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise PlanError(f"{what} must be three numbers x, y, z, got {p!r}") from None
+    if a.shape != (3,) or not np.isfinite(a).all():
+        raise PlanError(f"{what} must be three finite numbers x, y, z, got {p!r}")
+    return a
+
+
+def plan(
+    map_or_points,
+    start,
+    goal,
+    *,
+    lattice: str | Lattice = "fcc",
+    cell_volume: float | None = None,
+    radius: float = 0.0,
+    method: str = "astar",
+    neighbors: str = "full",
+    corner_cutting: bool = False,
+    bounds: np.ndarray | None = None,
+    backend: str = "numba",
+    shortcut: bool = False,
+    time_limit: float = 1.0,
+    seed: int = 0,
+) -> PlanResult:
+    """Plan a path from ``start`` to ``goal`` (world points, metres).
+
+    Parameters
+    ----------
+    map_or_points : str, Path, ndarray (N, 3), Obstacles or World
+        A map file, obstacle points, or a world from :func:`build_world` (then
+        ``lattice``, ``cell_volume``, ``radius`` and ``bounds`` are taken from it).
+    start, goal : array_like, shape (3,)
+    method : str
+        ``astar``, ``dijkstra``, ``theta``, ``lazy-theta`` on the lattice, or
+        ``ompl:<planner>`` (e.g. ``ompl:rrtconnect``) for the continuous baseline.
+    neighbors : str
+        ``full`` (every touching cell), ``face`` (the paper's Delta adjacency) or
+        ``face+k`` / ``full+k`` (k further shells).
+    shortcut : bool
+        Post-process the lattice path by line-of-sight shortcutting.
+
+    Returns
+    -------
+    PlanResult
+    """
+    from planner import search
+    from planner.world import World
+
+    s, g = _point(start, "start"), _point(goal, "goal")
+    if isinstance(map_or_points, World):
+        world = map_or_points
+    else:
+        world = build_world(
+            map_or_points, lattice, cell_volume=cell_volume, radius=radius, bounds=bounds
+        )
+    lat = world.lattice
+    common = dict(
+        lattice=lat.name or "custom", cell_volume=lat.cell_volume, method=method,
+        neighbors=neighbors, build_seconds=getattr(world, "build_seconds", 0.0),
+    )
+    if method.startswith("ompl:"):
+        return _plan_ompl(world, s, g, method.split(":", 1)[1], time_limit, seed, common)
+    cells = lat.quantize(np.stack([s, g]))
+    _check_endpoint(world, s, cells[0], "start")
+    _check_endpoint(world, g, cells[1], "goal")
+    res = search.search(
+        world, cells[0], cells[1], method=method, neighbors=neighbors,
+        corner_cutting=corner_cutting, backend=backend,
+    )
+    if not res.found:
+        return PlanResult(
+            found=False, path=np.zeros((0, 3)), cells=np.zeros((0, 3), np.int64),
+            length=math.inf, cell_checks=res.cell_checks, expansions=res.expansions,
+            generated=res.generated, seconds=res.seconds, reason=res.reason,
+            peak_bytes=res.peak_bytes, **common,
+        )
+    path_cells = res.cells
+    checks = res.cell_checks
+    seconds = res.seconds
+    if shortcut and method in ("astar", "dijkstra"):
+        t0 = time.perf_counter()
+        before = world.cell_checks
+        path_cells = search.shortcut(world, path_cells)
+        checks += world.cell_checks - before
+        seconds += time.perf_counter() - t0
+    path = np.concatenate([s[None], lat.to_world(path_cells), g[None]])
+    length = float(np.linalg.norm(np.diff(path, axis=0), axis=1).sum())
+    return PlanResult(
+        found=True, path=path, cells=path_cells, length=length, cell_checks=checks,
+        expansions=res.expansions, generated=res.generated, seconds=seconds,
+        peak_bytes=res.peak_bytes, extra={"cost_between_centres": res.cost}, **common,
+    )
+
+
+def _check_endpoint(world, p: np.ndarray, cell: np.ndarray, what: str) -> None:
+    lo, hi = world.bounds
+    if np.any(p < lo - 1e-9) or np.any(p > hi + 1e-9):
+        raise PlanError(
+            f"{what} {_fmt(p)} is outside the map bounds {_fmt(lo)} .. {_fmt(hi)}"
+        )
+    if not world.is_free(cell[None])[0]:
+        near = world.nearest_free(cell)
+        where = "outside the map bounds" if not world.in_bounds(cell[None])[0] else (
+            "inside an obstacle (after inflation for the robot radius)"
+        )
+        hint = f"; nearest free cell centre: {_fmt(world.lattice.to_world(near[None])[0])}" if (
+            near is not None
+        ) else "; no free cell nearby"
+        raise PlanError(f"{what} {_fmt(p)} is {where}{hint}")
+
+
+def _fmt(p: np.ndarray) -> str:
+    return "(" + ", ".join(f"{v:.3f}" for v in np.asarray(p).reshape(-1)) + ")"
+
+
+def _plan_ompl(world, s, g, planner_name, time_limit, seed, common) -> PlanResult:
+    from planner import baseline
+
+    r = baseline.plan_ompl(world, s, g, planner=planner_name, time_limit=time_limit, seed=seed)
+    d = r if isinstance(r, dict) else r.to_dict()
+    found = bool(d["found"])
+    path = np.asarray(d.get("path_simplified") if d.get("path_simplified") is not None
+                      else d.get("path", np.zeros((0, 3))), dtype=float).reshape(-1, 3)
+    length = float(np.linalg.norm(np.diff(path, axis=0), axis=1).sum()) if found else math.inf
+    return PlanResult(
+        found=found, path=path if found else np.zeros((0, 3)),
+        cells=np.zeros((0, 3), np.int64), length=length,
+        cell_checks=int(d.get("cell_checks", 0)), expansions=0, generated=0,
+        seconds=float(d.get("seconds", 0.0)), reason=str(d.get("reason", "") or ""),
+        extra={k: v for k, v in d.items() if k not in ("path", "path_simplified")},
+        **common,
+    )
