@@ -1,0 +1,145 @@
+"""Suite definitions: a small TOML file expanded into world configurations and runs.
+
+Example::
+
+    name = "quick"
+    seed = 1
+    queries = 6                      # per map x cell volume x radius
+    lattices = ["cubic", "bcc", "fcc", "mcc", "hex"]
+    neighbors = ["face", "full"]
+    methods = ["astar", "theta"]     # lattice methods
+    min_distance = 0.3               # start-goal distance, fraction of the box diagonal
+
+    [ompl]                           # optional continuous baseline
+    planners = ["rrtconnect"]
+    time = 0.5                       # seconds per run
+    seeds = [0, 1]
+    lattice = "cubic"                # whose voxel world OMPL checks validity against
+
+    [[maps]]
+    path = "maps/office.ply"         # relative to the suite file's folder, then the repo
+    cell_volumes = [0.008]
+    radii = [0.2]
+    # scenarios = "../shared/data/warframe/Simple.3dmap.3dscen"   # instead of sampling
+"""
+
+from __future__ import annotations
+
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from planner.errors import PlannerError
+from planner.lattice import NAMED_LATTICES
+
+REPO = Path(__file__).resolve().parents[2]
+SUITES = REPO / "benchmarks" / "suites"
+
+
+class SuiteError(PlannerError):
+    """A suite file that cannot be run."""
+
+
+@dataclass(frozen=True)
+class MapSpec:
+    path: str
+    cell_volumes: tuple[float, ...]
+    radii: tuple[float, ...]
+    scenarios: str | None = None
+    queries: int | None = None
+
+
+@dataclass(frozen=True)
+class Suite:
+    name: str
+    maps: tuple[MapSpec, ...]
+    lattices: tuple[str, ...] = NAMED_LATTICES
+    neighbors: tuple[str, ...] = ("face", "full")
+    methods: tuple[str, ...] = ("astar",)
+    queries: int = 10
+    seed: int = 0
+    min_distance: float = 0.3
+    ompl_planners: tuple[str, ...] = ()
+    ompl_time: float = 1.0
+    ompl_seeds: tuple[int, ...] = (0,)
+    ompl_lattice: str = "cubic"
+    kind: str = "planning"
+    paper_args: tuple[str, ...] = ()
+    source: str = ""
+    skipped: tuple[str, ...] = field(default=())
+
+
+def _resolve(p: str, base: Path) -> Path | None:
+    for root in (base, REPO):
+        q = (root / p).resolve()
+        if q.exists():
+            return q
+    return None
+
+
+def load_suite(name_or_path: str) -> Suite:
+    """Read a suite by bundled name (``quick``, ``paper``, ``full``) or TOML path.
+
+    Maps whose files are absent (e.g. ``../shared/data`` on a fresh clone) are skipped
+    and listed in ``Suite.skipped`` rather than failing the whole suite.
+    """
+    path = Path(name_or_path)
+    if not path.suffix:
+        path = SUITES / f"{name_or_path}.toml"
+    if not path.is_file():
+        known = ", ".join(sorted(p.stem for p in SUITES.glob("*.toml")))
+        raise SuiteError(f"{name_or_path}: no such suite (bundled: {known})")
+    try:
+        raw = tomllib.loads(path.read_text())
+    except (OSError, tomllib.TOMLDecodeError) as exc:
+        raise SuiteError(f"{path}: not a valid TOML suite: {exc}") from None
+    base = path.parent
+    maps, skipped = [], []
+    try:
+        for m in raw.get("maps", []):
+            p = _resolve(m["path"], base)
+            if p is None:
+                skipped.append(m["path"])
+                continue
+            scen = None
+            if "scenarios" in m:
+                s = _resolve(m["scenarios"], base)
+                if s is None:
+                    skipped.append(m["scenarios"])
+                    continue
+                scen = str(s)
+            maps.append(MapSpec(
+                path=str(p),
+                cell_volumes=tuple(float(v) for v in m.get("cell_volumes", [m.get("cell_volume")])),
+                radii=tuple(float(r) for r in m.get("radii", [m.get("radius", 0.0)])),
+                scenarios=scen,
+                queries=m.get("queries"),
+            ))
+        ompl = raw.get("ompl", {})
+        suite = Suite(
+            name=str(raw.get("name", path.stem)),
+            maps=tuple(maps),
+            lattices=tuple(raw.get("lattices", NAMED_LATTICES)),
+            neighbors=tuple(raw.get("neighbors", ("face", "full"))),
+            methods=tuple(raw.get("methods", ("astar",))),
+            queries=int(raw.get("queries", 10)),
+            seed=int(raw.get("seed", 0)),
+            min_distance=float(raw.get("min_distance", 0.3)),
+            ompl_planners=tuple(ompl.get("planners", ())),
+            ompl_time=float(ompl.get("time", 1.0)),
+            ompl_seeds=tuple(int(s) for s in ompl.get("seeds", (0,))),
+            ompl_lattice=str(ompl.get("lattice", "cubic")),
+            kind=str(raw.get("kind", "planning")),
+            paper_args=tuple(str(a) for a in raw.get("paper_args", ())),
+            source=str(path),
+            skipped=tuple(skipped),
+        )
+    except (KeyError, TypeError, ValueError) as exc:
+        raise SuiteError(f"{path}: bad suite entry: {exc}") from None
+    for lat in suite.lattices:
+        if lat not in NAMED_LATTICES:
+            raise SuiteError(f"{path}: unknown lattice {lat!r}")
+    for m in suite.maps:
+        if any(v is None or v <= 0 for v in m.cell_volumes):
+            raise SuiteError(f"{path}: map {m.path} needs positive cell_volumes")
+    return suite

@@ -1,0 +1,196 @@
+"""Summaries of benchmark rows: per lattice x method statistics relative to cubic,
+box plots in the style of the paper's Fig. 6, and a Markdown report that embeds them."""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+from collections import defaultdict
+from pathlib import Path
+
+import numpy as np
+
+from planner.fsutil import atomic_path, write_text_atomic
+
+LATTICE_ORDER = ("cubic", "bcc", "fcc", "mcc", "hex")
+
+
+def _group_key(r: dict) -> tuple:
+    return (r["map"], r["cell_volume"], r["radius"], r["query"])
+
+
+def add_ratios(rows: list[dict]) -> list[dict]:
+    """Set ``length_ratio``: smoothed length over the best length any run found on the
+    same query (same map, cell volume and radius)."""
+    best: dict = defaultdict(lambda: math.inf)
+    for r in rows:
+        if r.get("found") and r.get("length_smoothed") is not None:
+            best[_group_key(r)] = min(best[_group_key(r)], r["length_smoothed"], r["length"])
+    for r in rows:
+        b = best[_group_key(r)]
+        ok = r.get("found") and r.get("length_smoothed") is not None and math.isfinite(b)
+        r["length_ratio"] = r["length_smoothed"] / b if ok and b > 0 else None
+        r["raw_length_ratio"] = r["length"] / b if ok and b > 0 else None
+    return rows
+
+
+def _label(r: dict) -> str:
+    if str(r["method"]).startswith("ompl:"):
+        return f"{r['method']} ({r['lattice']} world)"
+    return f"{r['lattice']} {r['neighbors']} {r['method']}"
+
+
+def _stats(vals: list[float]) -> tuple[float, float]:
+    if not vals:
+        return math.nan, math.nan
+    q1, med, q3 = np.percentile(vals, [25, 50, 75])
+    return float(med), float(q3 - q1)
+
+
+def summarize(rows: list[dict]) -> list[dict]:
+    """One row per (lattice, neighbours, method): success rate and median/IQR of the
+    length ratio, cell checks, expansions and time, plus medians relative to cubic with
+    the same neighbours and method."""
+    add_ratios(rows)
+    groups: dict = defaultdict(list)
+    for r in rows:
+        groups[(r["lattice"], r["neighbors"], r["method"])].append(r)
+    out = []
+    for (lat, nb, meth), rs in groups.items():
+        found = [r for r in rs if r.get("found")]
+        s = {"lattice": lat, "neighbors": nb, "method": meth, "runs": len(rs),
+             "success": len(found) / len(rs),
+             "collision_free": all(r.get("collision_free") for r in found)}
+        for key in ("length_ratio", "raw_length_ratio", "cell_checks", "expansions", "seconds",
+                    "peak_bytes", "clearance"):
+            med, iqr = _stats([r[key] for r in found if r.get(key) is not None])
+            s[f"{key}_median"], s[f"{key}_iqr"] = med, iqr
+        out.append(s)
+    by = {(s["lattice"], s["neighbors"], s["method"]): s for s in out}
+    for s in out:
+        c = by.get(("cubic", s["neighbors"], s["method"]))
+        for key in ("length_ratio", "cell_checks", "seconds"):
+            v, b = s[f"{key}_median"], c[f"{key}_median"] if c else math.nan
+            s[f"{key}_vs_cubic"] = v / b if c and b and math.isfinite(b) else math.nan
+
+    def order(s):
+        lat = LATTICE_ORDER.index(s["lattice"]) if s["lattice"] in LATTICE_ORDER else 9
+        return (s["method"].startswith("ompl:"), s["method"], s["neighbors"], lat)
+
+    return sorted(out, key=order)
+
+
+def format_summary(summary: list[dict]) -> str:
+    head = ["lattice", "nbrs", "method", "runs", "success", "len ratio (IQR)", "vs cubic",
+            "cell checks (IQR)", "vs cubic", "time ms", "clear-ok"]
+    lines = []
+    for s in summary:
+        lines.append([
+            s["lattice"], s["neighbors"], s["method"], str(s["runs"]), f"{s['success']:.0%}",
+            f"{s['length_ratio_median']:.3f} ({s['length_ratio_iqr']:.3f})",
+            _f(s["length_ratio_vs_cubic"]),
+            f"{s['cell_checks_median']:,.0f} ({s['cell_checks_iqr']:,.0f})",
+            _f(s["cell_checks_vs_cubic"]), f"{1e3 * s['seconds_median']:.1f}",
+            "yes" if s["collision_free"] else "NO",
+        ])
+    widths = [max(len(h), *(len(x[i]) for x in lines)) for i, h in enumerate(head)]
+    txt = ["  ".join(h.rjust(w) for h, w in zip(head, widths, strict=True))]
+    txt += ["  ".join(c.rjust(w) for c, w in zip(x, widths, strict=True)) for x in lines]
+    return "\n".join(txt)
+
+
+def _f(v: float) -> str:
+    return f"{v:.3f}" if isinstance(v, float) and math.isfinite(v) else "-"
+
+
+def write_csv(path: Path, summary: list[dict]) -> None:
+    buf = io.StringIO()
+    if summary:
+        w = csv.DictWriter(buf, fieldnames=list(summary[0]))
+        w.writeheader()
+        w.writerows(summary)
+    write_text_atomic(path, buf.getvalue())
+
+
+def plot(rows: list[dict], out_dir: Path) -> list[Path]:
+    """Box plots (length ratio, cell checks, time) and success rates; returns the PNGs."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    add_ratios(rows)
+    labels = sorted({_label(r) for r in rows}, key=lambda s: (
+        s.startswith("ompl"), s.split()[-1], s.split()[1] if len(s.split()) > 2 else "",
+        LATTICE_ORDER.index(s.split()[0]) if s.split()[0] in LATTICE_ORDER else 9))
+    colours = {"cubic": "tab:grey", "bcc": "tab:blue", "fcc": "tab:green", "mcc": "tab:purple",
+               "hex": "tab:orange"}
+    files = []
+    metrics = [("length_ratio", "path length / best length on the query", False, "length_ratio"),
+               ("cell_checks", "cell checks per query", True, "cell_checks"),
+               ("seconds", "search time per query (s)", True, "time")]
+    for key, ylabel, log, name in metrics:
+        data = [[r[key] for r in rows if _label(r) == lab and r.get("found")
+                 and r.get(key) is not None] for lab in labels]
+        fig, ax = plt.subplots(figsize=(max(7, 0.55 * len(labels) + 2), 5))
+        keep = [i for i, d in enumerate(data) if d]
+        bp = ax.boxplot([data[i] for i in keep], whis=1.5, patch_artist=True)
+        for patch, i in zip(bp["boxes"], keep, strict=True):
+            patch.set_facecolor(colours.get(labels[i].split()[0], "white"))
+            patch.set_alpha(0.6)
+        ax.set_xticks(range(1, len(keep) + 1), [labels[i] for i in keep], rotation=60,
+                      ha="right", fontsize=8)
+        if log:
+            ax.set_yscale("log")
+        ax.set_ylabel(ylabel)
+        ax.set_title(f"{ylabel} (whiskers 1.5 IQR)")
+        ax.grid(axis="y", alpha=0.3)
+        fig.tight_layout()
+        p = out_dir / f"{name}.png"
+        with atomic_path(p) as tmp:
+            fig.savefig(tmp, dpi=110, format="png")
+        plt.close(fig)
+        files.append(p)
+    fig, ax = plt.subplots(figsize=(max(7, 0.55 * len(labels) + 2), 4))
+    rates = [np.mean([bool(r.get("found")) for r in rows if _label(r) == lab]) for lab in labels]
+    ax.bar(range(len(labels)), rates,
+           color=[colours.get(lab.split()[0], "tab:red") for lab in labels])
+    ax.set_xticks(range(len(labels)), labels, rotation=60, ha="right", fontsize=8)
+    ax.set_ylim(0, 1.05)
+    ax.set_ylabel("success rate")
+    ax.set_title("fraction of queries solved")
+    fig.tight_layout()
+    p = out_dir / "success.png"
+    with atomic_path(p) as tmp:
+        fig.savefig(tmp, dpi=110, format="png")
+    plt.close(fig)
+    files.append(p)
+    return files
+
+
+def write_report(out_dir: Path, suite, rows: list[dict], summary: list[dict], record: dict,
+                 figures: list[Path], command: str) -> Path:
+    """Markdown report embedding the figures; returns its path."""
+    unsafe = [r for r in rows if r.get("found") and r.get("collision_free") is False]
+    lines = [f"# Benchmark suite `{suite.name}`", "",
+             f"Regenerate with `{command}`.", "",
+             f"{len(rows)} runs; {sum(bool(r.get('found')) for r in rows)} found a path; "
+             f"{len(unsafe)} paths violated the robot clearance against the raw obstacles.", ""]
+    if suite.skipped:
+        lines += [f"Skipped (files absent): {', '.join(suite.skipped)}", ""]
+    lines += ["## Queries", ""]
+    for group, rec in record.items():
+        drop = ", ".join(f"{k}: {v}" for k, v in sorted(rec["dropped"].items())) or "none"
+        lines.append(f"- {group}: {rec['kept']}/{rec['wanted']} queries kept; "
+                     f"candidates dropped: {drop}")
+    lines += ["", "## Summary (medians; ratios relative to cubic with the same neighbours "
+              "and method)", "", "```", format_summary(summary), "```", ""]
+    lines += ["Length ratio: smoothed path length over the shortest path any run found on "
+              "that query. Cell checks: occupancy lookups. Clearance is measured against "
+              "the raw obstacle points, not the voxels.", ""]
+    for f in figures:
+        lines += [f"![{f.stem}]({f.name})", ""]
+    p = out_dir / "report.md"
+    write_text_atomic(p, "\n".join(lines))
+    return p

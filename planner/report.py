@@ -1,0 +1,208 @@
+"""Presenting results: the cross-lattice comparison table, path files and path figures."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from planner.errors import MapError, PlanError
+from planner.fsutil import atomic_path
+
+__all__ = ["compare", "describe", "format_rows", "plot_paths", "write_path"]
+
+
+def describe(res) -> str:
+    """One human-readable paragraph about a PlanResult."""
+    head = f"{res.lattice} (cell volume {res.cell_volume:.6g} m^3), {res.method}, {res.neighbors}"
+    if not res.found:
+        return f"{head}: no path ({res.reason}); {res.cell_checks} cell checks"
+    return (
+        f"{head}: length {res.length:.3f} m, {len(res.path)} waypoints, "
+        f"{res.cell_checks} cell checks, {res.expansions} expansions, "
+        f"{res.seconds * 1e3:.1f} ms search (+{res.build_seconds:.2f} s map build)"
+    )
+
+
+def write_path(path: str, res) -> None:
+    """Write the path as CSV (x,y,z per waypoint) or JSON (the whole result), atomically."""
+    suffix = Path(path).suffix.lower()
+    if suffix not in (".csv", ".json"):
+        raise PlanError(f"{path}: unknown output format {suffix!r}; use .csv or .json")
+    with atomic_path(path) as tmp:
+        if suffix == ".json":
+            tmp.write_text(json.dumps(res.to_dict(), indent=1))
+        else:
+            with open(tmp, "w", newline="") as f:
+                w = csv.writer(f)
+                w.writerow(["x", "y", "z"])
+                w.writerows(np.round(res.path, 6).tolist())
+
+
+def _sidecar(map_path: str) -> dict:
+    side = Path(map_path).with_suffix(".json")
+    if side.is_file():
+        try:
+            return json.loads(side.read_text())
+        except (OSError, ValueError) as exc:
+            raise MapError(f"{side}: unreadable map description: {exc}") from None
+    return {}
+
+
+def compare(
+    map_path: str,
+    *,
+    lattices: list[str],
+    cell_volume: float | None = None,
+    radius: float | None = None,
+    bounds=None,
+    start=None,
+    goal=None,
+    method: str = "astar",
+    neighbors: str = "full",
+    plot: str | None = None,
+    progress: bool = True,
+) -> list[dict]:
+    """Plan the same queries on every lattice and return one summary row per lattice.
+
+    Queries are ``start``/``goal`` when given, else the map's default queries (bundled
+    maps' JSON sidecar). Radius and cell volume default to the sidecar's suggestions.
+    """
+    from planner import api
+
+    side = _sidecar(map_path)
+    if start is not None and goal is not None:
+        queries = [(np.asarray(start), np.asarray(goal))]
+    elif start is not None or goal is not None:
+        raise PlanError("give both --start and --goal, or neither to use the map's queries")
+    else:
+        queries = [(np.asarray(q["start"]), np.asarray(q["goal"])) for q in side.get("queries", [])]
+        if not queries:
+            raise PlanError(f"{map_path}: no default queries; pass --start and --goal")
+    if radius is None:
+        radius = float(side.get("robot_radius", 0.0))
+    if cell_volume is None:
+        cell_volume = side.get("cell_volume")
+    rows, results = [], {}
+    for name in lattices:
+        t0 = time.perf_counter()
+        world = api.build_world(map_path, name, cell_volume=cell_volume, radius=radius,
+                                bounds=bounds)
+        build = time.perf_counter() - t0
+        per = []
+        for i, (s, g) in enumerate(queries):
+            if progress:
+                print(f"\r{name}: query {i + 1}/{len(queries)}", end="", file=sys.stderr,
+                      flush=True)
+            per.append(api.plan(world, s, g, method=method, neighbors=neighbors))
+        if progress:
+            print("\r" + " " * 40 + "\r", end="", file=sys.stderr, flush=True)
+        results[name] = per[0]
+        found = [r for r in per if r.found]
+        rows.append({
+            "lattice": name,
+            "cell_volume": world.lattice.cell_volume,
+            "neighbors": neighbors,
+            "method": method,
+            "queries": len(per),
+            "found": len(found) == len(per),
+            "n_found": len(found),
+            "length": float(sum(r.length for r in found)) if found else math.inf,
+            "cell_checks": int(sum(r.cell_checks for r in per)),
+            "expansions": int(sum(r.expansions for r in per)),
+            "seconds": float(sum(r.seconds for r in per)),
+            "build_seconds": build,
+            "blocked_cells": int(world.n_blocked),
+        })
+    if plot:
+        plot_paths(plot, world, results)
+    return rows
+
+
+def format_rows(rows: list[dict]) -> str:
+    """Aligned text table of :func:`compare` rows, with ratios to cubic where present."""
+    base = next((r for r in rows if r["lattice"] == "cubic"), rows[0] if rows else None)
+    head = ["lattice", "found", "length m", "vs cubic", "cell checks", "vs cubic",
+            "expansions", "search s", "build s", "blocked cells"]
+    out = []
+    for r in rows:
+        def ratio(key, r=r):
+            b = base[key]
+            return f"{r[key] / b:.3f}" if b and math.isfinite(b) and math.isfinite(r[key]) else "-"
+
+        out.append([
+            r["lattice"], f"{r['n_found']}/{r['queries']}", f"{r['length']:.3f}",
+            ratio("length"), f"{r['cell_checks']:,}", ratio("cell_checks"),
+            f"{r['expansions']:,}", f"{r['seconds']:.3f}", f"{r['build_seconds']:.2f}",
+            f"{r['blocked_cells']:,}",
+        ])
+    widths = [max(len(h), *(len(row[i]) for row in out)) for i, h in enumerate(head)]
+    lines = ["  ".join(h.rjust(w) for h, w in zip(head, widths, strict=True))]
+    lines += ["  ".join(c.rjust(w) for c, w in zip(row, widths, strict=True)) for row in out]
+    if rows:
+        r0 = rows[0]
+        lines.append(f"(sums over {r0['queries']} queries; {r0['method']}, "
+                     f"{r0['neighbors']} neighbours; lengths in metres)")
+    return "\n".join(lines)
+
+
+def plot_paths(path: str, world, results: dict, max_cells: int = 4000) -> None:
+    """Figure of paths over the occupied cells near them: a 3D view and a top-down view.
+
+    Parameters
+    ----------
+    path : str
+        Output PNG file.
+    world : World
+        Its blocked cells are drawn (sub-sampled to ``max_cells`` near the paths).
+    results : dict of str -> PlanResult
+        Paths to draw, by label.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    paths = {k: r.path for k, r in results.items() if r.found and len(r.path)}
+    if not paths:
+        raise PlanError("nothing to plot: no path was found")
+    allp = np.concatenate(list(paths.values()))
+    lo, hi = allp.min(axis=0), allp.max(axis=0)
+    margin = 0.15 * (hi - lo).max() + 4 * world.lattice.covering_radius
+    centres = world.blocked_centres()
+    near = np.all((centres >= lo - margin) & (centres <= hi + margin), axis=1)
+    cells = centres[near]
+    if len(cells) > max_cells:
+        cells = cells[np.random.default_rng(0).choice(len(cells), max_cells, replace=False)]
+    fig = plt.figure(figsize=(13, 6))
+    ax3 = fig.add_subplot(1, 2, 1, projection="3d")
+    ax2 = fig.add_subplot(1, 2, 2)
+    ax3.scatter(*cells.T, s=2, c=cells[:, 2], cmap="Greys", alpha=0.25, depthshade=False)
+    ax2.scatter(cells[:, 0], cells[:, 1], s=2, c=cells[:, 2], cmap="Greys", alpha=0.3)
+    for label, p in paths.items():
+        r = results[label]
+        text = f"{label}: {r.length:.2f} m, {r.cell_checks:,} checks"
+        ax3.plot(*p.T, lw=2, label=text)
+        ax2.plot(p[:, 0], p[:, 1], lw=2, label=text)
+    first = next(iter(paths.values()))
+    for ax, pts in ((ax3, (first[0], first[-1])), (ax2, (first[0][:2], first[-1][:2]))):
+        ax.scatter(*np.array(pts[:1]).T, marker="o", s=60, c="green", label="start", zorder=5)
+        ax.scatter(*np.array(pts[1:]).T, marker="*", s=120, c="red", label="goal", zorder=5)
+    ax3.set_xlabel("x (m)")
+    ax3.set_ylabel("y (m)")
+    ax3.set_zlabel("z (m)")
+    ax2.set_xlabel("x (m)")
+    ax2.set_ylabel("y (m)")
+    ax2.set_aspect("equal")
+    ax2.set_title("top-down view (grey: blocked cells near the path)")
+    ax3.set_title(f"{Path(str(getattr(world, 'source', ''))).name}: paths in 3D")
+    ax2.legend(fontsize=8, loc="best")
+    fig.tight_layout()
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=110, format=Path(path).suffix.lstrip(".") or "png")
+    plt.close(fig)
