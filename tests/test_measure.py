@@ -1,0 +1,230 @@
+"""Measurements: lattice table, second moments, rotations, eq. (2), paper benchmark run."""
+
+import csv
+import importlib.util
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from planner.lattice import PAPER_DELTAS, Lattice
+from planner.measure import (
+    NAMED,
+    distance_distributions,
+    distribution_stats,
+    exact_extent,
+    format_table,
+    lattice_table,
+    main,
+    paper_delta_errors,
+    quantization_metrics,
+    quantize_eq2_numpy,
+    random_rotations,
+    sample_in_cell,
+    sample_in_cells,
+    table1_summary,
+)
+
+ROOT = Path(__file__).resolve().parents[1]
+DATA = ROOT / ".." / "shared" / "data"
+CUBE27 = np.array(np.meshgrid(*[(-1, 0, 1)] * 3, indexing="ij")).reshape(3, -1).T
+
+
+@pytest.fixture(scope="module")
+def table():
+    return {r["lattice"]: r for r in lattice_table(1.0, n_points=200_000, seed=1)}
+
+
+def test_table_has_known_neighbour_counts(table):
+    counts = {name: (r["n_face"], r["n_full"]) for name, r in table.items()}
+    assert counts["cubic"] == (6, 26)
+    assert counts["fcc"] == (12, 18)
+    assert counts["bcc"] == (14, 14)
+    assert counts["hex"] == (8, 20)
+    assert set(counts) == set(NAMED)
+
+
+def test_table_distances_and_radii_are_consistent(table):
+    for r in table.values():
+        assert r["face_min"] == pytest.approx(2 * r["packing_radius"])
+        assert r["face_min"] <= r["face_mean"] <= r["face_max"] <= r["full_max"]
+        assert r["packing_radius"] < r["covering_radius"]
+        assert r["points_per_s"] > 0
+    assert table["cubic"]["full_max"] == pytest.approx(np.sqrt(3))
+    assert table["cubic"]["covering_radius"] == pytest.approx(np.sqrt(3) / 2)
+
+
+def test_known_second_moments_and_monte_carlo_agreement(table):
+    known = {"cubic": 1 / 12, "bcc": 0.0785433, "fcc": 0.0787451}
+    for name, value in known.items():
+        assert table[name]["nsm_exact"] == pytest.approx(value, rel=1e-5)
+    for r in table.values():
+        assert r["nsm_mc"] == pytest.approx(r["nsm_exact"], rel=0.01)
+    # Better quantizers than cubic, and mean error ordered the same way.
+    for name in ("bcc", "fcc", "mcc"):
+        assert table[name]["nsm_exact"] < table["cubic"]["nsm_exact"]
+        assert table[name]["mean_error"] < table["cubic"]["mean_error"]
+
+
+def test_table_scales_with_cell_volume():
+    (r,) = lattice_table(0.001, names=["fcc"], n_points=20_000)
+    assert r["cell_volume"] == 0.001
+    assert r["face_min"] == pytest.approx(2 ** (1 / 6) / 10)  # FCC nearest neighbour
+    assert r["nsm_exact"] == pytest.approx(0.0787451, rel=1e-5)  # dimensionless
+
+
+def test_format_table_aligns_columns(table):
+    text = format_table(list(table.values()), ["lattice", "n_face", "nsm_exact", "points_per_s"])
+    lines = text.splitlines()
+    assert len(lines) == 2 + len(NAMED)
+    assert len({len(line) for line in lines[:2]}) == 1
+    assert "cubic" in text and "M" in lines[2]
+
+
+def test_cli_prints_table(capsys):
+    assert main(["--cell-volume", "0.125", "--points", "20000"]) == 0
+    out = capsys.readouterr().out
+    assert "0.125" in out and all(name in out for name in NAMED)
+    with pytest.raises(SystemExit):
+        main(["--cell-volume", "-1"])
+
+
+def test_shoemake_rotations_are_proper_and_uniform():
+    r = random_rotations(20_000, seed=3)
+    assert r.shape == (20_000, 3, 3)
+    eye = np.broadcast_to(np.eye(3), r.shape)
+    assert np.allclose(r @ r.transpose(0, 2, 1), eye, atol=1e-12)
+    assert np.allclose(np.linalg.det(r), 1.0)
+    # Haar measure: R @ e uniform on the sphere (mean 0, second moment I/3), E[R] = 0.
+    for e in np.eye(3):
+        v = r @ e
+        assert np.abs(v.mean(axis=0)).max() < 0.02
+        assert np.allclose(v.T @ v / len(v), np.eye(3) / 3, atol=0.02)
+    assert np.abs(r.mean(axis=0)).max() < 0.02
+    # Rotation angle density (1 - cos t) / pi: mean angle pi/2 + 2/pi.
+    ang = np.arccos(np.clip((np.trace(r, axis1=1, axis2=2) - 1) / 2, -1, 1))
+    assert ang.mean() == pytest.approx(np.pi / 2 + 2 / np.pi, abs=0.02)
+    assert np.array_equal(random_rotations(5, seed=7), random_rotations(5, seed=7))
+
+
+@pytest.mark.parametrize("name", NAMED)
+def test_cell_samples_are_uniform_in_the_voronoi_cell(name):
+    lat = Lattice.named(name, 0.5)
+    rng = np.random.default_rng(0)
+    x = sample_in_cell(lat, 100_000, rng)
+    assert np.all(lat.quantize(x) == 0)
+    assert np.abs(x.mean(axis=0)).max() < 0.01
+    # Agrees with rejection sampling in the bounding box of the Voronoi vertices.
+    v = lat.voronoi_vertices
+    box = rng.uniform(v.min(axis=0), v.max(axis=0), size=(200_000, 3))
+    kept = box[np.all(lat.quantize(box) == 0, axis=1)]
+    q = [50, 90]
+    a = np.percentile(np.linalg.norm(x, axis=1), q)
+    b = np.percentile(np.linalg.norm(kept, axis=1), q)
+    assert np.allclose(a, b, rtol=0.02)
+    # Adjacent-cell samples land in the requested cells, uniformly.
+    offs = lat.neighbors("face")
+    y = sample_in_cells(lat, offs, 50_000, rng)
+    w = lat.quantize(y)
+    keys = {tuple(o) for o in offs.tolist()}
+    assert all(tuple(t) in keys for t in w[:2000].tolist())
+    _, counts = np.unique(w, axis=0, return_counts=True)
+    assert len(counts) == len(offs) and counts.min() > 0.8 * len(y) / len(offs)
+
+
+def test_fig4_distances_stay_within_exact_extent():
+    for name in ("cubic", "fcc"):
+        lat = Lattice.named(name, 1.0)
+        dd = distance_distributions(lat, 50_000, seed=2)
+        for key, d in dd.items():
+            offs = None if key == "cell" else (
+                PAPER_DELTAS[name] if key == "paper" else lat.neighbors(key))
+            lo, hi = exact_extent(lat, offs)
+            s = distribution_stats(d)
+            assert lo - 1e-9 <= s["min"] and s["max"] <= hi + 1e-9
+            assert s["p5"] < s["p95"] and s["range90"] < s["range"] <= hi - lo + 1e-9
+    cube = Lattice.named("cubic", 1.0)
+    assert exact_extent(cube, cube.neighbors("full")) == pytest.approx((0.5, 1.5 * np.sqrt(3)))
+    assert exact_extent(cube, cube.neighbors("face")) == pytest.approx((0.5, np.sqrt(2.75)))
+
+
+def test_quantization_metrics_on_known_points():
+    lat = Lattice.named("cubic", 1.0)
+    pts = np.array([[0.1, 0, 0], [0.2, 0, 0], [1.0, 0.0, 0.3]])
+    m = quantization_metrics(lat, pts)
+    assert m["voxel_count"] == 2
+    assert m["distortion"] == pytest.approx(0.2)
+    assert m["mse_per_dim"] == pytest.approx((0.01 + 0.04 + 0.09) / 9)
+
+
+@pytest.mark.parametrize("name", NAMED)
+def test_eq2_with_all_27_offsets_is_exact(name):
+    lat = Lattice.named(name, 2.0)
+    x = np.random.default_rng(4).uniform(-20, 20, size=(30_000, 3))
+    assert np.array_equal(quantize_eq2_numpy(x, lat.generator, CUBE27, chunk=4096),
+                          lat.quantize(x))
+
+
+def test_paper_deltas_miss_nearest_points_for_fcc_and_hex_only():
+    for name in NAMED:
+        r = paper_delta_errors(Lattice.named(name, 1.0), 40_000, seed=5)
+        if name in ("fcc", "hex"):
+            assert r["rate"] > 0.002 and 0 < r["max_extra_rel"] < 0.5
+        else:
+            assert r["wrong"] == 0 and r["max_extra"] == 0.0
+
+
+def test_table1_summary_medians_and_relative_change():
+    rows = []
+    for rot, (c, f) in enumerate([(100, 90), (110, 99), (120, 96)]):
+        for lat, v in (("cubic", c), ("fcc", f)):
+            rows.append({"dataset": "d", "cell_volume": 0.125, "lattice": lat, "rotation": rot,
+                         "voxel_count": v, "mse_per_dim": v / 1000, "distortion": v / 100})
+    out = {r["lattice"]: r for r in table1_summary(rows)}
+    assert out["cubic"]["voxel_count"] == 110 and out["fcc"]["voxel_count"] == 96
+    assert out["cubic"]["rel_voxel_count"] == 0
+    assert out["fcc"]["rel_distortion"] == pytest.approx(100 * (96 / 110 - 1))
+    assert out["fcc"]["rotations"] == 3
+
+
+def _load_paper_benchmark():
+    spec = importlib.util.spec_from_file_location("paper_bench", ROOT / "benchmarks" / "paper.py")
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules["paper_bench"] = mod
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_paper_benchmark_quick_run(tmp_path, capsys):
+    bench = _load_paper_benchmark()
+    out = tmp_path / "paper"
+    assert bench.main(["--quick", "--out", str(out), "--rotations", "2"]) == 0
+    text = capsys.readouterr().out
+    for name in ("fig3_neighbour_distances.png", "fig4_distance_distributions.png",
+                 "lattice_table.csv", "fig3_neighbour_distances.csv",
+                 "fig4_distance_stats.csv", "fig4_ratios.csv"):
+        assert (out / name).stat().st_size > 0, name
+    assert (out / "fig4_distance_distributions.png").read_bytes()[:4] == b"\x89PNG"
+    with (out / "fig4_ratios.csv").open() as f:
+        ratios = {(r["fcc_set"], r["cubic_set"]): r for r in csv.DictReader(f)}
+    # Paper's adjacency (FCC 12 face cells vs cubic 26): smaller spread for FCC.
+    assert float(ratios[("paper", "paper")]["std_ratio"]) < 0.8
+    assert float(ratios[("paper", "paper")]["range_ratio"]) < 0.65
+    assert not list(out.glob(".*.tmp"))
+    if not (DATA / "octomap" / "scan.dat.bz2").exists():
+        assert "skipping Fig. 5" in text
+        pytest.skip("../shared/data absent: real-scan part not exercised")
+    for name in ("rotations.csv", "table1.csv", "fig5_distortion_cdf.png",
+                 "fig5_voxel_count_cdf.png"):
+        assert (out / name).stat().st_size > 0, name
+    with (out / "rotations.csv").open() as f:
+        rows = list(csv.DictReader(f))
+    n_before = len(rows)
+    assert n_before % len(NAMED) == 0 and n_before > 0
+    # Resumable: a second run with one more rotation only adds that rotation.
+    assert bench.main(["--quick", "--out", str(out), "--rotations", "3"]) == 0
+    assert "resumed" in capsys.readouterr().out + ""
+    with (out / "rotations.csv").open() as f:
+        rows = list(csv.DictReader(f))
+    assert len(rows) == n_before * 3 // 2
