@@ -97,28 +97,34 @@ def quantize_hex(x, a, h, ginv, out):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True)
-def quantize_generic(x, b, binv, cand, cand_z, t, out):  # pragma: no cover - compiled
+def quantize_generic(x, b, binv, cand, cand_z, counts, t, out):  # pragma: no cover - compiled
     """Round in reduced basis b, then pick the nearest of the candidate offsets.
 
-    cand: (k, d) world offsets B @ delta, cand_z: (k, d) the deltas, t: reduction
-    (indices in the user's generator are t @ z).
+    The sign pattern of the rounding residual f = b^-1 x - round(b^-1 x) selects a row
+    o = sum_i (f_i > 0) << i of cand (2^d, k, d) world offsets (cand_z: the same in
+    reduced coefficients), of which the first counts[o] are the exact candidate set.
+    t is the reduction: indices in the user's generator are t @ z.
     """
     n, d = x.shape
-    k = cand.shape[0]
+    k = cand.shape[1]
     z = np.empty(d, dtype=np.float64)
     r = np.empty(d, dtype=np.float64)
-    cn = np.empty(k, dtype=np.float64)
-    for j in range(k):
-        s = 0.0
-        for m in range(d):
-            s += cand[j, m] * cand[j, m]
-        cn[j] = s
+    cn = np.empty((cand.shape[0], k), dtype=np.float64)
+    for o in range(cand.shape[0]):
+        for j in range(k):
+            s = 0.0
+            for m in range(d):
+                s += cand[o, j, m] * cand[o, j, m]
+            cn[o, j] = s
     for i in range(n):
+        o = 0
         for m in range(d):
             s = 0.0
             for c in range(d):
                 s += binv[m, c] * x[i, c]
             z[m] = np.rint(s)
+            if s > z[m]:
+                o |= 1 << m
         for m in range(d):
             s = x[i, m]
             for c in range(d):
@@ -127,15 +133,48 @@ def quantize_generic(x, b, binv, cand, cand_z, t, out):  # pragma: no cover - co
         # |r - c|^2 = |r|^2 - 2 r.c + |c|^2: minimise the last two terms.
         best = 0
         best_v = np.inf
-        for j in range(k):
-            s = cn[j]
+        for j in range(counts[o]):
+            s = cn[o, j]
             for m in range(d):
-                s -= 2.0 * r[m] * cand[j, m]
+                s -= 2.0 * r[m] * cand[o, j, m]
             if s < best_v:
                 best_v = s
                 best = j
         for m in range(d):
             acc = 0.0
             for c in range(d):
-                acc += t[m, c] * (z[c] + cand_z[best, c])
+                acc += t[m, c] * (z[c] + cand_z[o, best, c])
             out[i, m] = np.int64(np.rint(acc))
+
+
+@njit(cache=True, nogil=True)
+def quantize_generic3(x, b, binv, cand, cand_z, counts, t, out):  # pragma: no cover - compiled
+    """:func:`quantize_generic` unrolled for d = 3 (the hot case: MCC, user lattices)."""
+    k = cand.shape[1]
+    cn = np.empty((8, k), dtype=np.float64)
+    for o in range(8):
+        for j in range(k):
+            cn[o, j] = cand[o, j, 0] ** 2 + cand[o, j, 1] ** 2 + cand[o, j, 2] ** 2
+    for i in range(x.shape[0]):
+        x0, x1, x2 = x[i, 0], x[i, 1], x[i, 2]
+        y0 = binv[0, 0] * x0 + binv[0, 1] * x1 + binv[0, 2] * x2
+        y1 = binv[1, 0] * x0 + binv[1, 1] * x1 + binv[1, 2] * x2
+        y2 = binv[2, 0] * x0 + binv[2, 1] * x1 + binv[2, 2] * x2
+        z0, z1, z2 = np.rint(y0), np.rint(y1), np.rint(y2)
+        o = (1 if y0 > z0 else 0) | (2 if y1 > z1 else 0) | (4 if y2 > z2 else 0)
+        r0 = 2.0 * (x0 - b[0, 0] * z0 - b[0, 1] * z1 - b[0, 2] * z2)
+        r1 = 2.0 * (x1 - b[1, 0] * z0 - b[1, 1] * z1 - b[1, 2] * z2)
+        r2 = 2.0 * (x2 - b[2, 0] * z0 - b[2, 1] * z1 - b[2, 2] * z2)
+        best = 0
+        best_v = np.inf
+        for j in range(counts[o]):
+            s = cn[o, j] - r0 * cand[o, j, 0] - r1 * cand[o, j, 1] - r2 * cand[o, j, 2]
+            if s < best_v:
+                best_v = s
+                best = j
+        w0 = z0 + cand_z[o, best, 0]
+        w1 = z1 + cand_z[o, best, 1]
+        w2 = z2 + cand_z[o, best, 2]
+        out[i, 0] = np.int64(np.rint(t[0, 0] * w0 + t[0, 1] * w1 + t[0, 2] * w2))
+        out[i, 1] = np.int64(np.rint(t[1, 0] * w0 + t[1, 1] * w1 + t[1, 2] * w2))
+        out[i, 2] = np.int64(np.rint(t[2, 0] * w0 + t[2, 1] * w1 + t[2, 2] * w2))

@@ -176,6 +176,15 @@ def _geometry(gen_bytes: bytes, d: int) -> dict:
     pack = float(np.linalg.norm(rel, axis=1).min() / 2)
     moment = _second_moment(rel, verts)
     offsets = _rounding_offsets(b, rel, cover)
+    # Per sign pattern of the rounding residual (bit i set: f_i > 0), padded with the
+    # zero offset so that every row has the same length for the compiled kernel.
+    per = [_rounding_offsets(b, rel, cover, tuple(1 if (o >> i) & 1 else -1 for i in range(d)))
+           for o in range(2**d)]
+    width = max(len(p) for p in per)
+    by_orthant = np.zeros((2**d, width, d), dtype=np.int64)
+    counts = np.array([len(p) for p in per], dtype=np.int64)
+    for o, p in enumerate(per):
+        by_orthant[o, : len(p)] = p
     return {
         "reduced": b,
         "reduction": t,
@@ -187,6 +196,8 @@ def _geometry(gen_bytes: bytes, d: int) -> dict:
         "packing": pack,
         "second_moment": moment,
         "round_offsets": offsets,
+        "orthant_offsets": by_orthant,
+        "orthant_counts": counts,
     }
 
 
@@ -249,7 +260,9 @@ def _second_moment(rel: np.ndarray, verts: np.ndarray) -> float:
     return inertia / vol / d / vol ** (2 / d)
 
 
-def _rounding_offsets(basis: np.ndarray, rel: np.ndarray, cover: float) -> np.ndarray:
+def _rounding_offsets(
+    basis: np.ndarray, rel: np.ndarray, cover: float, orthant: tuple[int, ...] | None = None
+) -> np.ndarray:
     """Exact candidate set for quantization by rounding in ``basis`` then a local search.
 
     With ``z0 = round(B^-1 x)`` the residual ``x - B z0`` lies in the parallelepiped
@@ -257,6 +270,8 @@ def _rounding_offsets(basis: np.ndarray, rel: np.ndarray, cover: float) -> np.nd
     ``delta`` whose Voronoi cell meets the interior of ``P``. Each candidate is decided by a
     small linear programme (largest ball-slack of a common point), so the set is minimal:
     every returned offset is the unique answer for some open set of points.
+    With ``orthant`` (a sign per axis) only residuals ``f = B^-1 x - z0`` with those
+    signs are considered: the residual's sign pattern then selects a smaller set.
 
     Returns
     -------
@@ -284,7 +299,13 @@ def _rounding_offsets(basis: np.ndarray, rel: np.ndarray, cover: float) -> np.nd
                 np.hstack([-binv, rows[:, None]]),
             ]
         )
-        b_ub = np.concatenate([rhs_v + rel @ c, np.full(d, 0.5), np.full(d, 0.5)])
+        hi = np.full(d, 0.5)
+        lo = np.full(d, 0.5)
+        if orthant is not None:  # 0 <= sign_i * f_i: clamp the other half of the box
+            o = np.asarray(orthant)
+            hi = np.where(o > 0, 0.5, 0.0)
+            lo = np.where(o > 0, 0.0, 0.5)
+        b_ub = np.concatenate([rhs_v + rel @ c, hi, lo])
         res = linprog(
             np.r_[np.zeros(d), -1.0],
             A_ub=a_ub,
@@ -535,15 +556,18 @@ class Lattice:
         x = self._check_points(points)
         geo = self._geo
         b = geo["reduced"]
-        cand = geo["round_offsets"].astype(float) @ b.T
+        cand_z = geo["orthant_offsets"]
+        cand = cand_z.astype(float) @ b.T
         if out is None:
             out = np.empty(x.shape, dtype=np.int64)
-        qk.quantize_generic(
+        kernel = qk.quantize_generic3 if self.dim == 3 else qk.quantize_generic
+        kernel(
             x,
             np.ascontiguousarray(b),
             np.ascontiguousarray(np.linalg.inv(b)),
             np.ascontiguousarray(cand),
-            np.ascontiguousarray(geo["round_offsets"]),
+            np.ascontiguousarray(cand_z),
+            geo["orthant_counts"],
             np.ascontiguousarray(geo["reduction"]),
             out,
         )
