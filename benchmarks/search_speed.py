@@ -1,0 +1,260 @@
+"""Search engine speed: numba A* vs networkx A* (graph build included) vs plain Python A*.
+
+Usage::
+
+    python benchmarks/search_speed.py                 # sampled Warframe + geb079-like table
+    python benchmarks/search_speed.py --all-warframe  # all 30,000 Warframe queries, mismatches
+    python benchmarks/search_speed.py --da1 1000      # time 1,000 DA1 queries
+
+Cubic lattice, 26 neighbours, safe rule (= MovingAI no corner cutting). networkx and the
+Python baseline run on a cropped world (the start/goal box padded by ``--pad`` cells) so
+that their graphs stay small; the numba search runs on the same cropped world for the
+ratio columns. No assertions on time anywhere: this prints figures.
+"""
+
+from __future__ import annotations
+
+import argparse
+import heapq
+import math
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from planner import search as S
+from planner.lattice import Lattice
+from planner.world import World
+
+ROOT = Path(__file__).resolve().parents[1]
+WARFRAME = ROOT / ".." / "shared" / "data" / "warframe"
+MAPS = ("Simple", "Complex", "DA1")
+
+
+def load_warframe(name: str) -> tuple[World, np.ndarray]:
+    path = WARFRAME / f"{name}.3dmap"
+    dims = np.loadtxt(path, max_rows=1, usecols=(1, 2, 3), dtype=np.int64)
+    blocked = np.loadtxt(path, skiprows=1, dtype=np.int64, ndmin=2)
+    scen = np.loadtxt(f"{path}.3dscen", skiprows=2, ndmin=2)
+    return World(Lattice.named("cubic", 1.0), blocked, np.array([[0, 0, 0], dims - 1.0])), scen
+
+
+def python_astar(world: World, s: np.ndarray, gl: np.ndarray, neighbors: str = "full"):
+    """Plain Python heapq A* over the implicit graph, same moves / rule / heuristic.
+
+    Returns (cost, expansions)."""
+    moves, mcost, _, _, _, per_move = S.move_stencils(world.lattice, neighbors, False)
+    hm = S.move_heuristic(world.lattice, neighbors).tolist()
+    mv = [tuple(m) for m in moves.tolist()]
+    need = [[tuple(c) for c in pm.tolist()] for pm in per_move]
+    cost = mcost.tolist()
+    blocked = set(map(tuple, world.blocked.tolist()))
+    g_ = world.lattice.generator.tolist()
+    lo, hi = (x.tolist() for x in world._tol_bounds())
+    freec: dict = {}
+
+    def free(c):
+        f = freec.get(c)
+        if f is None:
+            x = [g_[r][0] * c[0] + g_[r][1] * c[1] + g_[r][2] * c[2] for r in range(3)]
+            f = c not in blocked and all(lo[r] <= x[r] <= hi[r] for r in range(3))
+            freec[c] = f
+        return f
+
+    goal = tuple(gl.tolist())
+
+    def h(c):
+        d = (goal[0] - c[0], goal[1] - c[1], goal[2] - c[2])
+        return max(0.0, max(f[0] * d[0] + f[1] * d[1] + f[2] * d[2] for f in hm))
+
+    start = tuple(s.tolist())
+    gs = {start: 0.0}
+    closed = set()
+    heap = [(h(start), 0.0, start)]
+    while heap:
+        _, _, u = heapq.heappop(heap)
+        if u in closed:
+            continue
+        if u == goal:
+            return gs[u], len(closed) + 1
+        closed.add(u)
+        gu = gs[u]
+        for m, d in enumerate(mv):
+            if not all(free((u[0] + c[0], u[1] + c[1], u[2] + c[2])) for c in need[m]):
+                continue
+            v = (u[0] + d[0], u[1] + d[1], u[2] + d[2])
+            gv = gu + cost[m]
+            if gv < gs.get(v, math.inf):
+                gs[v] = gv
+                heapq.heappush(heap, (gv + h(v), -gv, v))
+    return math.inf, len(closed)
+
+
+def crop(world: World, s: np.ndarray, g: np.ndarray, pad: int) -> World:
+    """Same world restricted to the start/goal box padded by ``pad`` cells (cubic)."""
+    lo = np.maximum(np.minimum(s, g) - pad, world.bounds[0])
+    hi = np.minimum(np.maximum(s, g) + pad, world.bounds[1])
+    b = world.blocked
+    keep = np.all((b >= lo) & (b <= hi), axis=1)
+    return World(world.lattice, b[keep], np.array([lo, hi], float))
+
+
+def numba_batch(world: World, queries: np.ndarray) -> dict:
+    """Run the numba A* over the queries; expansions/s over the kernel time."""
+    exp = checks = 0
+    ksec = 0.0
+    bad = []
+    t0 = time.perf_counter()
+    for q in queries:
+        r = S.search(world, q[:3].astype(np.int64), q[3:6].astype(np.int64))
+        exp += r.expansions
+        checks += r.cell_checks
+        ksec += r.seconds
+        if len(q) > 6 and (not r.found or abs(r.cost - q[6]) > 1e-6 * q[6]):
+            bad.append((q[:6].astype(int).tolist(), q[6], r.cost))
+    wall = time.perf_counter() - t0
+    return dict(n=len(queries), exp=exp, checks=checks, ksec=ksec, wall=wall, bad=bad)
+
+
+def compare(world: World, queries: np.ndarray, pad: int, with_nx: bool = True) -> dict:
+    """numba vs networkx (build included) vs Python A* on cropped worlds."""
+    tn = tx = tp = 0.0
+    exp = 0
+    for q in queries:
+        s, g = q[:3].astype(np.int64), q[3:6].astype(np.int64)
+        w = crop(world, s, g, pad)
+        S.search(w, s, g)  # build the cropped world's grid outside the timing
+        t = time.perf_counter()
+        a = S.search(w, s, g)
+        tn += time.perf_counter() - t
+        exp += a.expansions
+        t = time.perf_counter()
+        c, _ = python_astar(w, s, g)
+        tp += time.perf_counter() - t
+        assert abs(c - a.cost) <= 1e-9 * max(1.0, c), (c, a.cost)
+        if with_nx:
+            t = time.perf_counter()
+            b = S.search(w, s, g, backend="networkx")
+            tx += time.perf_counter() - t
+            assert abs(b.cost - a.cost) <= 1e-9 * max(1.0, a.cost), (b.cost, a.cost)
+    return dict(numba=tn, nx=tx, py=tp, exp=exp)
+
+
+def geb079_like(seed: int = 0) -> tuple[World, np.ndarray]:
+    """Synthetic office corridor the size of geb079 (39 x 15 x 3 m, 0.08 m cells): floor,
+    ceiling, outer walls, a corridor with doors into rooms, clutter boxes."""
+    rng = np.random.default_rng(seed)
+    lat = Lattice.named("cubic", 0.08**3)
+    dims = np.array([39.0, 15.0, 3.0])
+    n = np.round(dims / 0.08).astype(int)
+    occ = np.zeros(n, bool)
+    occ[:, :, 0] = occ[:, :, -1] = True
+    occ[0], occ[-1], occ[:, 0], occ[:, -1] = True, True, True, True
+    ya, yb = int(n[1] * 0.45), int(n[1] * 0.55)  # corridor walls with doors
+    for y in (ya, yb):
+        occ[:, y, :] = True
+        for x in range(20, n[0] - 20, 40):
+            occ[x : x + 11, y, 1:26] = False
+    for x in range(60, n[0], 60):  # room dividers
+        occ[x, :ya, :] = True
+        occ[x, yb:, :] = True
+    for _ in range(150):  # furniture
+        c = rng.integers([2, 2, 1], n - [12, 12, 14])
+        e = rng.integers([4, 4, 4], [12, 12, 14])
+        if c[1] + e[1] > ya and c[1] < yb:
+            continue
+        occ[c[0] : c[0] + e[0], c[1] : c[1] + e[1], c[2] : c[2] + e[2]] = True
+    blocked = np.argwhere(occ).astype(np.int64)
+    world = World(lat, blocked, np.array([[0, 0, 0], (n - 1) * 0.08]))
+    free = np.argwhere(~occ[:, :, 5:15]) + [0, 0, 5]
+    q = []
+    while len(q) < 20:
+        s, g = free[rng.choice(len(free), 2)]
+        if np.linalg.norm(s - g) > 150:
+            q.append(np.r_[s, g])
+    return world, np.array(q, float)
+
+
+def cold_warm() -> tuple[float, float]:
+    """First-call time in a fresh process (cache on disk) and the warm time after it."""
+    code = (
+        "import time, numpy as np\n"
+        "t = time.perf_counter()\n"
+        "from planner import search as S\nfrom planner.lattice import Lattice\n"
+        "from planner.world import World\n"
+        "w = World(Lattice.named('cubic', 1.0), np.array([[5, 5, 5]]), [[0, 0, 0], [20, 20, 20]])\n"
+        "S.search(w, [1, 1, 1], [18, 18, 18])\n"
+        "t1 = time.perf_counter()\n"
+        "S.search(w, [1, 1, 1], [18, 17, 18])\n"
+        "print(t1 - t, time.perf_counter() - t1)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, cwd=ROOT)
+    cold, warm = map(float, out.stdout.split())
+    return cold, warm
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--all-warframe", action="store_true", help="check all 30,000 queries")
+    ap.add_argument("--sample", type=int, default=200, help="queries per map for the table")
+    ap.add_argument("--compare", type=int, default=10, help="queries per map vs nx/Python")
+    ap.add_argument("--pad", type=int, default=6, help="crop padding (cells) for nx/Python")
+    ap.add_argument("--da1", type=int, default=1000, help="DA1 queries to time (0: skip)")
+    a = ap.parse_args(argv)
+    if not WARFRAME.exists():
+        print(f"no Warframe data at {WARFRAME}; skipping")
+        return 0
+
+    cold, warm = cold_warm()
+    print(f"first call in a fresh process (import + cached-kernel load + tiny search): "
+          f"{cold:.2f} s; second call {warm * 1e3:.2f} ms")
+
+    print("\nnumba A*, cubic-26, safe rule (kernel time; per-query Python overhead excluded)")
+    print(f"{'map':10s} {'queries':>7s} {'expansions':>11s} {'exp/s':>11s} {'checks/s':>12s} "
+          f"{'wall s':>7s} {'mismatch':>8s}")
+    total_bad = []
+    for name in MAPS:
+        world, scen = load_warframe(name)
+        S.search(world, scen[0, :3].astype(np.int64), scen[0, 3:6].astype(np.int64))
+        qs = scen if a.all_warframe else scen[:: max(1, len(scen) // a.sample)][: a.sample]
+        r = numba_batch(world, qs)
+        total_bad += [(name, *b) for b in r["bad"]]
+        print(f"{name:10s} {r['n']:7d} {r['exp']:11d} {r['exp'] / r['ksec']:11.3g} "
+              f"{r['checks'] / r['ksec']:12.3g} {r['wall']:7.2f} {len(r['bad']):8d}")
+    if a.all_warframe:
+        print(f"all Warframe queries: {len(total_bad)} mismatches")
+        for b in total_bad[:20]:
+            print("  ", b)
+
+    if a.da1:
+        world, scen = load_warframe("DA1")
+        S.search(world, scen[0, :3].astype(np.int64), scen[0, 3:6].astype(np.int64))
+        r = numba_batch(world, scen[: a.da1])
+        print(f"\n{a.da1} DA1 queries: {r['wall']:.2f} s wall ({r['ksec']:.2f} s in the kernel), "
+              f"{len(r['bad'])} mismatches")
+
+    print(f"\nratios on cropped worlds (start/goal box + {a.pad} cells; same graph for all)")
+    print(f"{'case':10s} {'queries':>7s} {'numba s':>9s} {'networkx s':>10s} {'python s':>9s} "
+          f"{'nx/numba':>9s} {'py/numba':>9s}")
+    cases = [(name, *load_warframe(name)) for name in MAPS]
+    gw, gq = geb079_like()
+    cases.append(("geb079ish", gw, gq))
+    for name, world, scen in cases:
+        qs = scen[:: max(1, len(scen) // a.compare)][: a.compare]
+        r = compare(world, qs, a.pad)
+        print(f"{name:10s} {len(qs):7d} {r['numba']:9.4f} {r['nx']:10.3f} {r['py']:9.3f} "
+              f"{r['nx'] / r['numba']:9.0f} {r['py'] / r['numba']:9.0f}")
+
+    print("\ngeb079-like full world (cubic 0.08 m, ~39 x 15 x 3 m), numba A*")
+    S.search(gw, gq[0, :3].astype(np.int64), gq[0, 3:6].astype(np.int64))
+    r = numba_batch(gw, gq)
+    print(f"{len(gq)} queries: {r['exp']} expansions, {r['exp'] / r['ksec']:.3g} exp/s, "
+          f"{r['checks'] / r['ksec']:.3g} checks/s, {r['wall']:.2f} s wall")
+    return 1 if total_bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,192 @@
+"""Compiled (numba) kernels of :mod:`planner.voxels`, dimension-generic (2D and 3D).
+
+Cells are addressed either by packed keys (:mod:`planner.keys`) or, inside a dense scratch
+grid over an index box, by flat C-order positions ``sum((w - lo) * strides)``. A lattice
+offset ``delta`` is then a constant flat offset, so dilation is a 1D loop.
+
+The Voronoi cell V of the origin is described by unit facet normals ``A`` (k, d), offsets
+``b`` (k,) (V = {y : A y <= b}) and its edges as segments ``e0``-``e1`` (m, d).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def cell_distance(y, a, b, e0, e1, tol):  # pragma: no cover - compiled
+    """Exact Euclidean distance from point ``y`` (d,) to the Voronoi cell V.
+
+    The nearest point of V lies in the relative interior of a facet, on an edge or at a
+    vertex. Facet candidates are the orthogonal projections that land inside V (within
+    ``tol``); edge candidates are the clamped projections onto the edge segments (always in
+    V, vertices included). The minimum over the candidates is the distance.
+    """
+    k, d = a.shape
+    inside = True
+    for i in range(k):
+        s = 0.0
+        for j in range(d):
+            s += a[i, j] * y[j]
+        if s > b[i] + tol:
+            inside = False
+            break
+    if inside:
+        return 0.0
+    best = np.inf
+    proj = np.empty(d)
+    for i in range(k):
+        s = -b[i]
+        for j in range(d):
+            s += a[i, j] * y[j]
+        if s <= 0.0:  # y is not beyond this facet: its projection is not the nearest point
+            continue
+        if s >= best:
+            continue
+        for j in range(d):
+            proj[j] = y[j] - s * a[i, j]
+        ok = True
+        for m in range(k):
+            t = 0.0
+            for j in range(d):
+                t += a[m, j] * proj[j]
+            if t > b[m] + tol:
+                ok = False
+                break
+        if ok:
+            best = s
+    for m in range(e0.shape[0]):
+        uu = 0.0
+        uy = 0.0
+        for j in range(d):
+            u = e1[m, j] - e0[m, j]
+            uu += u * u
+            uy += u * (y[j] - e0[m, j])
+        t = min(max(uy / uu, 0.0), 1.0)
+        s = 0.0
+        for j in range(d):
+            r = y[j] - e0[m, j] - t * (e1[m, j] - e0[m, j])
+            s += r * r
+        s = math.sqrt(s)
+        if s < best:
+            best = s
+    return best
+
+
+@njit(cache=True)
+def cell_distances(ys, a, b, e0, e1, tol, out):  # pragma: no cover - compiled
+    """:func:`cell_distance` for every row of ``ys`` (n, d) into ``out`` (n,)."""
+    for i in range(ys.shape[0]):
+        out[i] = cell_distance(ys[i], a, b, e0, e1, tol)
+
+
+@njit(cache=True)
+def dilate(grid, occ_flat, stencil_flat, full_flat):  # pragma: no cover - compiled
+    """Mark ``occ_flat`` with bit 1, then OR bit 2 into ``occ + stencil`` for every occupied
+    cell that has a free full neighbour (an interior cell's stencil is covered by its
+    neighbours' stencils: any point of its boundary lies in a touching neighbour's cell)."""
+    for i in range(occ_flat.shape[0]):
+        grid[occ_flat[i]] = 1
+    for i in range(occ_flat.shape[0]):
+        p = occ_flat[i]
+        interior = True
+        for j in range(full_flat.shape[0]):
+            if (grid[p + full_flat[j]] & 1) == 0:
+                interior = False
+                break
+        if interior:
+            continue
+        for j in range(stencil_flat.shape[0]):
+            grid[p + stencil_flat[j]] |= 2
+
+
+@njit(cache=True)
+def grid_keys(grid, lo, dims, bits, limit, out):  # pragma: no cover - compiled
+    """Packed keys of the nonzero cells of ``grid`` in C order (ascending keys) into ``out``."""
+    d = dims.shape[0]
+    w = np.zeros(d, dtype=np.int64)
+    n = 0
+    for p in range(grid.shape[0]):
+        if grid[p] != 0:
+            q = p
+            for j in range(d - 1, -1, -1):
+                w[j] = q % dims[j]
+                q //= dims[j]
+            key = np.int64(0)
+            for j in range(d):
+                key = (key << bits) | (w[j] + lo[j] + limit)
+            out[n] = key
+            n += 1
+    return n
+
+
+@njit(cache=True)
+def box_cells(base_keys, resid, offs_world, offs_key, axes, thr, r_in, r_out, out):
+    # pragma: no cover - compiled
+    """Keys of the cells whose Voronoi cell overlaps a box, for many boxes of one size.
+
+    For box ``i`` (quantized centre key ``base_keys[i]``, ``resid[i]`` = that cell centre
+    minus the box centre) and candidate offset ``o`` the cell centre relative to the box
+    centre is ``x = resid[i] + offs_world[o]``; the cell overlaps the box iff ``x`` lies in
+    the Minkowski sum ``box + V``, i.e. iff ``|axes @ x| < thr`` on every separating axis
+    (thresholds already carry the tolerance). ``r_in`` / ``r_out``: radii of a ball inside /
+    outside that sum, for early accept / reject. Returns the number of keys written.
+    """
+    n = 0
+    d = resid.shape[1]
+    for i in range(base_keys.shape[0]):
+        for o in range(offs_world.shape[0]):
+            r2 = 0.0
+            for j in range(d):
+                x = resid[i, j] + offs_world[o, j]
+                r2 += x * x
+            if r2 > r_out * r_out:
+                continue
+            hit = True
+            if r2 >= r_in * r_in:
+                for m in range(axes.shape[0]):
+                    s = 0.0
+                    for j in range(d):
+                        s += axes[m, j] * (resid[i, j] + offs_world[o, j])
+                    if abs(s) >= thr[m]:
+                        hit = False
+                        break
+            if hit:
+                out[n] = base_keys[i] + offs_key[o]
+                n += 1
+    return n
+
+
+@njit(cache=True)
+def exact_mark(points, centres, base_flat, grid, cand_flat, cand_world, a, b, e0, e1, tol,
+               radius, rho, big_r):  # pragma: no cover - compiled
+    """Mark (set to 1) every grid cell whose Voronoi cell is at distance < ``radius`` from a
+    point. ``centres[i]`` is the centre of the cell containing ``points[i]`` (flat position
+    ``base_flat[i]``); candidate cells are ``base + cand``. ``rho`` / ``big_r``: packing and
+    covering radii, bounding the distance as ``|y| - big_r <= dist <= |y| - rho``.
+    Returns the number of exact point-to-cell distance evaluations."""
+    d = points.shape[1]
+    y = np.empty(d)
+    evals = 0
+    for i in range(points.shape[0]):
+        for o in range(cand_flat.shape[0]):
+            f = base_flat[i] + cand_flat[o]
+            if grid[f] != 0:
+                continue
+            s = 0.0
+            for j in range(d):
+                y[j] = points[i, j] - centres[i, j] - cand_world[o, j]
+                s += y[j] * y[j]
+            s = math.sqrt(s)
+            if s - big_r >= radius:
+                continue
+            if s - rho < radius:
+                grid[f] = 1
+                continue
+            evals += 1
+            if cell_distance(y, a, b, e0, e1, tol) < radius:
+                grid[f] = 1
+    return evals

@@ -1,0 +1,278 @@
+"""The planning world: a lattice, its blocked cells and a bounding box, with fast lookups.
+
+Occupancy storage (chosen per world, see :attr:`World.storage`):
+
+* ``"dense"`` (default when it fits ``dense_budget`` bytes, 256 MB): one byte per cell over
+  the index bounding box of the in-bounds cells, 1 = free. A lookup is one bounds test and
+  one byte load, and it answers "in bounds" and "not blocked" at once. A 389 x 313 x 511
+  Warframe map takes 62 MB.
+* ``"hash"`` (fallback for huge boxes): an open-addressing set of the blocked cells' packed
+  keys (power-of-two size, load <= 0.5, splitmix64 mixing) plus an in-bounds test of the
+  cell centre. Memory proportional to the number of blocked cells.
+
+Both are plain numpy arrays used by the numba kernels in :mod:`planner._search_kernels`;
+they are built lazily and dropped when pickling (OMPL runs the world in a worker process).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from planner import _search_kernels as sk
+from planner.errors import MapError, PlanError
+from planner.keys import pack
+from planner.lattice import Lattice
+
+__all__ = ["World", "DENSE_BUDGET"]
+
+DENSE_BUDGET = 256 * 2**20  # bytes: above this the hash set is used
+_BOUNDS_TOL = 1e-9
+
+
+class World:
+    """Lattice + blocked cells + bounds.
+
+    Parameters
+    ----------
+    lattice : Lattice
+        A 3D lattice.
+    blocked_indices : array_like of int, shape (M, 3)
+        Blocked cells (already inflated for the robot radius). Duplicates are fine.
+    bounds : array_like, shape (2, 3)
+        World box ``[min, max]`` in metres. A cell is in bounds iff its centre lies in the
+        closed box (with ``1e-9`` relative tolerance).
+    dense_budget : int
+        Largest dense occupancy grid in bytes; beyond it the hash set is used.
+
+    Attributes
+    ----------
+    cell_checks : int
+        Running count of occupancy lookups made through this world (including by searches).
+    """
+
+    def __init__(
+        self,
+        lattice: Lattice,
+        blocked_indices: np.ndarray,
+        bounds: np.ndarray,
+        *,
+        dense_budget: int = DENSE_BUDGET,
+    ):
+        if not isinstance(lattice, Lattice):
+            raise MapError(f"lattice must be a Lattice, got {type(lattice).__name__}")
+        if lattice.dim != 3:
+            raise MapError(f"World supports 3D lattices only, got dimension {lattice.dim}")
+        b = np.asarray(blocked_indices)
+        if b.size == 0:
+            b = np.zeros((0, 3), dtype=np.int64)
+        if b.ndim != 2 or b.shape[1] != 3 or not np.issubdtype(b.dtype, np.integer):
+            raise MapError(f"blocked indices must be an (M, 3) integer array, got {b.shape}")
+        bb = np.asarray(bounds, dtype=float)
+        if bb.shape != (2, 3) or not np.isfinite(bb).all() or np.any(bb[1] < bb[0]):
+            raise MapError(f"bounds must be [[xmin, ymin, zmin], [xmax, ymax, zmax]], got {bb}")
+        self._lattice = lattice
+        self._blocked = np.ascontiguousarray(b, dtype=np.int64)
+        pack(self._blocked)  # range check now, not inside a kernel
+        self._bounds = bb
+        self.dense_budget = int(dense_budget)
+        self.cell_checks = 0
+        self._occ = None
+
+    # -- pickling: plain arrays only; lookup structures rebuilt on first use -----------
+    def __getstate__(self) -> dict:
+        state = self.__dict__.copy()
+        state["_occ"] = None
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+
+    # -- properties ------------------------------------------------------------------
+    @property
+    def lattice(self) -> Lattice:
+        return self._lattice
+
+    @property
+    def bounds(self) -> np.ndarray:
+        """(2, 3) world box [min, max] (m)."""
+        return self._bounds.copy()
+
+    @property
+    def cell_size(self) -> float:
+        """Twice the packing radius: the distance between face-neighbour centres (m)."""
+        return 2.0 * self._lattice.packing_radius
+
+    @property
+    def blocked(self) -> np.ndarray:
+        """(M, 3) int64 blocked cells as given."""
+        return self._blocked
+
+    @property
+    def n_blocked(self) -> int:
+        """Number of distinct blocked cells."""
+        return len(np.unique(pack(self._blocked))) if len(self._blocked) else 0
+
+    @property
+    def storage(self) -> str:
+        """``"dense"`` or ``"hash"`` (module docstring)."""
+        return "dense" if self.occupancy[0] == 0 else "hash"
+
+    def blocked_centres(self) -> np.ndarray:
+        """(M, 3) centres of the blocked cells (m)."""
+        return self._lattice.to_world(self._blocked)
+
+    def blocked_voxels(self):
+        """The blocked cells as an :class:`planner.voxels.OccupiedVoxelList`."""
+        from planner.voxels import OccupiedVoxelList
+
+        return OccupiedVoxelList(self._lattice, self._blocked)
+
+    def _tol_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        lo, hi = self._bounds
+        tol = _BOUNDS_TOL * max(float(np.abs(self._bounds).max()), self.cell_size)
+        return lo - tol, hi + tol
+
+    @property
+    def occupancy(self) -> tuple:
+        """The numba occupancy tuple (see :mod:`planner._search_kernels`); built lazily."""
+        if self._occ is None:
+            self._occ = self._build()
+        return self._occ
+
+    def _build(self) -> tuple:
+        g = np.ascontiguousarray(self._lattice.generator, dtype=float)
+        blo, bhi = self._tol_bounds()
+        corners = np.array([[(blo, bhi)[c][a] for a, c in enumerate(bits)]
+                            for bits in np.ndindex(2, 2, 2)])
+        w = corners @ np.linalg.inv(g).T
+        lo = np.floor(w.min(axis=0)).astype(np.int64) - 1
+        hi = np.ceil(w.max(axis=0)).astype(np.int64) + 1
+        dims = hi - lo + 1
+        empty_i = np.zeros(1, dtype=np.int64)
+        if float(np.prod(dims.astype(float))) <= self.dense_budget:
+            grid = np.empty(int(np.prod(dims)), dtype=np.uint8)
+            sk.fill_in_bounds(grid, lo, dims, g, blo, bhi)
+            sk.clear_cells(grid, lo, dims, self._blocked)
+            return (0, grid, lo, dims, np.full(1, -1, np.int64), 0, g, blo, bhi)
+        keys = np.unique(pack(self._blocked))
+        size = 16
+        while size < 2 * len(keys):
+            size *= 2
+        table = sk.build_key_set(keys, size)
+        return (1, np.zeros(1, np.uint8), empty_i, empty_i.repeat(3), table, size - 1, g,
+                blo, bhi)
+
+    # -- queries ----------------------------------------------------------------------
+    def in_bounds(self, indices: np.ndarray) -> np.ndarray:
+        """(N,) bool: cell centre inside the bounds box (no lookup counted)."""
+        w = _cells(indices)
+        c = self._lattice.to_world(w)
+        blo, bhi = self._tol_bounds()
+        return np.all((c >= blo) & (c <= bhi), axis=1)
+
+    def is_free(self, indices: np.ndarray) -> np.ndarray:
+        """(N,) bool: cell in bounds and not blocked. Adds N to :attr:`cell_checks`.
+
+        Parameters
+        ----------
+        indices : array_like of int, shape (N, 3) or (3,)
+        """
+        w = _cells(indices)
+        out = np.empty(len(w), dtype=np.bool_)
+        sk.free_many(self.occupancy, w, out)
+        self.cell_checks += len(w)
+        return out
+
+    def points_free(self, points: np.ndarray) -> np.ndarray:
+        """(N,) bool: the cell containing each point (m, shape (N, 3)) is free."""
+        return self.is_free(self._lattice.quantize(points))
+
+    def _walk(self, a, b, check: bool):
+        a = np.asarray(a, dtype=float).reshape(3)
+        b = np.asarray(b, dtype=float).reshape(3)
+        if not (np.isfinite(a).all() and np.isfinite(b).all()):
+            raise PlanError("segment end points must be finite")
+        s = self._lattice.quantize(a[None])[0]
+        g, rel, rhs, full = _walk_data(self._lattice)
+        return sk.segment_walk(self.occupancy, a, b, s, g, rel, rhs, full, check)
+
+    def segment_cells(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """Cells whose closed Voronoi cell the segment a-b (points, m) touches.
+
+        Returns
+        -------
+        ndarray, shape (K, 3), int64
+            In walk order (breadth-first from the cell containing ``a``).
+        """
+        cells, _, _ = self._walk(a, b, False)
+        return cells
+
+    def segment_free(self, a: np.ndarray, b: np.ndarray) -> bool:
+        """True iff every cell the segment a-b touches (see :meth:`segment_cells`) is free.
+        Stops at the first blocked cell; adds the lookups made to :attr:`cell_checks`."""
+        _, free, n = self._walk(a, b, True)
+        self.cell_checks += int(n)
+        return bool(free)
+
+    def nearest_free(self, cell: np.ndarray, max_radius: float | None = None) -> np.ndarray | None:
+        """Nearest free cell to ``cell`` by centre distance, searching outward in growing
+        shells up to ``max_radius`` metres (default 64 cell sizes). None if there is none.
+        Lookups are not counted (this is for error messages)."""
+        c = _cells(cell)[0]
+        g = self._lattice.generator
+        limit = max_radius if max_radius is not None else 64 * self.cell_size
+        r = 2 * self.cell_size
+        rows = np.linalg.norm(np.linalg.inv(g), axis=1)
+        before = self.cell_checks
+        try:
+            while True:
+                k = np.ceil(min(r, limit) * rows).astype(np.int64)
+                axes = [np.arange(-x, x + 1) for x in k]
+                offs = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, 3)
+                d = np.linalg.norm(offs @ g.T, axis=1)
+                keep = d <= min(r, limit)
+                offs, d = offs[keep], d[keep]
+                order = np.argsort(d, kind="stable")
+                cand = c + offs[order]
+                free = self.is_free(cand)
+                if free.any():
+                    return cand[int(np.argmax(free))]
+                if r >= limit or len(cand) > 4_000_000:
+                    return None
+                r *= 2
+        finally:
+            self.cell_checks = before
+
+    def __repr__(self) -> str:
+        return (f"World({self._lattice!r}, {len(self._blocked)} blocked cells, "
+                f"bounds={self._bounds.tolist()})")
+
+
+def _cells(indices) -> np.ndarray:
+    w = np.asarray(indices)
+    if w.ndim == 1 and w.shape[0] == 3:
+        w = w[None]
+    if w.ndim != 2 or w.shape[1] != 3:
+        raise PlanError(f"cells must have shape (N, 3), got {w.shape}")
+    if w.size and not np.issubdtype(w.dtype, np.integer):
+        raise PlanError(f"cells must be integer lattice indices, got dtype {w.dtype}")
+    return np.ascontiguousarray(w, dtype=np.int64)
+
+
+_WALK_CACHE: dict = {}
+
+
+def _walk_data(lattice: Lattice) -> tuple:
+    """(G, relevant vectors, |v|^2/2, full offsets) as contiguous arrays, cached."""
+    key = lattice.generator.tobytes()
+    got = _WALK_CACHE.get(key)
+    if got is None:
+        rel = np.ascontiguousarray(lattice.relevant_vectors, dtype=float)
+        got = (
+            np.ascontiguousarray(lattice.generator, dtype=float),
+            rel,
+            0.5 * np.einsum("ij,ij->i", rel, rel),
+            np.ascontiguousarray(lattice.neighbors("full")),
+        )
+        _WALK_CACHE[key] = got
+    return got

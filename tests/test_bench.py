@@ -1,0 +1,141 @@
+"""The benchmark suite: runs are resumable, identical across executors, and every path
+that is reported found keeps the robot clearance against the raw obstacles."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from planner.bench import runner, summary
+from planner.bench.metrics import Clearance
+from planner.bench.suite import REPO, SuiteError, load_suite
+
+SUITE = """
+name = "tiny"
+seed = 3
+queries = 3
+lattices = ["cubic", "fcc"]
+neighbors = ["face"]
+methods = ["astar", "theta"]
+min_distance = 0.2
+
+[[maps]]
+path = "{map}"
+cell_volumes = [0.03]
+radii = [0.2]
+"""
+
+
+@pytest.fixture(scope="module")
+def tiny_suite(tmp_path_factory):
+    d = tmp_path_factory.mktemp("suite")
+    p = d / "tiny.toml"
+    p.write_text(SUITE.format(map=(REPO / "maps" / "office.ply").as_posix()))
+    return load_suite(str(p))
+
+
+@pytest.fixture(scope="module")
+def tiny_tasks(tiny_suite):
+    return runner.plan_tasks(tiny_suite, log=lambda m: None)
+
+
+def _stable(rows):
+    """Everything but timings."""
+    drop = {"seconds"}
+    return sorted((json.dumps({k: v for k, v in r.items() if k not in drop}, sort_keys=True)
+                   for r in rows))
+
+
+def test_queries_are_shared_by_every_lattice_and_method(tiny_tasks):
+    tasks, record = tiny_tasks
+    (group,) = record.values()
+    assert group["kept"] == 3
+    per = {}
+    for t in tasks:
+        per.setdefault((t["lattice"], t["method"]), []).extend(
+            (q["start"], q["goal"]) for q in t["queries"])
+    first = next(iter(per.values()))
+    assert all(v == first for v in per.values())
+
+
+def test_a_killed_run_resumes_without_redoing_finished_rows(tiny_tasks, tmp_path):
+    tasks, _ = tiny_tasks
+    out = tmp_path / "results.jsonl"
+    rows = runner.run(tasks[:2], out, progress=False)
+    n_first = len(rows)
+    with open(out, "a") as f:  # a row cut short by a kill
+        f.write('{"map": "trunc')
+    rows = runner.run(tasks, out, resume=True, progress=False)
+    keys = [runner.row_key(r) for r in rows]
+    assert len(keys) == len(set(keys)) == sum(len(t["queries"]) for t in tasks)
+    assert n_first > 0
+    for r in rows:
+        if r["found"]:
+            assert r["collision_free"], r
+            assert r["clearance"] >= 0.2 - 1e-9
+            assert r["length_smoothed"] <= r["length"] + 1e-9
+
+
+def test_results_are_identical_in_processes_and_on_a_dask_cluster(tiny_tasks, tmp_path):
+    distributed = pytest.importorskip("distributed")
+    tasks, _ = tiny_tasks
+    tasks = [t for t in tasks if t["method"] == "astar"]
+    serial = runner.run(tasks, tmp_path / "a.jsonl", progress=False)
+    pool = runner.run(tasks, tmp_path / "b.jsonl", jobs=2, progress=False)
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
+                                  protocol="tcp", dashboard_address=None) as cluster:
+        dask_rows = runner.run(tasks, tmp_path / "c.jsonl", scheduler=cluster.scheduler_address,
+                               progress=False)
+    assert _stable(serial) == _stable(pool) == _stable(dask_rows)
+
+
+def test_summary_report_and_figures(tiny_tasks, tiny_suite, tmp_path):
+    tasks, record = tiny_tasks
+    rows = runner.run(tasks, tmp_path / "r.jsonl", progress=False)
+    summ = summary.summarize(rows)
+    labels = {(s["lattice"], s["method"]) for s in summ}
+    assert labels == {(lat, m) for lat in ("cubic", "fcc") for m in ("astar", "theta")}
+    for s in summ:
+        if s["lattice"] == "cubic":
+            assert s["cell_checks_vs_cubic"] == pytest.approx(1.0)
+        if s["success"] > 0:
+            assert s["length_ratio_median"] >= 1.0 - 1e-9
+    figs = summary.plot(rows, tmp_path)
+    rep = summary.write_report(tmp_path, tiny_suite, rows, summ, record, figs, "planner bench x")
+    text = rep.read_text()
+    for f in figs:
+        assert f.stat().st_size > 5000
+        assert f"]({f.name})" in text
+
+
+def test_clearance_is_exact_against_brute_force():
+    rng = np.random.default_rng(0)
+    pts = rng.uniform(0, 10, (400, 3))
+    boxes = rng.integers(0, 10, (30, 3)).astype(float)
+    c = Clearance(pts, boxes, 0.6)
+    path = rng.uniform(0, 10, (4, 3))
+    t = np.linspace(0, 1, 20001)[:, None]
+    s = np.concatenate([a + t * (b - a) for a, b in zip(path[:-1], path[1:], strict=True)])
+    d_pts = np.min(np.linalg.norm(s[:, None] - pts[None], axis=2))
+    d_box = np.min(np.linalg.norm(np.maximum(np.abs(s[:, None] - boxes[None]) - 0.3, 0), axis=2))
+    assert c.of_path(path, 0.3) == pytest.approx(min(d_pts, d_box), abs=1e-6)
+
+
+def test_bad_suites_are_clear_errors(tmp_path):
+    with pytest.raises(SuiteError, match="no such suite"):
+        load_suite("nonexistent")
+    bad = tmp_path / "bad.toml"
+    bad.write_text("lattices = ['diamond']\n")
+    with pytest.raises(SuiteError, match="diamond"):
+        load_suite(str(bad))
+    bad.write_text("this is = = not toml")
+    with pytest.raises(SuiteError, match="TOML"):
+        load_suite(str(bad))
+
+
+def test_bundled_suites_load():
+    for name in ("quick", "paper", "full"):
+        s = load_suite(name)
+        assert s.name == name
+    assert math.isfinite(load_suite("quick").ompl_time)

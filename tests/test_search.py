@@ -1,0 +1,278 @@
+"""Search engine: world lookups, exact segment walk, movement rule, heuristic, A* family."""
+
+from __future__ import annotations
+
+import itertools
+import pickle
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from planner import search as S
+from planner.errors import PlanError
+from planner.lattice import NAMED_LATTICES, Lattice
+from planner.world import World
+
+DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
+WARFRAME = DATA / "warframe"
+
+
+def _box_world(name="cubic", n=8, blocked=(), vol=1.0, **kw):
+    lat = Lattice.named(name, vol)
+    b = np.array(blocked, dtype=np.int64).reshape(-1, 3)
+    return World(lat, b, np.array([[0.0, 0, 0], [n, n, n]]) * vol ** (1 / 3), **kw)
+
+
+# -- world ---------------------------------------------------------------------------------
+@pytest.mark.parametrize("budget", [None, 0])
+def test_world_lookups_dense_and_hash(budget):
+    kw = {} if budget is None else {"dense_budget": budget}
+    w = _box_world(blocked=[(1, 1, 1), (2, 3, 4)], n=5, **kw)
+    assert w.storage == ("hash" if budget == 0 else "dense")
+    q = np.array([[1, 1, 1], [2, 3, 4], [0, 0, 0], [5, 5, 5], [6, 0, 0], [-1, 2, 2]])
+    assert w.is_free(q).tolist() == [False, False, True, True, False, False]
+    assert w.cell_checks == 6
+    assert w.points_free(np.array([[1.2, 0.9, 1.1], [0.1, 0.2, 0.3]])).tolist() == [False, True]
+    assert w.cell_checks == 8
+    assert w.in_bounds(q).tolist() == [True, True, True, True, False, False]
+
+
+def test_world_pickles_without_numba_state():
+    w = _box_world(blocked=[(1, 1, 1)])
+    w.is_free(np.zeros((1, 3), np.int64))
+    w2 = pickle.loads(pickle.dumps(w))
+    assert w2._occ is None
+    assert w2.is_free(np.array([[1, 1, 1], [2, 2, 2]])).tolist() == [False, True]
+    assert w2.lattice == w.lattice and np.array_equal(w2.bounds, w.bounds)
+
+
+def test_nearest_free_and_endpoint_errors():
+    w = _box_world(blocked=[(2, 2, 2)])
+    with pytest.raises(PlanError, match=r"start cell \[2, 2, 2\].*blocked.*nearest free"):
+        S.search(w, [2, 2, 2], [0, 0, 0])
+    with pytest.raises(PlanError, match=r"goal cell .*outside the bounds"):
+        S.search(w, [0, 0, 0], [20, 0, 0])
+    near = w.nearest_free(np.array([2, 2, 2]))
+    assert np.abs(near - 2).sum() == 1
+
+
+# -- exact segment walk --------------------------------------------------------------------
+def _slab_touches(a, b, c, tol=1e-9):
+    """Cube [c - 1/2, c + 1/2] meets segment a-b (slab clipping, closed)."""
+    lo, hi = 0.0, 1.0
+    d = b - a
+    for k in range(3):
+        if abs(d[k]) < 1e-15:
+            if abs(a[k] - c[k]) > 0.5 + tol:
+                return False
+            continue
+        t1 = (c[k] - 0.5 - tol - a[k]) / d[k]
+        t2 = (c[k] + 0.5 + tol - a[k]) / d[k]
+        lo, hi = max(lo, min(t1, t2)), min(hi, max(t1, t2))
+    return lo <= hi
+
+
+def test_segment_cells_cubic_matches_slab_clipping():
+    rng = np.random.default_rng(0)
+    w = _box_world(n=30)
+    for _ in range(60):
+        a, b = rng.uniform(2, 20, (2, 3))
+        if rng.random() < 0.3:  # exact lattice geometry: centres and corners
+            a, b = np.round(a), np.round(b) + 0.5 * rng.integers(0, 2, 3)
+        got = {tuple(c) for c in w.segment_cells(a, b).tolist()}
+        lo = np.floor(np.minimum(a, b)) - 1
+        hi = np.ceil(np.maximum(a, b)) + 1
+        axes = [range(int(x), int(y) + 1) for x, y in zip(lo, hi, strict=True)]
+        want = {
+            c for c in itertools.product(*axes) if _slab_touches(a, b, np.array(c, float))
+        }
+        assert got == want
+
+
+@pytest.mark.parametrize("name", NAMED_LATTICES)
+def test_segment_cells_contain_sampled_cells(name):
+    lat = Lattice.named(name, 0.5)
+    w = World(lat, np.zeros((0, 3), np.int64), np.array([[-9.0] * 3, [9.0] * 3]))
+    rng = np.random.default_rng(1)
+    rel = lat.relevant_vectors
+    for _ in range(20):
+        a, b = rng.uniform(-4, 4, (2, 3))
+        cells = w.segment_cells(a, b)
+        got = {tuple(c) for c in cells.tolist()}
+        pts = a + np.linspace(0, 1, 2000)[:, None] * (b - a)
+        assert {tuple(c) for c in lat.quantize(pts).tolist()} <= got
+        # Every reported cell really meets the segment: the closest segment point to the
+        # cell lies in the (slightly widened) cell.
+        cen = lat.to_world(cells)
+        for c in cen:
+            x = pts - c
+            slack = (x @ rel.T - 0.5 * (rel * rel).sum(1)).max(axis=1).min()
+            assert slack <= 1e-2 * lat.packing_radius
+
+
+def test_segment_free_counts_lookups():
+    w = _box_world(blocked=[(3, 3, 3)], n=10)
+    assert not w.segment_free([1, 1, 1], [5, 5, 5])
+    n = w.cell_checks
+    assert 0 < n < len(w.segment_cells([1, 1, 1], [5, 5, 5]))  # stopped early
+    assert w.segment_free([1, 1, 1], [1, 1, 6])
+    assert w.cell_checks == n + 6
+
+
+# -- movement rule and heuristic -------------------------------------------------------------
+def test_cubic26_safe_rule_is_bounding_box():
+    lat = Lattice.named("cubic", 1.0)
+    moves, _, _, _, _, per_move = S.move_stencils(lat, "full", False)
+    for d, cells in zip(moves, per_move, strict=True):
+        box = {c for c in itertools.product(*[sorted({0, int(x)}) for x in d]) if any(c)}
+        assert {tuple(c) for c in cells.tolist()} == box
+    _, _, union, _, _, per_cc = S.move_stencils(lat, "full", True)
+    assert all(len(c) == 1 for c in per_cc) and len(union) == 26
+
+
+def test_heuristic_cubic26_is_octile():
+    lat = Lattice.named("cubic", 1.0)
+    hm = S.move_heuristic(lat, "full")
+    rng = np.random.default_rng(2)
+    d = rng.integers(-50, 50, (500, 3))
+    h = (d @ hm.T).max(axis=1)
+    a = np.sort(np.abs(d), axis=1)
+    octile = (np.sqrt(3) - np.sqrt(2)) * a[:, 0] + (np.sqrt(2) - 1) * a[:, 1] + a[:, 2]
+    np.testing.assert_allclose(h, octile, rtol=1e-12, atol=1e-12)
+
+
+@pytest.mark.parametrize("name", NAMED_LATTICES)
+@pytest.mark.parametrize("nb", ["face", "full", "full+1"])
+def test_heuristic_admissible_and_tight_on_moves(name, nb):
+    lat = Lattice.named(name, 2.0)
+    hm = S.move_heuristic(lat, nb)
+    moves = lat.neighbors(nb)
+    cost = np.linalg.norm(moves @ lat.generator.T, axis=1)
+    h = (moves @ hm.T).max(axis=1)
+    assert np.all(h <= cost * (1 + 1e-12))  # consistency: h(s) <= c(s) for every move
+    # The gauge is tight on the hull's vertices: at least the shortest moves are exact.
+    assert np.isclose(h[0], cost[0])
+
+
+# -- search ------------------------------------------------------------------------------
+def _random_world(name, seed, n=5, frac=0.25):
+    rng = np.random.default_rng(seed)
+    lat = Lattice.named(name, 1.0)
+    bounds = np.array([[0.0, 0, 0], [n, n, n * 0.7]])
+    cells = np.unique(lat.quantize(rng.uniform(bounds[0], bounds[1], (4000, 3))), axis=0)
+    w = World(lat, np.zeros((0, 3), np.int64), bounds)
+    cells = cells[w.in_bounds(cells)]
+    blocked = cells[rng.random(len(cells)) < frac]
+    world = World(lat, blocked, bounds)
+    free = cells[world.is_free(cells)]
+    s, g = free[rng.choice(len(free), 2, replace=False)]
+    return world, s, g
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    name=st.sampled_from(NAMED_LATTICES),
+    seed=st.integers(0, 10_000),
+    nb=st.sampled_from(["face", "full"]),
+    cc=st.booleans(),
+)
+def test_numba_matches_networkx(name, seed, nb, cc):
+    world, s, g = _random_world(name, seed)
+    a = S.search(world, s, g, neighbors=nb, corner_cutting=cc)
+    b = S.search(world, s, g, neighbors=nb, corner_cutting=cc, backend="networkx")
+    d = S.search(world, s, g, neighbors=nb, corner_cutting=cc, method="dijkstra")
+    assert a.found == b.found == d.found
+    if a.found:
+        assert a.cost == pytest.approx(b.cost, rel=1e-9)
+        assert d.cost == pytest.approx(b.cost, rel=1e-9)
+        _check_lattice_path(world, a, nb, cc)
+    else:
+        assert "unreachable" in a.reason
+
+
+def _check_lattice_path(world, res, nb, cc):
+    lat = world.lattice
+    moves, mcost, _, _, _, per_move = S.move_stencils(lat, nb, cc)
+    index = {tuple(m): i for i, m in enumerate(moves.tolist())}
+    total = 0.0
+    for u, v in itertools.pairwise(res.cells):
+        m = index[tuple((v - u).tolist())]
+        assert world.is_free(u + per_move[m]).all()
+        total += mcost[m]
+    assert total == pytest.approx(res.cost, rel=1e-9)
+
+
+@pytest.mark.parametrize("name", NAMED_LATTICES)
+@pytest.mark.parametrize("method", ["theta", "lazy-theta"])
+def test_any_angle_paths_valid_and_short(name, method):
+    for seed in range(6):
+        world, s, g = _random_world(name, seed, n=6, frac=0.15)
+        a = S.search(world, s, g)
+        r = S.search(world, s, g, method=method)
+        assert r.found == a.found
+        if not a.found:
+            continue
+        pts = world.lattice.to_world(r.cells)
+        seg = np.linalg.norm(np.diff(pts, axis=0), axis=1).sum()
+        assert r.cost == pytest.approx(seg, rel=1e-9)
+        assert r.cost <= a.cost * (1 + 1e-9)
+        assert r.cost >= np.linalg.norm(pts[-1] - pts[0]) * (1 - 1e-9)
+        for p, q in itertools.pairwise(pts):
+            assert world.segment_free(p, q)
+        sc = S.shortcut(world, a.cells)
+        assert np.array_equal(sc[0], a.cells[0]) and np.array_equal(sc[-1], a.cells[-1])
+        sp = world.lattice.to_world(sc)
+        for p, q in itertools.pairwise(sp):
+            assert world.segment_free(p, q)
+        assert np.linalg.norm(np.diff(sp, axis=0), axis=1).sum() <= a.cost * (1 + 1e-9)
+
+
+def test_no_path_and_trivial_path():
+    blocked = [(x, y, 4) for x in range(9) for y in range(9)]
+    w = _box_world(blocked=blocked, n=8)
+    r = S.search(w, [1, 1, 1], [1, 1, 7])
+    assert not r.found and r.reason.startswith("goal unreachable") and r.cells.shape == (0, 3)
+    r = S.search(w, [1, 1, 1], [1, 1, 1])
+    assert r.found and r.cost == 0 and r.cells.tolist() == [[1, 1, 1]]
+    r = S.search(w, [1, 1, 1], [1, 1, 7], max_nodes=50)
+    assert not r.found and "node limit" in r.reason
+
+
+def test_hash_storage_gives_same_results():
+    world, s, g = _random_world("fcc", 7, n=6)
+    w2 = World(world.lattice, world.blocked, world.bounds, dense_budget=0)
+    a, b = S.search(world, s, g), S.search(w2, s, g)
+    assert w2.storage == "hash" and a.found == b.found
+    assert a.cost == pytest.approx(b.cost) and a.cell_checks == b.cell_checks
+
+
+def test_search_counts_checks_in_world():
+    world, s, g = _random_world("bcc", 3)
+    before = world.cell_checks
+    r = S.search(world, s, g)
+    assert world.cell_checks - before == r.cell_checks
+    assert r.expansions > 0 and r.generated >= r.expansions and r.peak_bytes > 0
+
+
+# -- MovingAI Warframe ----------------------------------------------------------------------
+def _load_warframe(name):
+    path = WARFRAME / f"{name}.3dmap"
+    if not path.exists():
+        pytest.skip("Warframe data not available")
+    dims = np.loadtxt(path, max_rows=1, usecols=(1, 2, 3), dtype=np.int64)
+    blocked = np.loadtxt(path, skiprows=1, dtype=np.int64, ndmin=2)
+    scen = np.loadtxt(f"{path}.3dscen", skiprows=2, ndmin=2)
+    world = World(Lattice.named("cubic", 1.0), blocked, np.array([[0, 0, 0], dims - 1.0]))
+    return world, scen
+
+
+@pytest.mark.parametrize("name", ["Simple", "Complex", "DA1"])
+def test_warframe_optimal_costs(name):
+    world, scen = _load_warframe(name)
+    for q in scen[:: len(scen) // 30][:30]:
+        r = S.search(world, q[:3].astype(np.int64), q[3:6].astype(np.int64))
+        assert r.found
+        assert r.cost == pytest.approx(q[6], rel=1e-6)
