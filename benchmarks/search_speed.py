@@ -2,7 +2,7 @@
 
 Usage::
 
-    python benchmarks/search_speed.py                 # sampled Warframe + geb079-like table
+    python benchmarks/search_speed.py                 # sampled Warframe + geb079 table
     python benchmarks/search_speed.py --all-warframe  # all 30,000 Warframe queries, mismatches
     python benchmarks/search_speed.py --da1 1000      # time 1,000 DA1 queries
 
@@ -31,6 +31,7 @@ from planner.world import World
 ROOT = Path(__file__).resolve().parents[1]
 WARFRAME = ROOT / ".." / "shared" / "data" / "warframe"
 MAPS = ("Simple", "Complex", "DA1")
+GEB079 = ROOT / ".." / "shared" / "data" / "octomap" / "geb079.bt"
 
 
 def load_warframe(name: str) -> tuple[World, np.ndarray]:
@@ -142,38 +143,22 @@ def compare(world: World, queries: np.ndarray, pad: int, with_nx: bool = True) -
     return dict(numba=tn, nx=tx, py=tp, exp=exp)
 
 
-def geb079_like(seed: int = 0) -> tuple[World, np.ndarray]:
-    """Synthetic office corridor the size of geb079 (39 x 15 x 3 m, 0.08 m cells): floor,
-    ceiling, outer walls, a corridor with doors into rooms, clutter boxes."""
+def geb079(n_queries: int = 20, seed: int = 0) -> tuple[World, np.ndarray] | None:
+    """The real OctoMap scan geb079.bt on the cubic lattice at its native 0.08 m, with
+    random free start/goal cells at least 8 m apart (None when the data is absent)."""
+    from planner.api import build_world
+
+    if not GEB079.is_file():
+        return None
+    world = build_world(GEB079, "cubic", cell_volume=0.08**3)
     rng = np.random.default_rng(seed)
-    lat = Lattice.named("cubic", 0.08**3)
-    dims = np.array([39.0, 15.0, 3.0])
-    n = np.round(dims / 0.08).astype(int)
-    occ = np.zeros(n, bool)
-    occ[:, :, 0] = occ[:, :, -1] = True
-    occ[0], occ[-1], occ[:, 0], occ[:, -1] = True, True, True, True
-    ya, yb = int(n[1] * 0.45), int(n[1] * 0.55)  # corridor walls with doors
-    for y in (ya, yb):
-        occ[:, y, :] = True
-        for x in range(20, n[0] - 20, 40):
-            occ[x : x + 11, y, 1:26] = False
-    for x in range(60, n[0], 60):  # room dividers
-        occ[x, :ya, :] = True
-        occ[x, yb:, :] = True
-    for _ in range(150):  # furniture
-        c = rng.integers([2, 2, 1], n - [12, 12, 14])
-        e = rng.integers([4, 4, 4], [12, 12, 14])
-        if c[1] + e[1] > ya and c[1] < yb:
-            continue
-        occ[c[0] : c[0] + e[0], c[1] : c[1] + e[1], c[2] : c[2] + e[2]] = True
-    blocked = np.argwhere(occ).astype(np.int64)
-    world = World(lat, blocked, np.array([[0, 0, 0], (n - 1) * 0.08]))
-    free = np.argwhere(~occ[:, :, 5:15]) + [0, 0, 5]
+    lo = np.ceil(world.bounds[0] / 0.08).astype(np.int64)
+    hi = np.floor(world.bounds[1] / 0.08).astype(np.int64)
     q = []
-    while len(q) < 20:
-        s, g = free[rng.choice(len(free), 2)]
-        if np.linalg.norm(s - g) > 150:
-            q.append(np.r_[s, g])
+    while len(q) < n_queries:
+        c = rng.integers(lo, hi + 1, size=(2, 3))
+        if world.is_free(c).all() and np.linalg.norm(c[0] - c[1]) * 0.08 > 8.0:
+            q.append(np.r_[c[0], c[1]])
     return world, np.array(q, float)
 
 
@@ -203,6 +188,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--compare", type=int, default=10, help="queries per map vs nx/Python")
     ap.add_argument("--pad", type=int, default=6, help="crop padding (cells) for nx/Python")
     ap.add_argument("--da1", type=int, default=1000, help="DA1 queries to time (0: skip)")
+    ap.add_argument("--no-geb079", dest="geb079", action="store_false",
+                    help="skip the geb079.bt OctoMap world")
     a = ap.parse_args(argv)
     if not WARFRAME.exists():
         print(f"no Warframe data at {WARFRAME}; skipping")
@@ -240,19 +227,23 @@ def main(argv: list[str] | None = None) -> int:
     print(f"{'case':10s} {'queries':>7s} {'numba s':>9s} {'networkx s':>10s} {'python s':>9s} "
           f"{'nx/numba':>9s} {'py/numba':>9s}")
     cases = [(name, *load_warframe(name)) for name in MAPS]
-    gw, gq = geb079_like()
-    cases.append(("geb079ish", gw, gq))
+    geb = geb079() if a.geb079 else None
+    if geb is not None:
+        cases.append(("geb079", *geb))
     for name, world, scen in cases:
         qs = scen[:: max(1, len(scen) // a.compare)][: a.compare]
         r = compare(world, qs, a.pad)
         print(f"{name:10s} {len(qs):7d} {r['numba']:9.4f} {r['nx']:10.3f} {r['py']:9.3f} "
               f"{r['nx'] / r['numba']:9.0f} {r['py'] / r['numba']:9.0f}")
 
-    print("\ngeb079-like full world (cubic 0.08 m, ~39 x 15 x 3 m), numba A*")
-    S.search(gw, gq[0, :3].astype(np.int64), gq[0, 3:6].astype(np.int64))
-    r = numba_batch(gw, gq)
-    print(f"{len(gq)} queries: {r['exp']} expansions, {r['exp'] / r['ksec']:.3g} exp/s, "
-          f"{r['checks'] / r['ksec']:.3g} checks/s, {r['wall']:.2f} s wall")
+    if geb is not None:
+        gw, gq = geb
+        print(f"\ngeb079.bt full world (cubic 0.08 m, {gw.n_blocked} blocked cells, "
+              f"{gw.storage} storage), numba A*, random free queries > 8 m apart")
+        S.search(gw, gq[0, :3].astype(np.int64), gq[0, 3:6].astype(np.int64))
+        r = numba_batch(gw, gq)
+        print(f"{len(gq)} queries: {r['exp']} expansions, {r['exp'] / r['ksec']:.3g} exp/s, "
+              f"{r['checks'] / r['ksec']:.3g} checks/s, {r['wall']:.2f} s wall")
     return 1 if total_bad else 0
 
 

@@ -1,4 +1,10 @@
-"""lattice planner: path planning on non-cubic 3D lattices over occupied voxel lists."""
+"""lattice planner: path planning on non-cubic 3D lattices over occupied voxel lists.
+
+The pipeline, one module per step: points (:mod:`planner.io`) -> lattice indices
+(:class:`Lattice`) -> occupied voxel list (:class:`OccupiedVoxelList`) -> planning world
+(:class:`World`) -> search (:mod:`planner.search`, :mod:`planner.baseline`) -> path
+(:class:`PlanResult`) -> metrics (:mod:`planner.bench`).
+"""
 
 from planner.errors import LatticeError, MapError, PlanError, PlannerError
 from planner.lattice import NAMED_LATTICES, Lattice
@@ -8,7 +14,29 @@ __all__ = [
     "Lattice",
     "LatticeError",
     "MapError",
+    "OccupiedVoxelList",
     "PlanError",
+    "PlanResult",
     "PlannerError",
+    "World",
+    "build_world",
+    "plan",
 ]
 __version__ = "0.1.0"
+
+# Lazy so that `import planner` stays cheap (the search and voxel modules load numba kernels).
+_LAZY = {
+    "OccupiedVoxelList": "planner.voxels",
+    "World": "planner.world",
+    "PlanResult": "planner.api",
+    "build_world": "planner.api",
+    "plan": "planner.api",
+}
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        import importlib
+
+        return getattr(importlib.import_module(_LAZY[name]), name)
+    raise AttributeError(f"module 'planner' has no attribute {name!r}")

@@ -359,15 +359,59 @@ def _dist(g, p0, p1, p2, q0, q1, q2):  # pragma: no cover - compiled
 
 
 # Slots of the int64 state vector shared by the resumable search kernel and its driver.
-ST_N, ST_HN, ST_EXP, ST_LOOK, ST_GOAL = 0, 1, 2, 3, 4
+ST_N, ST_HN, ST_EXP, ST_LOOK, ST_GOAL, ST_NP = 0, 1, 2, 3, 4, 5
+
+# Cell -> node slot map: pages of PAGE int32 slots, one per touched PB x PB x PB block of
+# cells, found through a small open-addressing table of block keys. Neighbouring cells share
+# a page, so a lookup is usually a cached-page hit plus one nearby load: memory stays
+# proportional to the region the search touches, with near-dense-array locality.
+PB_SHIFT = 2
+PB_MASK = (1 << PB_SHIFT) - 1
+PAGE = 1 << (3 * PB_SHIFT)
+
+
+@njit(cache=True, inline="always")
+def _local(v0, v1, v2):  # pragma: no cover - compiled
+    return ((v0 & PB_MASK) << (2 * PB_SHIFT)) | ((v1 & PB_MASK) << PB_SHIFT) | (v2 & PB_MASK)
+
+
+@njit(cache=True, inline="always")
+def _block_key(v0, v1, v2):  # pragma: no cover - compiled
+    return pack3(v0 >> PB_SHIFT, v1 >> PB_SHIFT, v2 >> PB_SHIFT)
+
+
+@njit(cache=True)
+def _find_slot(pages, btab, bkeys, v0, v1, v2):  # pragma: no cover - compiled
+    """Node slot of cell (v0, v1, v2), or -1 when the search has not generated it."""
+    bmask = btab.shape[0] - 1
+    bk = _block_key(v0, v1, v2)
+    p = mix64(bk) & bmask
+    while True:
+        q = btab[p]
+        if q == _EMPTY:
+            return _EMPTY
+        if bkeys[q] == bk:
+            return np.int64(pages[q * PAGE + _local(v0, v1, v2)])
+        p = (p + 1) & bmask
+
+
+@njit(cache=True)
+def _new_page(pages, btab, bkeys, st, bk, p):  # pragma: no cover - compiled
+    q = st[ST_NP]
+    st[ST_NP] = q + 1
+    btab[p] = q
+    bkeys[q] = bk
+    for i in range(q * PAGE, (q + 1) * PAGE):
+        pages[i] = _EMPTY
+    return q
 RUN_EXHAUSTED, RUN_FOUND, RUN_LIMIT, RUN_GROW = 0, 1, 2, 3
 
 
 @njit(cache=True)
-def search_init(start, goal, nkey, ng, nf, nh, npar, npos, heap, table, hmat, hkind, g,
-                st):  # pragma: no cover - compiled
-    """Put the start node in empty node arrays (slot 0) and the heap."""
-    tmask = table.shape[0] - 1
+def search_init(start, goal, nkey, ng, nf, nh, npar, npos, heap, pages, btab, bkeys, hmat,
+                hkind, g, st):  # pragma: no cover - compiled
+    """Put the start node in empty node arrays (slot 0), the slot map and the heap."""
+    bmask = btab.shape[0] - 1
     sk = pack3(start[0], start[1], start[2])
     nkey[0] = sk
     ng[0] = 0.0
@@ -377,25 +421,28 @@ def search_init(start, goal, nkey, ng, nf, nh, npar, npos, heap, table, hmat, hk
     npar[0] = 0
     heap[0] = 0
     npos[0] = 0
-    table[mix64(sk) & tmask] = 0
+    st[ST_NP] = 0
+    bk = _block_key(start[0], start[1], start[2])
+    q = _new_page(pages, btab, bkeys, st, bk, mix64(bk) & bmask)
+    pages[q * PAGE + _local(start[0], start[1], start[2])] = 0
     st[ST_N] = 1
     st[ST_HN] = 1
 
 
 @njit(cache=True)
-def rehash(table, nkey, n):  # pragma: no cover - compiled
-    """Insert node slots 0..n-1 (by their keys) into an empty table."""
-    tmask = table.shape[0] - 1
-    for x in range(n):
-        q = mix64(nkey[x]) & tmask
-        while table[q] != _EMPTY:
-            q = (q + 1) & tmask
-        table[q] = x
+def rehash(btab, bkeys, npages):  # pragma: no cover - compiled
+    """Insert pages 0..npages-1 (by their block keys) into an empty block table."""
+    bmask = btab.shape[0] - 1
+    for x in range(npages):
+        q = mix64(bkeys[x]) & bmask
+        while btab[q] != _EMPTY:
+            q = (q + 1) & bmask
+        btab[q] = x
 
 
 @njit(cache=True)
 def search_run(
-    occ, goal, st, nkey, ng, nf, nh, npar, npos, heap, table, ufree,
+    occ, goal, st, nkey, ng, nf, nh, npar, npos, heap, pages, btab, bkeys, ufree,
     moves, mcost, ust, mptr, midx, hmat, hkind, anyangle, g, rel, rhs, full, max_nodes,
 ):  # pragma: no cover - compiled
     """A* / Dijkstra / Theta* / Lazy Theta* over lattice cells, resumable.
@@ -415,8 +462,9 @@ def search_run(
     nkey, ng, nf, nh, npar, npos, heap : (cap,) arrays
         Node table (packed key, g, f, h, parent slot, heap position or -1 closed / -2 new)
         and the binary heap of slots.
-    table : (T,) int64
-        Open-addressing hash, packed key -> node slot (-1 empty), T a power of two.
+    pages : (P * PAGE,) int32, btab : (T,) int64, bkeys : (P,) int64
+        Cell -> node slot map (-1 none): pages of one block of cells each, and the
+        open-addressing table (T a power of two, -1 empty) from block key to page.
     ufree : (U,) bool
         Scratch for the union stencil lookups.
     moves : (M, 3) int64, mcost : (M,) float64
@@ -449,8 +497,11 @@ def search_run(
     g20, g21, g22 = g[2, 0], g[2, 1], g[2, 2]
     nfac = hmat.shape[0]
     cap = nkey.shape[0]
-    tsize = table.shape[0]
-    tmask = tsize - 1
+    pcap = bkeys.shape[0]
+    bsize = btab.shape[0]
+    bmask = bsize - 1
+    last_bk = np.int64(-1)
+    last_pg = np.int64(0)
     nu = ust.shape[0]
     nm = moves.shape[0]
     pt = np.empty(3, dtype=np.int64)
@@ -464,7 +515,7 @@ def search_run(
     lookups = st[ST_LOOK]
     status = RUN_EXHAUSTED
     while hn > 0:
-        if n + nm > cap or 2 * (n + nm) > tsize:
+        if n + nm > cap or st[ST_NP] + nm > pcap or 2 * (st[ST_NP] + nm) > bsize:
             status = RUN_GROW
             break
         s = heap[0]
@@ -513,11 +564,8 @@ def search_run(
                             break
                     if not allowed:
                         continue
-                    kk = pack3(u0 + moves[m, 0], u1 + moves[m, 1], u2 + moves[m, 2])
-                    p = mix64(kk) & tmask
-                    while table[p] != _EMPTY and nkey[table[p]] != kk:
-                        p = (p + 1) & tmask
-                    t = table[p]
+                    t = _find_slot(pages, btab, bkeys, u0 + moves[m, 0], u1 + moves[m, 1],
+                                   u2 + moves[m, 2])
                     if t == _EMPTY or npos[t] != -1:
                         continue
                     v = ng[t] + mcost[m]
@@ -549,18 +597,25 @@ def search_run(
             v0 = u0 + moves[m, 0]
             v1 = u1 + moves[m, 1]
             v2 = u2 + moves[m, 2]
-            kk = pack3(v0, v1, v2)
-            p = mix64(kk) & tmask
-            while True:
-                t = table[p]
-                if t == _EMPTY or nkey[t] == kk:
-                    break
-                p = (p + 1) & tmask
+            bk = _block_key(v0, v1, v2)
+            if bk != last_bk:
+                p = mix64(bk) & bmask
+                while True:
+                    q = btab[p]
+                    if q == _EMPTY or bkeys[q] == bk:
+                        break
+                    p = (p + 1) & bmask
+                if q == _EMPTY:
+                    q = _new_page(pages, btab, bkeys, st, bk, p)
+                last_bk = bk
+                last_pg = q
+            loc = last_pg * PAGE + _local(v0, v1, v2)
+            t = np.int64(pages[loc])
             if t == _EMPTY:
                 t = n
                 n += 1
-                table[p] = t
-                nkey[t] = kk
+                pages[loc] = t
+                nkey[t] = pack3(v0, v1, v2)
                 ng[t] = np.inf
                 e0 = gl0 - v0
                 e1 = gl1 - v1

@@ -256,28 +256,42 @@ def _run(occ, s, gl, moves, mcost, union, ptr, idx, hmat, hkind, anyangle, g, re
     """Drive the resumable kernel, doubling the node arrays / hash table when it asks."""
     arrs = {k: np.empty(cap, np.float64 if k in _F8 else np.int64)
             for k in ("nkey", "ng", "nf", "nh", "npar", "npos", "heap")}
-    table = np.full(2 * cap, -1, np.int64)
-    st = np.zeros(5, np.int64)
+    pcap = 64  # pages (sk.PAGE slots each) of the cell -> node slot map
+    pages = np.empty(pcap * sk.PAGE, np.int32)
+    bkeys = np.empty(pcap, np.int64)
+    btab = np.full(2 * pcap, -1, np.int64)
+    st = np.zeros(6, np.int64)
     ufree = np.empty(len(union), np.bool_)
     sk.search_init(s, gl, arrs["nkey"], arrs["ng"], arrs["nf"], arrs["nh"], arrs["npar"],
-                   arrs["npos"], arrs["heap"], table, hmat, hkind, g, st)
+                   arrs["npos"], arrs["heap"], pages, btab, bkeys, hmat, hkind, g, st)
     while True:
         status = sk.search_run(
             occ, gl, st, arrs["nkey"], arrs["ng"], arrs["nf"], arrs["nh"], arrs["npar"],
-            arrs["npos"], arrs["heap"], table, ufree, moves, mcost, union, ptr, idx, hmat,
+            arrs["npos"], arrs["heap"], pages, btab, bkeys, ufree, moves, mcost, union, ptr,
+            idx, hmat,
             hkind, anyangle, g, rel, rhs, full, max_nodes,
         )
         if status != sk.RUN_GROW:
             break
-        n = int(st[sk.ST_N])
-        cap *= 2
-        for k, a in arrs.items():
-            b = np.empty(cap, a.dtype)
-            b[:n] = a[:n]
-            arrs[k] = b
-        table = np.full(2 * cap, -1, np.int64)
-        sk.rehash(table, arrs["nkey"], n)
-    peak = sum(a.nbytes for a in arrs.values()) + table.nbytes + ufree.nbytes + st.nbytes
+        n, npg = int(st[sk.ST_N]), int(st[sk.ST_NP])
+        if n + len(moves) > cap:
+            cap *= 2
+            for k, a in arrs.items():
+                b = np.empty(cap, a.dtype)
+                b[:n] = a[:n]
+                arrs[k] = b
+        if npg + len(moves) > pcap or 2 * (npg + len(moves)) > len(btab):
+            pcap *= 2
+            b = np.empty(pcap * sk.PAGE, np.int32)
+            b[: npg * sk.PAGE] = pages[: npg * sk.PAGE]
+            pages = b
+            b = np.empty(pcap, np.int64)
+            b[:npg] = bkeys[:npg]
+            bkeys = b
+            btab = np.full(2 * pcap, -1, np.int64)
+            sk.rehash(btab, bkeys, npg)
+    peak = (sum(a.nbytes for a in arrs.values()) + pages.nbytes + bkeys.nbytes + btab.nbytes
+            + ufree.nbytes + st.nbytes)
     if status != sk.RUN_FOUND:
         return status, None, math.inf, st, peak
     gs = int(st[sk.ST_GOAL])
