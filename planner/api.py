@@ -16,7 +16,10 @@ import numpy as np
 from planner.errors import MapError, PlanError
 from planner.lattice import Lattice
 
-__all__ = ["PlanResult", "build_world", "default_cell_volume", "plan", "as_obstacles"]
+__all__ = [
+    "PlanResult", "as_obstacles", "build_world", "default_cell_volume", "inflated_obstacles",
+    "plan",
+]
 
 # Default planning resolution for raw clouds: about this many cells in the bounding box.
 _DEFAULT_CELLS = 2_000_000
@@ -149,7 +152,6 @@ def build_world(
     -------
     World
     """
-    from planner.voxels import OccupiedVoxelList
     from planner.world import World
 
     t0 = time.perf_counter()
@@ -176,14 +178,40 @@ def build_world(
         if cell_volume is None:
             cell_volume = side.get("cell_volume") or default_cell_volume(obst, bounds)
         lat = Lattice.named(lattice, cell_volume=cell_volume)
-    occupied = OccupiedVoxelList.from_obstacles(obst, lat)
-    blocked = occupied.inflate(radius) if radius > 0 else occupied
-    world = World(lat, blocked.indices, bounds)
+    world = World(lat, inflated_obstacles(obst, lat, radius).indices, bounds)
     world.radius = float(radius)
     world.source = obst.source
     world.obstacles = obst
     world.build_seconds = time.perf_counter() - t0
     return world
+
+
+def inflated_obstacles(obst, lattice: Lattice, radius: float):
+    """The cells a robot centre of radius ``radius`` (m) must not enter, as tight as is cheap.
+
+    Points: exactly the cells whose closed Voronoi cell is closer than ``radius`` to a point
+    (:func:`planner.voxels.exact_inflation`). Boxes (``.3dmap`` voxels): the cells that
+    overlap the box grown by ``radius`` on every side, a superset of the exact set (the
+    grown box contains every point within ``radius`` of the box). Either way a path whose
+    segments touch only free cells keeps distance >= ``radius`` from every obstacle, and
+    the stencil inflation of :meth:`OccupiedVoxelList.inflate` is only needed when the
+    points are gone (a saved voxel list).
+
+    Returns
+    -------
+    OccupiedVoxelList
+    """
+    from planner.keys import unpack
+    from planner.voxels import OccupiedVoxelList, box_keys, exact_inflation
+
+    keys = []
+    if len(obst.points):
+        keys.append(exact_inflation(obst.points, lattice, radius).keys)
+    if len(obst.boxes):
+        keys.append(box_keys(obst.boxes, obst.box_size + 2 * radius, lattice))
+    if not keys:
+        raise MapError(f"{obst.source}: no obstacles")
+    return OccupiedVoxelList.from_indices(unpack(np.concatenate(keys), lattice.dim), lattice)
 
 
 def _point(p, what: str) -> np.ndarray:

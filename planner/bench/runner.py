@@ -187,6 +187,17 @@ class _Progress:
             print(file=sys.stderr)
 
 
+def _drop_partial_line(path: Path) -> None:
+    """Cut a last line left unfinished by a kill, so that appended rows start on a line."""
+    if not path.is_file() or path.stat().st_size == 0:
+        return
+    with open(path, "rb+") as f:
+        data = f.read()
+        if data.endswith(b"\n"):
+            return
+        f.truncate(data.rfind(b"\n") + 1)
+
+
 def run(tasks: list[dict], out: Path, *, jobs: int = 1, scheduler: str | None = None,
         resume: bool = True, progress: bool = True) -> list[dict]:
     """Execute tasks, appending each finished row to ``out`` (JSON lines).
@@ -197,6 +208,7 @@ def run(tasks: list[dict], out: Path, *, jobs: int = 1, scheduler: str | None = 
     out.parent.mkdir(parents=True, exist_ok=True)
     if not resume and out.exists():
         out.unlink()
+    _drop_partial_line(out)
     done = {row_key(r) for r in read_rows(out)}
     todo = []
     for t in tasks:
