@@ -22,8 +22,10 @@ def cell_distance(y, a, b, e0, e1, tol):  # pragma: no cover - compiled
 
     The nearest point of V lies in the relative interior of a facet, on an edge or at a
     vertex. Facet candidates are the orthogonal projections that land inside V (within
-    ``tol``); edge candidates are the clamped projections onto the edge segments (always in
-    V, vertices included). The minimum over the candidates is the distance.
+    ``tol``): V lies on one side of the facet plane, so such a projection is the nearest
+    point. Edge candidates are the clamped projections onto the edge segments (always in V,
+    vertices included). The minimum over the candidates is the distance; ``tol`` can only
+    make it smaller (conservative for "closer than r" tests).
     """
     k, d = a.shape
     inside = True
@@ -42,9 +44,7 @@ def cell_distance(y, a, b, e0, e1, tol):  # pragma: no cover - compiled
         s = -b[i]
         for j in range(d):
             s += a[i, j] * y[j]
-        if s <= 0.0:  # y is not beyond this facet: its projection is not the nearest point
-            continue
-        if s >= best:
+        if s <= 0.0 or s >= best:  # not beyond this facet, or cannot improve
             continue
         for j in range(d):
             proj[j] = y[j] - s * a[i, j]
@@ -86,8 +86,14 @@ def cell_distances(ys, a, b, e0, e1, tol, out):  # pragma: no cover - compiled
 @njit(cache=True)
 def dilate(grid, occ_flat, stencil_flat, full_flat):  # pragma: no cover - compiled
     """Mark ``occ_flat`` with bit 1, then OR bit 2 into ``occ + stencil`` for every occupied
-    cell that has a free full neighbour (an interior cell's stencil is covered by its
-    neighbours' stencils: any point of its boundary lies in a touching neighbour's cell)."""
+    cell that has a free full neighbour.
+
+    Skipping interior cells is exact: if ``x`` in V(c) and ``y`` in V(c + delta) are closer
+    than r, walk the segment from ``y`` to ``x``; the first point on an occupied closed cell
+    V(m) also lies in a free closed cell (the ones before it), so ``m`` is a boundary cell
+    and V(m) is still within r of V(c + delta). The grid must be padded by the stencil
+    and full-neighbour extents (no bounds checks here).
+    """
     for i in range(occ_flat.shape[0]):
         grid[occ_flat[i]] = 1
     for i in range(occ_flat.shape[0]):
@@ -104,8 +110,24 @@ def dilate(grid, occ_flat, stencil_flat, full_flat):  # pragma: no cover - compi
 
 
 @njit(cache=True)
+def flat_positions(keys, lo, strides, bits, limit, out):  # pragma: no cover - compiled
+    """Flat grid positions ``sum((w - lo) * strides)`` of packed ``keys`` into ``out``."""
+    d = lo.shape[0]
+    mask = (np.int64(1) << bits) - 1
+    for i in range(keys.shape[0]):
+        k = keys[i]
+        f = np.int64(0)
+        for j in range(d - 1, -1, -1):
+            w = (k & mask) - limit
+            k >>= bits
+            f += (w - lo[j]) * strides[j]
+        out[i] = f
+
+
+@njit(cache=True)
 def grid_keys(grid, lo, dims, bits, limit, out):  # pragma: no cover - compiled
-    """Packed keys of the nonzero cells of ``grid`` in C order (ascending keys) into ``out``."""
+    """Packed keys of the nonzero cells of ``grid`` in C order (ascending keys) into ``out``.
+    Returns the number written."""
     d = dims.shape[0]
     w = np.zeros(d, dtype=np.int64)
     n = 0
@@ -125,16 +147,16 @@ def grid_keys(grid, lo, dims, bits, limit, out):  # pragma: no cover - compiled
 
 @njit(cache=True)
 def box_cells(base_keys, resid, offs_world, offs_key, axes, thr, r_in, r_out, out):
-    # pragma: no cover - compiled
     """Keys of the cells whose Voronoi cell overlaps a box, for many boxes of one size.
 
     For box ``i`` (quantized centre key ``base_keys[i]``, ``resid[i]`` = that cell centre
     minus the box centre) and candidate offset ``o`` the cell centre relative to the box
     centre is ``x = resid[i] + offs_world[o]``; the cell overlaps the box iff ``x`` lies in
-    the Minkowski sum ``box + V``, i.e. iff ``|axes @ x| < thr`` on every separating axis
-    (thresholds already carry the tolerance). ``r_in`` / ``r_out``: radii of a ball inside /
-    outside that sum, for early accept / reject. Returns the number of keys written.
-    """
+    the interior of the Minkowski sum ``box + V``, i.e. iff ``|axes @ x| < thr`` on every
+    separating axis (thresholds already carry the tolerance). ``r_in`` / ``r_out``: radii
+    of a ball inside / outside that sum, for early accept / reject. Returns the number of
+    keys written.
+    """  # pragma: no cover - compiled
     n = 0
     d = resid.shape[1]
     for i in range(base_keys.shape[0]):

@@ -235,7 +235,8 @@ def search(
     occ = world.occupancy
     t0 = time.perf_counter()
     status, keys, cost, st, peak = _run(occ, s, gl, moves, mcost, union, ptr, idx, hmat, hkind,
-                                        anyangle, g, rel, rhs, full, int(max_nodes or 0))
+                                        anyangle, g, rel, rhs, full, int(max_nodes or 0),
+                                        _span(world) if anyangle else 0.0)
     secs = time.perf_counter() - t0
     exp, gen, look = int(st[sk.ST_EXP]), int(st[sk.ST_N]), int(st[sk.ST_LOOK])
     world.cell_checks += look
@@ -251,8 +252,13 @@ def search(
 _F8 = ("ng", "nf", "nh")
 
 
+def _span(world: World) -> float:
+    """Longest line of sight inside the world (m): sizes the any-angle walk scratch."""
+    return float(np.linalg.norm(world.bounds[1] - world.bounds[0]))
+
+
 def _run(occ, s, gl, moves, mcost, union, ptr, idx, hmat, hkind, anyangle, g, rel, rhs, full,
-         max_nodes, cap=4096):
+         max_nodes, span, cap=4096):
     """Drive the resumable kernel, doubling the node arrays / hash table when it asks."""
     arrs = {k: np.empty(cap, np.float64 if k in _F8 else np.int64)
             for k in ("nkey", "ng", "nf", "nh", "npar", "npos", "heap")}
@@ -260,7 +266,9 @@ def _run(occ, s, gl, moves, mcost, union, ptr, idx, hmat, hkind, anyangle, g, re
     pages = np.empty(pcap * sk.PAGE, np.int32)
     bkeys = np.empty(pcap, np.int64)
     btab = np.full(2 * pcap, -1, np.int64)
-    st = np.zeros(6, np.int64)
+    st = np.zeros(7, np.int64)
+    wvis, wgen, wq = sk.walk_scratch(span, math.sqrt(2.0 * rhs.min()), len(full))
+    wv = rel @ g
     ufree = np.empty(len(union), np.bool_)
     sk.search_init(s, gl, arrs["nkey"], arrs["ng"], arrs["nf"], arrs["nh"], arrs["npar"],
                    arrs["npos"], arrs["heap"], pages, btab, bkeys, hmat, hkind, g, st)
@@ -269,7 +277,7 @@ def _run(occ, s, gl, moves, mcost, union, ptr, idx, hmat, hkind, anyangle, g, re
             occ, gl, st, arrs["nkey"], arrs["ng"], arrs["nf"], arrs["nh"], arrs["npar"],
             arrs["npos"], arrs["heap"], pages, btab, bkeys, ufree, moves, mcost, union, ptr,
             idx, hmat,
-            hkind, anyangle, g, rel, rhs, full, max_nodes,
+            hkind, anyangle, g, rel, rhs, full, max_nodes, wv, wvis, wgen, wq,
         )
         if status != sk.RUN_GROW:
             break
@@ -291,7 +299,7 @@ def _run(occ, s, gl, moves, mcost, union, ptr, idx, hmat, hkind, anyangle, g, re
             btab = np.full(2 * pcap, -1, np.int64)
             sk.rehash(btab, bkeys, npg)
     peak = (sum(a.nbytes for a in arrs.values()) + pages.nbytes + bkeys.nbytes + btab.nbytes
-            + ufree.nbytes + st.nbytes)
+            + ufree.nbytes + st.nbytes + wvis.nbytes + wgen.nbytes + wq.nbytes)
     if status != sk.RUN_FOUND:
         return status, None, math.inf, st, peak
     gs = int(st[sk.ST_GOAL])

@@ -1,0 +1,181 @@
+"""Occupied voxel list speed: build, inflation, exact inflation, membership, vs a Python set.
+
+For each data set and named lattice it reports
+
+* ``build s``: :meth:`OccupiedVoxelList.from_points` on the whole cloud (quantize + sort);
+* ``cells``, ``B/cell``: occupied cells and bytes held per cell;
+* ``inflate s``, ``inflated``: :meth:`OccupiedVoxelList.inflate` with radius
+  ``--diameters`` cell diameters, where one *cell diameter* is ``cell_volume ** (1/3)``
+  (the edge of a cube of the cell's volume; 0.24 m for geb079 at 0.08**3 and 3 diameters);
+* ``exact s``, ``exact``, ``over``: :func:`exact_inflation` (tight set for the points) and
+  the over-blocking ratio ``inflated / exact``;
+* ``contains s``: ``contains`` of ``--queries`` random cells in the map's index box;
+* ``py build s`` / ``py infl s`` and ratios: a set of index tuples built from the quantized
+  points, inflated by adding every stencil offset in Python loops. Runs longer than
+  ``--baseline-seconds`` are measured on a prefix of the cells and extrapolated linearly
+  (marked ``~``).
+
+A separate table times building from 10^6 uniform random points. Compilation is excluded
+(a warm-up call per lattice first; numba caches to disk).
+
+Run: ``python benchmarks/voxels_speed.py [--lattices fcc bcc] [--baseline-seconds 60]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+import numpy as np
+
+from planner.io import load_points
+from planner.lattice import NAMED_LATTICES, Lattice
+from planner.voxels import OccupiedVoxelList, exact_inflation, inflation_stencil
+
+DATA = (Path(__file__).resolve().parents[1] / ".." / "shared" / "data").resolve()
+
+
+def _datasets(data: Path) -> list[tuple[str, np.ndarray | None, float]]:
+    """(label, points (N, 3) or None when absent, cell volume m^3)."""
+    out = []
+    geb = data / "octomap" / "geb079.bt"
+    out.append(("geb079.bt", load_points(geb) if geb.exists() else None, 0.08**3))
+    scans = [data / "pcl_room" / f"room_scan{i}.pcd" for i in (1, 2)]
+    room = np.concatenate([load_points(p) for p in scans]) if all(
+        p.exists() for p in scans) else None
+    out.append(("room_scan1+2", room, 0.05**3))
+    return out
+
+
+def _timed(fn, *args, **kw):
+    t0 = time.perf_counter()
+    res = fn(*args, **kw)
+    return res, time.perf_counter() - t0
+
+
+def _warm_up(lat: Lattice) -> None:
+    """Compile every kernel once (also fills numba's on-disk cache)."""
+    pts = np.random.default_rng(0).uniform(0, 1, size=(50, 3))
+    occ = OccupiedVoxelList.from_points(pts, lat)
+    occ.inflate(0.3)
+    exact_inflation(pts, lat, 0.3)
+    occ.contains(occ.indices)
+
+
+def _py_build(points: np.ndarray, lat: Lattice) -> tuple[set, float]:
+    t0 = time.perf_counter()
+    cells = {tuple(r) for r in lat.quantize(points).tolist()}
+    return cells, time.perf_counter() - t0
+
+
+def _py_inflate(cells: set, stencil: np.ndarray, cap: float) -> tuple[int | None, float, bool]:
+    """Inflate a set of tuples in pure Python. Returns (cells or None, seconds, extrapolated)."""
+    offs = [tuple(o) for o in stencil.tolist()]
+    todo = list(cells)
+    out: set = set()
+    t0 = time.perf_counter()
+    done = 0
+    step = 2000
+    while done < len(todo):
+        for c in todo[done: done + step]:
+            x, y, z = c
+            for dx, dy, dz in offs:
+                out.add((x + dx, y + dy, z + dz))
+        done = min(done + step, len(todo))
+        el = time.perf_counter() - t0
+        if done < len(todo) and el / done * len(todo) > cap and el > 0.2 * cap:
+            return None, el / done * len(todo), True
+    return len(out), time.perf_counter() - t0, False
+
+
+def _row(label: str, name: str, points: np.ndarray, vol: float, args) -> dict:
+    lat = Lattice.named(name, vol)
+    _warm_up(lat)
+    occ, t_build = _timed(OccupiedVoxelList.from_points, points, lat)
+    r = args.diameters * vol ** (1 / 3)
+    inflated, t_infl = _timed(occ.inflate, r)
+    exact, t_exact = _timed(exact_inflation, points, lat, r)
+    rng = np.random.default_rng(1)
+    w = inflated.indices
+    q = rng.integers(w.min(0), w.max(0) + 1, size=(args.queries, 3))
+    hits, t_cont = _timed(inflated.contains, q)
+    row = {"data": label, "lattice": name, "points": len(points), "build": t_build,
+           "cells": len(occ), "bpc": occ.nbytes / len(occ), "radius": r, "inflate": t_infl,
+           "inflated": len(inflated), "exact_s": t_exact, "exact": len(exact),
+           "over": len(inflated) / len(exact), "contains": t_cont,
+           "hit_rate": float(hits.mean())}
+    if args.baseline_seconds > 0:
+        cells, t_pb = _py_build(points, lat)
+        assert len(cells) == len(occ)
+        n, t_pi, extrap = _py_inflate(cells, inflation_stencil(lat, r), args.baseline_seconds)
+        assert n is None or n == len(inflated)
+        row.update(py_build=t_pb, py_infl=t_pi, py_extrap=extrap)
+    return row
+
+
+def _fmt(rows: list[dict], baseline: bool) -> str:
+    head = ["data", "lattice", "build s", "cells", "B/cell", "radius m", "inflate s",
+            "inflated", "exact s", "exact", "over", "contains s"]
+    if baseline:
+        head += ["py build s", "x", "py infl s", "x"]
+    lines = [head]
+    for r in rows:
+        line = [r["data"], r["lattice"], f"{r['build']:.3f}", f"{r['cells']:,}",
+                f"{r['bpc']:.0f}", f"{r['radius']:.3f}", f"{r['inflate']:.3f}",
+                f"{r['inflated']:,}", f"{r['exact_s']:.3f}", f"{r['exact']:,}",
+                f"{r['over']:.2f}", f"{r['contains']:.3f}"]
+        if baseline:
+            mark = "~" if r["py_extrap"] else ""
+            line += [f"{r['py_build']:.3f}", f"{r['py_build'] / r['build']:.0f}",
+                     f"{mark}{r['py_infl']:.1f}", f"{mark}{r['py_infl'] / r['inflate']:.0f}"]
+        lines.append(line)
+    widths = [max(len(x[i]) for x in lines) for i in range(len(head))]
+    out = ["  ".join(x.rjust(w) for x, w in zip(line, widths, strict=True)) for line in lines]
+    out.insert(1, "  ".join("-" * w for w in widths))
+    return "\n".join(out)
+
+
+def _random_build(names: list[str], n: int) -> str:
+    pts = np.random.default_rng(2).uniform(0, 20, size=(n, 3))
+    lines = [f"build from {n:,} uniform random points in a 20 m cube, cell volume 0.1**3:"]
+    for name in names:
+        lat = Lattice.named(name, 0.1**3)
+        _warm_up(lat)
+        occ, t = _timed(OccupiedVoxelList.from_points, pts, lat)
+        lines.append(f"  {name:6s} {t:.3f} s  ({len(occ):,} cells)")
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p.add_argument("--data", type=Path, default=DATA, help="shared data folder")
+    p.add_argument("--lattices", nargs="+", default=list(NAMED_LATTICES))
+    p.add_argument("--diameters", type=float, default=3.0,
+                   help="inflation radius in cell diameters (cell_volume ** (1/3))")
+    p.add_argument("--queries", type=int, default=10**6, help="random contains() queries")
+    p.add_argument("--random-points", type=int, default=10**6)
+    p.add_argument("--baseline-seconds", type=float, default=60.0,
+                   help="cap per Python-set inflation before extrapolating (0: no baseline)")
+    args = p.parse_args(argv)
+    rows = []
+    for label, pts, vol in _datasets(args.data):
+        if pts is None:
+            print(f"{label}: not found under {args.data}, skipped")
+            continue
+        print(f"{label}: {len(pts):,} points, cell volume {vol:.3g} m^3 "
+              f"(cell diameter {vol ** (1 / 3):.3f} m)", flush=True)
+        for name in args.lattices:
+            rows.append(_row(label, name, pts, vol, args))
+    if rows:
+        print()
+        print(_fmt(rows, args.baseline_seconds > 0))
+        print("\nover = inflated / exact; ~ = Python baseline extrapolated from a prefix; "
+              "x = baseline time / ours")
+    print()
+    print(_random_build(args.lattices, args.random_points))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
