@@ -183,7 +183,18 @@ def plot_paths(path: str, world, results: dict, max_cells: int = 4000) -> None:
     ax3 = fig.add_subplot(1, 2, 1, projection="3d")
     ax2 = fig.add_subplot(1, 2, 2)
     ax3.scatter(*cells.T, s=2, c=cells[:, 2], cmap="Greys", alpha=0.25, depthshade=False)
-    ax2.scatter(cells[:, 0], cells[:, 1], s=2, c=cells[:, 2], cmap="Greys", alpha=0.3)
+    # Top-down: the share of blocked cells in each x-y bin over the paths' height range, so
+    # walls read as dark lines and open floor as white (a scatter of all floors is noise).
+    slab = centres[near & (centres[:, 2] >= lo[2] - 0.3) & (centres[:, 2] <= hi[2] + 0.3)]
+    step = 2 * world.lattice.packing_radius
+    xe = np.arange(lo[0] - margin, hi[0] + margin + step, step)
+    ye = np.arange(lo[1] - margin, hi[1] + margin + step, step)
+    layers = max(1.0, (hi[2] - lo[2] + 0.6) / step)
+    if len(slab):
+        hist, _, _ = np.histogram2d(slab[:, 0], slab[:, 1], bins=(xe, ye))
+        ax2.imshow(np.minimum(hist.T / layers, 1.0), origin="lower", cmap="Greys",
+                   extent=(xe[0], xe[-1], ye[0], ye[-1]), vmin=0, vmax=1, alpha=0.8,
+                   interpolation="nearest")
     for label, p in paths.items():
         r = results[label]
         text = f"{label}: {r.length:.2f} m, {r.cell_checks:,} checks"
@@ -199,10 +210,12 @@ def plot_paths(path: str, world, results: dict, max_cells: int = 4000) -> None:
     ax2.set_xlabel("x (m)")
     ax2.set_ylabel("y (m)")
     ax2.set_aspect("equal")
-    ax2.set_title("top-down view (grey: blocked cells near the path)")
+    ax2.set_title("top-down view (grey: share of blocked cells over the path's heights)",
+                  fontsize=10)
     ax3.set_title(f"{Path(str(getattr(world, 'source', ''))).name}: paths in 3D")
     ax2.legend(fontsize=8, loc="best")
     fig.tight_layout()
     with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=110, format=Path(path).suffix.lstrip(".") or "png")
+        fig.savefig(tmp, dpi=110, format=Path(path).suffix.lstrip(".") or "png",
+                    bbox_inches="tight")
     plt.close(fig)
