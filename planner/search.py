@@ -249,7 +249,7 @@ def search(
                         peak, reason)
 
 
-_F8 = ("ng", "nf", "nh")
+_F8 = ("ng", "nf", "nh", "hf", "hg")
 
 
 def _span(world: World) -> float:
@@ -261,7 +261,7 @@ def _run(occ, s, gl, moves, mcost, union, ptr, idx, hmat, hkind, anyangle, g, re
          max_nodes, span, cap=4096):
     """Drive the resumable kernel, doubling the node arrays / hash table when it asks."""
     arrs = {k: np.empty(cap, np.float64 if k in _F8 else np.int64)
-            for k in ("nkey", "ng", "nf", "nh", "npar", "npos", "heap")}
+            for k in ("nkey", "ng", "nf", "nh", "npar", "npos", "heap", "hf", "hg")}
     pcap = 64  # pages (sk.PAGE slots each) of the cell -> node slot map
     pages = np.empty(pcap * sk.PAGE, np.int32)
     bkeys = np.empty(pcap, np.int64)
@@ -271,13 +271,14 @@ def _run(occ, s, gl, moves, mcost, union, ptr, idx, hmat, hkind, anyangle, g, re
     wv = rel @ g
     ufree = np.empty(len(union), np.bool_)
     sk.search_init(s, gl, arrs["nkey"], arrs["ng"], arrs["nf"], arrs["nh"], arrs["npar"],
-                   arrs["npos"], arrs["heap"], pages, btab, bkeys, hmat, hkind, g, st)
+                   arrs["npos"], arrs["heap"], arrs["hf"], arrs["hg"], pages, btab, bkeys,
+                   hmat, hkind, g, st)
     while True:
         status = sk.search_run(
             occ, gl, st, arrs["nkey"], arrs["ng"], arrs["nf"], arrs["nh"], arrs["npar"],
-            arrs["npos"], arrs["heap"], pages, btab, bkeys, ufree, moves, mcost, union, ptr,
-            idx, hmat,
-            hkind, anyangle, g, rel, rhs, full, max_nodes, wv, wvis, wgen, wq,
+            arrs["npos"], arrs["heap"], arrs["hf"], arrs["hg"], pages, btab, bkeys, ufree,
+            moves, mcost, union, ptr, idx, hmat, hkind, anyangle, g, rel, rhs, full, max_nodes,
+            wv, wvis, wgen, wq,
         )
         if status != sk.RUN_GROW:
             break
