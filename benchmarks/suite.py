@@ -18,6 +18,7 @@ from pathlib import Path
 from planner.bench import runner, summary
 from planner.bench.suite import REPO, load_suite
 from planner.errors import PlannerError
+from planner.fsutil import write_text_atomic
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -28,6 +29,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--scheduler", default=None, help="Dask scheduler address tcp://host:port")
     ap.add_argument("--resume", action="store_true", help="keep finished rows, run the rest")
     ap.add_argument("--no-progress", action="store_true")
+    ap.add_argument("--report-only", action="store_true",
+                    help="no new runs: summarise the rows already in OUT/results.jsonl")
     a = ap.parse_args(argv)
     try:
         suite = load_suite(a.suite)
@@ -40,14 +43,24 @@ def main(argv: list[str] | None = None) -> int:
             raise PlannerError(f"suite {suite.name}: no map files found "
                                f"(skipped: {', '.join(suite.skipped) or 'none'})")
         log = (lambda m: print(m, file=sys.stderr)) if not a.no_progress else (lambda m: None)
-        tasks, record = runner.plan_tasks(suite, log=log)
+        saved = out / "queries.json"
+        if a.report_only and saved.is_file():  # no need to rebuild worlds and queries
+            tasks, record = [], json.loads(saved.read_text())
+        else:
+            tasks, record = runner.plan_tasks(suite, log=log)
         out.mkdir(parents=True, exist_ok=True)
-        rows = runner.run(tasks, out / "results.jsonl", jobs=a.jobs, scheduler=a.scheduler,
-                          resume=a.resume, progress=not a.no_progress)
+        write_text_atomic(saved, json.dumps(record, indent=1))
+        if a.report_only:
+            rows = runner.read_rows(out / "results.jsonl")
+            if not rows:
+                raise PlannerError(f"{out / 'results.jsonl'}: no finished runs to report")
+        else:
+            rows = runner.run(tasks, out / "results.jsonl", jobs=a.jobs,
+                              scheduler=a.scheduler, resume=a.resume,
+                              progress=not a.no_progress)
         summ = summary.summarize(rows)
         summary.write_csv(out / "summary.csv", summ)
         figs = summary.plot(rows, out)
-        (out / "queries.json").write_text(json.dumps(record, indent=1))
         cmd = f"planner bench {a.suite}" + (f" --out {a.out}" if a.out else "")
         rep = summary.write_report(out, suite, rows, summ, record, figs, cmd)
     except PlannerError as exc:

@@ -73,14 +73,22 @@ class PlanResult:
         return json.dumps(self.to_dict())
 
 
-def as_obstacles(source):
-    """Obstacles from a file path, an (N, 3) point array or an Obstacles instance."""
+def as_obstacles(source, format: str | None = None):
+    """Obstacles from a file path, an (N, 3) point array or an Obstacles instance.
+
+    ``format`` overrides the file extension (see :func:`planner.io.load_obstacles`);
+    ``"poses"`` reads a pose list and merges its scans (:func:`planner.io.load_posed_scans`).
+    """
     from planner import io
 
     if isinstance(source, io.Obstacles):
         return source
+    if isinstance(source, str | Path) and format == "poses":
+        pts = io.load_posed_scans(source)
+        return io.Obstacles(points=pts, boxes=np.zeros((0, 3)), box_size=0.0, bounds=None,
+                            resolution=None, source=str(source))
     if isinstance(source, str | Path):
-        return io.load_obstacles(source)
+        return io.load_obstacles(source, format)
     pts = np.asarray(source, dtype=float)
     if pts.ndim != 2 or pts.shape[1] != 3:
         raise MapError(f"obstacle points must have shape (N, 3), got {pts.shape}")
@@ -128,6 +136,7 @@ def build_world(
     cell_volume: float | None = None,
     radius: float = 0.0,
     bounds: np.ndarray | None = None,
+    format: str | None = None,
 ):
     """Build the planning world once; query it many times with :func:`plan`.
 
@@ -147,6 +156,8 @@ def build_world(
     bounds : array_like, shape (2, 3), optional
         World box [min, max] (m) the robot centre must stay in. Default: the map's own
         bounds (.3dmap grid box, bundled map sidecar) or the obstacles' bounding box.
+    format : str, optional
+        File format overriding the extension, or ``"poses"`` for a pose list of scans.
 
     Returns
     -------
@@ -156,7 +167,7 @@ def build_world(
 
     t0 = time.perf_counter()
     side = _sidecar(source)
-    obst = as_obstacles(source)
+    obst = as_obstacles(source, format)
     if bounds is None:
         if obst.bounds is not None:
             bounds = obst.bounds

@@ -74,6 +74,9 @@ def _add_world_args(p: argparse.ArgumentParser, *, lattice: bool = True) -> None
     p.add_argument("--radius", type=_nonneg, default=None, help="robot radius in metres")
     p.add_argument("--bounds", type=_bounds, default=None,
                    help="world box xmin,ymin,zmin,xmax,ymax,zmax (m)")
+    p.add_argument("--format", default=None,
+                   help="file format instead of the extension: ply, pcd, xyz, npy, bt, 3dmap, "
+                        "or poses (a pose list of scans, merged)")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -143,18 +146,16 @@ def _cmd_lattices(a) -> int:
 def _cmd_plan(a) -> int:
     from planner import api, report
 
+    world = api.build_world(a.map, a.lattice, cell_volume=a.cell_volume,
+                            radius=a.radius or 0.0, bounds=a.bounds, format=a.format)
     res = api.plan(
-        a.map, a.start, a.goal, lattice=a.lattice, cell_volume=a.cell_volume,
-        radius=a.radius or 0.0, method=a.method, neighbors=a.neighbors,
-        corner_cutting=a.corner_cutting, bounds=a.bounds, shortcut=a.shortcut,
-        time_limit=a.time, seed=a.seed,
+        world, a.start, a.goal, method=a.method, neighbors=a.neighbors,
+        corner_cutting=a.corner_cutting, shortcut=a.shortcut, time_limit=a.time, seed=a.seed,
     )
     if a.out:
         report.write_path(a.out, res)
     if a.plot and res.found:
-        report.plot_paths(a.plot, api.build_world(a.map, a.lattice, cell_volume=a.cell_volume,
-                                                  radius=a.radius or 0.0, bounds=a.bounds),
-                          {a.lattice: res})
+        report.plot_paths(a.plot, world, {a.lattice: res})
     if a.json:
         print(json.dumps(res.to_dict()))
     else:
@@ -169,7 +170,7 @@ def _cmd_compare(a) -> int:
         a.map, lattices=[s.strip() for s in a.lattices.split(",") if s.strip()],
         cell_volume=a.cell_volume, radius=a.radius, bounds=a.bounds, start=a.start,
         goal=a.goal, method=a.method, neighbors=a.neighbors, plot=a.plot,
-        progress=not a.json,
+        progress=not a.json, format=a.format,
     )
     if a.json:
         print(json.dumps(rows))
@@ -182,7 +183,7 @@ def _cmd_voxels(a) -> int:
     from planner import api
 
     world = api.build_world(a.map, a.lattice, cell_volume=a.cell_volume,
-                            radius=a.radius or 0.0, bounds=a.bounds)
+                            radius=a.radius or 0.0, bounds=a.bounds, format=a.format)
     world.blocked_voxels().save(a.out)
     print(f"{a.out}: {world.n_blocked} blocked {a.lattice} cells, "
           f"cell volume {world.lattice.cell_volume:.6g} m^3")

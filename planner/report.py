@@ -19,13 +19,17 @@ __all__ = ["compare", "describe", "format_rows", "plot_paths", "write_path"]
 
 def describe(res) -> str:
     """One human-readable paragraph about a PlanResult."""
-    head = f"{res.lattice} (cell volume {res.cell_volume:.6g} m^3), {res.method}, {res.neighbors}"
+    ompl = res.method.startswith("ompl:")
+    head = f"{res.lattice} (cell volume {res.cell_volume:.6g} m^3), {res.method}" + (
+        " (continuous, validated on this lattice's world)" if ompl else f", {res.neighbors}")
     if not res.found:
         return f"{head}: no path ({res.reason}); {res.cell_checks} cell checks"
+    work = "" if ompl else f", {res.expansions} expansions"
+    note = f"; {res.reason}" if res.reason else ""
     return (
         f"{head}: length {res.length:.3f} m, {len(res.path)} waypoints, "
-        f"{res.cell_checks} cell checks, {res.expansions} expansions, "
-        f"{res.seconds * 1e3:.1f} ms search (+{res.build_seconds:.2f} s map build)"
+        f"{res.cell_checks} cell checks{work}, "
+        f"{res.seconds * 1e3:.1f} ms search (+{res.build_seconds:.2f} s map build){note}"
     )
 
 
@@ -67,6 +71,7 @@ def compare(
     neighbors: str = "full",
     plot: str | None = None,
     progress: bool = True,
+    format: str | None = None,
 ) -> list[dict]:
     """Plan the same queries on every lattice and return one summary row per lattice.
 
@@ -92,7 +97,7 @@ def compare(
     for name in lattices:
         t0 = time.perf_counter()
         world = api.build_world(map_path, name, cell_volume=cell_volume, radius=radius,
-                                bounds=bounds)
+                                bounds=bounds, format=format)
         build = time.perf_counter() - t0
         per = []
         for i, (s, g) in enumerate(queries):
