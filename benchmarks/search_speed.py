@@ -23,6 +23,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from numba import njit
 
 from planner import search as S
 from planner.lattice import Lattice
@@ -119,6 +120,114 @@ def numba_batch(world: World, queries: np.ndarray) -> dict:
     return dict(n=len(queries), exp=exp, checks=checks, ksec=ksec, wall=wall, bad=bad)
 
 
+@njit(cache=True)
+def _minimal_astar(free, d1, d2, s, gl, moves, mcost, g, pos, heap, hf):  # pragma: no cover
+    """The smallest compiled A* we could write for cubic-26 with the safe rule: dense g /
+    position arrays over the whole map (memory proportional to the box: the design the
+    product avoids), octile heuristic, binary heap. A floor for the per-expansion cost on
+    this machine, not a planner. Returns (expansions, cost)."""
+    hn = 1
+    heap[0] = s
+    hf[0] = 0.0
+    g[s] = 0.0
+    pos[s] = 0
+    exp = 0
+    ga, gb, gc = gl // (d1 * d2), (gl // d2) % d1, gl % d2
+    r3, r2 = math.sqrt(3.0), math.sqrt(2.0)
+    d0 = free.shape[0] // (d1 * d2)
+    while hn > 0:
+        x = heap[0]
+        if x == gl:
+            return exp, g[x]
+        hn -= 1
+        if hn > 0:
+            y, yf = heap[hn], hf[hn]
+            i = 0
+            while True:
+                c = 2 * i + 1
+                if c >= hn:
+                    break
+                if c + 1 < hn and hf[c + 1] < hf[c]:
+                    c += 1
+                if not hf[c] < yf:
+                    break
+                heap[i], hf[i] = heap[c], hf[c]
+                pos[heap[i]] = i
+                i = c
+            heap[i], hf[i] = y, yf
+            pos[y] = i
+        pos[x] = -1
+        exp += 1
+        a, b, cc = x // (d1 * d2), (x // d2) % d1, x % d2
+        for m in range(moves.shape[0]):
+            a2, b2, c2 = a + moves[m, 0], b + moves[m, 1], cc + moves[m, 2]
+            if a2 < 0 or b2 < 0 or c2 < 0 or a2 >= d0 or b2 >= d1 or c2 >= d2:
+                continue
+            t = (a2 * d1 + b2) * d2 + c2
+            if free[t] == 0 or pos[t] == -1:
+                continue
+            ok = True
+            for da in range(min(0, moves[m, 0]), max(0, moves[m, 0]) + 1):
+                for db in range(min(0, moves[m, 1]), max(0, moves[m, 1]) + 1):
+                    for dc in range(min(0, moves[m, 2]), max(0, moves[m, 2]) + 1):
+                        if free[((a + da) * d1 + b + db) * d2 + cc + dc] == 0:
+                            ok = False
+            if not ok:
+                continue
+            gt = g[x] + mcost[m]
+            if gt < g[t]:
+                g[t] = gt
+                x0, x1, x2 = abs(ga - a2), abs(gb - b2), abs(gc - c2)
+                lo = min(x0, min(x1, x2))
+                hi = max(x0, max(x1, x2))
+                f = gt + (r3 - r2) * lo + (r2 - 1.0) * (x0 + x1 + x2 - lo - hi) + hi
+                i = hn if pos[t] == -2 else pos[t]
+                if pos[t] == -2:
+                    hn += 1
+                while i > 0:
+                    p = (i - 1) >> 1
+                    if not f < hf[p]:
+                        break
+                    heap[i], hf[i] = heap[p], hf[p]
+                    pos[heap[i]] = i
+                    i = p
+                heap[i], hf[i] = t, f
+                pos[t] = i
+    return exp, np.inf
+
+
+def minimal_batch(world: World, queries: np.ndarray) -> float:
+    """Expansions/s of :func:`_minimal_astar` on the queries (array resets not timed)."""
+    lo = np.round(world.bounds[0]).astype(np.int64)
+    dims = np.round(world.bounds[1] - world.bounds[0]).astype(np.int64) + 1
+    free = np.ones(int(dims.prod()), np.uint8)
+    b = world.blocked - lo
+    free[(b[:, 0] * dims[1] + b[:, 1]) * dims[2] + b[:, 2]] = 0
+    n = free.shape[0]
+    g, pos, heap, hf = np.empty(n), np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n)
+    mv = np.array([(i, j, k) for i in (-1, 0, 1) for j in (-1, 0, 1) for k in (-1, 0, 1)
+                   if (i, j, k) != (0, 0, 0)], np.int64)
+    mc = np.linalg.norm(mv, axis=1)
+
+    def flat(p):
+        p = p.astype(np.int64) - lo
+        return (p[0] * dims[1] + p[1]) * dims[2] + p[2]
+
+    exp, secs = 0, 0.0
+    for k, q in enumerate(queries):
+        g[:] = np.inf
+        pos[:] = -2
+        t = time.perf_counter()
+        e, c = _minimal_astar(free, dims[1], dims[2], flat(q[:3]), flat(q[3:6]), mv, mc, g, pos,
+                              heap, hf)
+        if k:  # the first call may compile
+            secs += time.perf_counter() - t
+            exp += e
+        if len(q) > 6:
+            assert abs(c - q[6]) <= 1e-6 * q[6], (q, c)
+    return exp / secs if secs else math.nan
+
+
 def compare(world: World, queries: np.ndarray, pad: int, with_nx: bool = True) -> dict:
     """numba vs networkx (build included) vs Python A* on cropped worlds."""
     tn = tx = tp = 0.0
@@ -196,12 +305,14 @@ def main(argv: list[str] | None = None) -> int:
         return 0
 
     cold, warm = cold_warm()
+    print("minimal exp/s: a dense-array compiled A* (benchmarks/search_speed.py "
+          "_minimal_astar) on 50 of the same queries; ratio = ours / minimal")
     print(f"first call in a fresh process (import + cached-kernel load + tiny search): "
           f"{cold:.2f} s; second call {warm * 1e3:.2f} ms")
 
     print("\nnumba A*, cubic-26, safe rule (kernel time; per-query Python overhead excluded)")
     print(f"{'map':10s} {'queries':>7s} {'expansions':>11s} {'exp/s':>11s} {'checks/s':>12s} "
-          f"{'wall s':>7s} {'mismatch':>8s}")
+          f"{'wall s':>7s} {'mismatch':>8s} {'minimal exp/s':>13s} {'ratio':>6s}")
     total_bad = []
     for name in MAPS:
         world, scen = load_warframe(name)
@@ -209,8 +320,10 @@ def main(argv: list[str] | None = None) -> int:
         qs = scen if a.all_warframe else scen[:: max(1, len(scen) // a.sample)][: a.sample]
         r = numba_batch(world, qs)
         total_bad += [(name, *b) for b in r["bad"]]
+        mini = minimal_batch(world, qs[:: max(1, len(qs) // 50)])
         print(f"{name:10s} {r['n']:7d} {r['exp']:11d} {r['exp'] / r['ksec']:11.3g} "
-              f"{r['checks'] / r['ksec']:12.3g} {r['wall']:7.2f} {len(r['bad']):8d}")
+              f"{r['checks'] / r['ksec']:12.3g} {r['wall']:7.2f} {len(r['bad']):8d} "
+              f"{mini:13.3g} {r['exp'] / r['ksec'] / mini:6.2f}")
     if a.all_warframe:
         print(f"all Warframe queries: {len(total_bad)} mismatches")
         for b in total_bad[:20]:
@@ -230,7 +343,7 @@ def main(argv: list[str] | None = None) -> int:
     geb = geb079() if a.geb079 else None
     if geb is not None:
         cases.append(("geb079", *geb))
-    for name, world, scen in cases:
+    for name, world, scen in cases if a.compare else []:
         qs = scen[:: max(1, len(scen) // a.compare)][: a.compare]
         r = compare(world, qs, a.pad)
         print(f"{name:10s} {len(qs):7d} {r['numba']:9.4f} {r['nx']:10.3f} {r['py']:9.3f} "
