@@ -225,16 +225,6 @@ def inflated_obstacles(obst, lattice: Lattice, radius: float):
     return OccupiedVoxelList.from_indices(unpack(np.concatenate(keys), lattice.dim), lattice)
 
 
-def _point(p, what: str) -> np.ndarray:
-    try:
-        a = np.asarray(p, dtype=float).reshape(-1)
-    except (TypeError, ValueError):
-        raise PlanError(f"{what} must be three numbers x, y, z, got {p!r}") from None
-    if a.shape != (3,) or not np.isfinite(a).all():
-        raise PlanError(f"{what} must be three finite numbers x, y, z, got {p!r}")
-    return a
-
-
 def plan(
     map_or_points,
     start,
@@ -274,9 +264,10 @@ def plan(
     PlanResult
     """
     from planner import search
-    from planner.world import World
+    from planner.world import World, as_point
 
-    s, g = _point(start, "start"), _point(goal, "goal")
+    as_point(start, "start")  # malformed input fails before any map is built
+    as_point(goal, "goal")
     if isinstance(map_or_points, World):
         world = map_or_points
     else:
@@ -288,13 +279,12 @@ def plan(
         lattice=lat.name or "custom", cell_volume=lat.cell_volume, method=method,
         neighbors=neighbors, build_seconds=getattr(world, "build_seconds", 0.0),
     )
+    s, s_cell = world.endpoint(start, "start")
+    g, g_cell = world.endpoint(goal, "goal")
     if method.startswith("ompl:"):
         return _plan_ompl(world, s, g, method.split(":", 1)[1], time_limit, seed, common)
-    cells = lat.quantize(np.stack([s, g]))
-    _check_endpoint(world, s, cells[0], "start")
-    _check_endpoint(world, g, cells[1], "goal")
     res = search.search(
-        world, cells[0], cells[1], method=method, neighbors=neighbors,
+        world, s_cell, g_cell, method=method, neighbors=neighbors,
         corner_cutting=corner_cutting, backend=backend,
     )
     if not res.found:
@@ -320,27 +310,6 @@ def plan(
         expansions=res.expansions, generated=res.generated, seconds=seconds,
         peak_bytes=res.peak_bytes, extra={"cost_between_centres": res.cost}, **common,
     )
-
-
-def _check_endpoint(world, p: np.ndarray, cell: np.ndarray, what: str) -> None:
-    lo, hi = world.bounds
-    if np.any(p < lo - 1e-9) or np.any(p > hi + 1e-9):
-        raise PlanError(
-            f"{what} {_fmt(p)} is outside the map bounds {_fmt(lo)} .. {_fmt(hi)}"
-        )
-    if not world.is_free(cell[None])[0]:
-        near = world.nearest_free(cell)
-        where = "outside the map bounds" if not world.in_bounds(cell[None])[0] else (
-            "inside an obstacle (after inflation for the robot radius)"
-        )
-        hint = f"; nearest free cell centre: {_fmt(world.lattice.to_world(near[None])[0])}" if (
-            near is not None
-        ) else "; no free cell nearby"
-        raise PlanError(f"{what} {_fmt(p)} is {where}{hint}")
-
-
-def _fmt(p: np.ndarray) -> str:
-    return "(" + ", ".join(f"{v:.3f}" for v in np.asarray(p).reshape(-1)) + ")"
 
 
 def _plan_ompl(world, s, g, planner_name, time_limit, seed, common) -> PlanResult:

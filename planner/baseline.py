@@ -201,27 +201,6 @@ def canonical_planner(name: str) -> str:
     return key
 
 
-def _endpoint(world: World, p, what: str) -> np.ndarray:
-    try:
-        a = np.asarray(p, dtype=float).reshape(-1)
-    except (TypeError, ValueError):
-        raise PlanError(f"{what} must be three numbers x, y, z, got {p!r}") from None
-    if a.shape != (3,) or not np.isfinite(a).all():
-        raise PlanError(f"{what} must be three finite numbers x, y, z, got {p!r}")
-    lo, hi = world.bounds
-    if np.any(a < lo - 1e-9) or np.any(a > hi + 1e-9):
-        raise PlanError(f"{what} {a.round(3).tolist()} is outside the world bounds "
-                        f"{lo.tolist()} .. {hi.tolist()}")
-    if not world.points_free(a[None])[0]:
-        cell = world.lattice.quantize(a[None])[0]
-        near = world.nearest_free(cell)
-        hint = ("no free cell nearby" if near is None else "nearest free cell centre "
-                f"{np.round(world.lattice.to_world(near[None])[0], 3).tolist()}")
-        raise PlanError(f"{what} {a.round(3).tolist()} is in a blocked cell (obstacle, "
-                        f"inflated for the robot radius); {hint}")
-    return a
-
-
 def _length(path) -> float:
     p = np.asarray(path, dtype=float).reshape(-1, 3)
     return float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum()) if len(p) > 1 else 0.0
@@ -285,8 +264,8 @@ def plan_ompl(
     name = canonical_planner(planner)
     if not (isinstance(time_limit, int | float) and math.isfinite(time_limit) and time_limit > 0):
         raise PlanError(f"time_limit must be a positive number of seconds, got {time_limit!r}")
-    s = _endpoint(world, start, "start")
-    g = _endpoint(world, goal, "goal")
+    s, _ = world.endpoint(start, "start")
+    g, _ = world.endpoint(goal, "goal")
     hard = float(timeout) if timeout is not None else float(time_limit) + _EXTRA_TIMEOUT
     base: dict[str, Any] = {
         "found": False, "path": [], "path_raw": [], "path_simplified": None,

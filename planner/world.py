@@ -23,7 +23,7 @@ from planner.errors import MapError, PlanError
 from planner.keys import pack
 from planner.lattice import Lattice
 
-__all__ = ["World", "DENSE_BUDGET"]
+__all__ = ["World", "DENSE_BUDGET", "as_point"]
 
 DENSE_BUDGET = 256 * 2**20  # bytes: above this the hash set is used
 _BOUNDS_TOL = 1e-9
@@ -214,6 +214,26 @@ class World:
         self.cell_checks += int(n)
         return bool(free)
 
+    def endpoint(self, p, what: str = "point") -> tuple[np.ndarray, np.ndarray]:
+        """Check a start or goal point (m): returns the point (3,) and its cell (3,) int64.
+
+        Raises PlanError saying which end is wrong and why: malformed, outside the bounds,
+        or inside an obstacle after inflation (with the nearest free cell centre).
+        """
+        a = as_point(p, what)
+        lo, hi = self._bounds
+        if np.any(a < lo - _BOUNDS_TOL) or np.any(a > hi + _BOUNDS_TOL):
+            raise PlanError(f"{what} {_fmt(a)} is outside the map bounds {_fmt(lo)} .. {_fmt(hi)}")
+        cell = self._lattice.quantize(a[None])[0]
+        if not self.is_free(cell[None])[0]:
+            where = "outside the map bounds" if not self.in_bounds(cell[None])[0] else (
+                "inside an obstacle (after inflation for the robot radius)")
+            near = self.nearest_free(cell)
+            hint = "; no free cell nearby" if near is None else (
+                f"; nearest free cell centre: {_fmt(self._lattice.to_world(near[None])[0])}")
+            raise PlanError(f"{what} {_fmt(a)} is {where}{hint}")
+        return a, cell
+
     def nearest_free(self, cell: np.ndarray, max_radius: float | None = None) -> np.ndarray | None:
         """Nearest free cell to ``cell`` by centre distance, searching outward in growing
         shells up to ``max_radius`` metres (default 64 cell sizes). None if there is none.
@@ -260,6 +280,21 @@ def _cells(indices) -> np.ndarray:
 
 
 _WALK_CACHE: dict = {}
+
+
+def as_point(p, what: str = "point") -> np.ndarray:
+    """``p`` as a finite (3,) float array (m); PlanError naming ``what`` otherwise."""
+    try:
+        a = np.asarray(p, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise PlanError(f"{what} must be three numbers x, y, z, got {p!r}") from None
+    if a.shape != (3,) or not np.isfinite(a).all():
+        raise PlanError(f"{what} must be three finite numbers x, y, z, got {p!r}")
+    return a
+
+
+def _fmt(p: np.ndarray) -> str:
+    return "(" + ", ".join(f"{v:.3f}" for v in np.asarray(p).reshape(-1)) + ")"
 
 
 def _walk_data(lattice: Lattice) -> tuple:
