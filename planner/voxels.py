@@ -35,6 +35,7 @@ import numpy as np
 
 from planner import _voxel_kernels as vk
 from planner.errors import MapError
+from planner.fsutil import file_mode
 from planner.keys import BITS, index_limit, pack, unpack
 from planner.lattice import Lattice
 
@@ -451,6 +452,7 @@ class OccupiedVoxelList:
                                        dir=target.parent)
             with os.fdopen(fd, "wb") as fh:
                 np.savez(fh, **fields)  # a file object: numpy does not append ".npz"
+            os.chmod(tmp, file_mode())  # mkstemp makes 0600 files
             os.replace(tmp, target)
             tmp = None
         except OSError as exc:

@@ -195,6 +195,11 @@ def write_report(out_dir: Path, suite, rows: list[dict], summary: list[dict], re
                      f"candidates dropped: {drop}")
     lines += ["", "## Summary (medians; ratios relative to cubic with the same neighbours "
               "and method)", "", "```", format_summary(summary), "```", ""]
+    maps = sorted({r["map"] for r in rows})
+    if len(maps) > 1:  # the pooled medians above mix maps of very different sizes
+        for m in maps:
+            lines += [f"### {Path(m).name}", "", "```",
+                      format_summary(summarize([r for r in rows if r["map"] == m])), "```", ""]
     lines += ["Length ratio: smoothed path length over the shortest path any run found on "
               "that query. Cell checks: occupancy lookups. Clearance is measured against "
               "the raw obstacle points, not the voxels.", ""]
