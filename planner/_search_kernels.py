@@ -633,13 +633,6 @@ def search_run(
         else:
             p0, p1, p2 = u0, u1, u2
         for m in range(nm):
-            allowed = True
-            for e in range(mptr[m], mptr[m + 1]):
-                if not ufree[midx[e]]:
-                    allowed = False
-                    break
-            if not allowed:
-                continue
             v0 = u0 + moves[m, 0]
             v1 = u1 + moves[m, 1]
             v2 = u2 + moves[m, 2]
@@ -657,6 +650,16 @@ def search_run(
                 last_pg = q
             loc = last_pg * PAGE + _local(v0, v1, v2)
             t = np.int64(pages[loc])
+            if t != _EMPTY and npos[t] == -1:
+                continue  # closed: a consistent heuristic never improves it
+            # Safe rule after the closed test: most neighbours of an expanded cell are closed.
+            allowed = True
+            for e in range(mptr[m], mptr[m + 1]):
+                if not ufree[midx[e]]:
+                    allowed = False
+                    break
+            if not allowed:
+                continue
             if t == _EMPTY:
                 t = n
                 n += 1
@@ -679,8 +682,6 @@ def search_run(
                     hv = np.sqrt(x * x + y * y + z * z)
                 nh[t] = hv
                 npos[t] = -2
-            elif npos[t] == -1:
-                continue  # closed: a consistent heuristic never improves it
             if anyangle == 0:
                 gt = ng[s] + mcost[m]
                 par = s
