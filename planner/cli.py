@@ -193,14 +193,17 @@ def _cmd_voxels(a) -> int:
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     parser = build_parser()
+    scripts = {"stats": "paper", "bench": "suite"}
+    if argv and argv[0] in scripts:  # forwarded whole (also --help) to the script's parser
+        try:
+            return _run_script(scripts[argv[0]], list(argv[1:]))
+        except PlannerError as exc:
+            print(f"planner: error: {exc}", file=sys.stderr)
+            return 2
     a = parser.parse_args(argv)
     try:
         if a.command == "lattices":
             return _cmd_lattices(a)
-        if a.command == "stats":
-            return _run_script("paper", a.args)
-        if a.command == "bench":
-            return _run_script("suite", a.args)
         if a.command == "plan":
             return _cmd_plan(a)
         if a.command == "compare":

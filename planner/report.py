@@ -100,13 +100,15 @@ def compare(
                                 bounds=bounds, format=format)
         build = time.perf_counter() - t0
         per = []
-        for i, (s, g) in enumerate(queries):
+        try:
+            for i, (s, g) in enumerate(queries):
+                if progress:
+                    print(f"\r{name}: query {i + 1}/{len(queries)}", end="", file=sys.stderr,
+                          flush=True)
+                per.append(api.plan(world, s, g, method=method, neighbors=neighbors))
+        finally:  # clear the progress line, also before an error message
             if progress:
-                print(f"\r{name}: query {i + 1}/{len(queries)}", end="", file=sys.stderr,
-                      flush=True)
-            per.append(api.plan(world, s, g, method=method, neighbors=neighbors))
-        if progress:
-            print("\r" + " " * 40 + "\r", end="", file=sys.stderr, flush=True)
+                print("\r" + " " * 40 + "\r", end="", file=sys.stderr, flush=True)
         results[name] = per[0]
         found = [r for r in per if r.found]
         rows.append({
