@@ -330,21 +330,23 @@ def _better(hf, hg, i, j):  # pragma: no cover - compiled
 # The heap keeps each entry's f and g next to its slot (hf, hg): sifting then compares
 # contiguous memory instead of chasing slots into the node table (a cache miss per level).
 @njit(cache=True, inline="always")
+def _put(heap, hf, hg, pos, i, x, xf, xg):  # pragma: no cover - compiled
+    heap[i] = x
+    hf[i] = xf
+    hg[i] = xg
+    pos[x] = i
+
+
+@njit(cache=True, inline="always")
 def _sift_up(heap, hf, hg, pos, i):  # pragma: no cover - compiled
     x, xf, xg = heap[i], hf[i], hg[i]
     while i > 0:
         parent = (i - 1) >> 1
         if not (xf < hf[parent] or (xf == hf[parent] and xg > hg[parent])):
             break
-        heap[i] = heap[parent]
-        hf[i] = hf[parent]
-        hg[i] = hg[parent]
-        pos[heap[i]] = i
+        _put(heap, hf, hg, pos, i, heap[parent], hf[parent], hg[parent])
         i = parent
-    heap[i] = x
-    hf[i] = xf
-    hg[i] = xg
-    pos[x] = i
+    _put(heap, hf, hg, pos, i, x, xf, xg)
 
 
 @njit(cache=True, inline="always")
@@ -358,15 +360,9 @@ def _sift_down(heap, hf, hg, pos, i, n):  # pragma: no cover - compiled
             c += 1
         if not (hf[c] < xf or (hf[c] == xf and hg[c] > xg)):
             break
-        heap[i] = heap[c]
-        hf[i] = hf[c]
-        hg[i] = hg[c]
-        pos[heap[i]] = i
+        _put(heap, hf, hg, pos, i, heap[c], hf[c], hg[c])
         i = c
-    heap[i] = x
-    hf[i] = xf
-    hg[i] = xg
-    pos[x] = i
+    _put(heap, hf, hg, pos, i, x, xf, xg)
 
 
 @njit(cache=True, inline="always")
