@@ -473,6 +473,21 @@ def rehash(btab, bkeys, npages):  # pragma: no cover - compiled
         btab[q] = x
 
 
+@njit(cache=True, inline="always")
+def _sight(occ, st, pt, qt, p0, p1, p2, q0, q1, q2, g, rel, rhs, full, wv, wvis, wgen, wq):
+    # pragma: no cover - compiled
+    """Line of sight between cells p and q inside the search, on its scratch (pt, qt and
+    the walk's visited set, with a fresh generation from ``st[ST_WGEN]``)."""
+    pt[0] = p0
+    pt[1] = p1
+    pt[2] = p2
+    qt[0] = q0
+    qt[1] = q1
+    qt[2] = q2
+    st[ST_WGEN] += 1
+    return _los(occ, pt, qt, g, rel, rhs, full, wv, wvis, wgen, st[ST_WGEN], wq)
+
+
 @njit(cache=True)
 def search_run(
     occ, goal, st, nkey, ng, nf, nh, npar, npos, heap, hf, hg, pages, btab, bkeys, ufree,
@@ -586,14 +601,8 @@ def search_run(
             # Lazy Theta* SetVertex: verify the assumed line of sight to the parent; else
             # take the best closed neighbour (one exists: the node that generated s).
             p0, p1, p2 = unpack3(nkey[npar[s]])
-            pt[0] = p0
-            pt[1] = p1
-            pt[2] = p2
-            qt[0] = u0
-            qt[1] = u1
-            qt[2] = u2
-            st[ST_WGEN] += 1
-            ok, c = _los(occ, pt, qt, g, rel, rhs, full, wv, wvis, wgen, st[ST_WGEN], wq)
+            ok, c = _sight(occ, st, pt, qt, p0, p1, p2, u0, u1, u2, g, rel, rhs, full, wv,
+                           wvis, wgen, wq)
             lookups += c
             if not ok:
                 best = np.inf
@@ -685,14 +694,8 @@ def search_run(
                 gt = ng[ps] + _dist(g, p0, p1, p2, v0, v1, v2)
                 par = ps
             else:
-                pt[0] = p0
-                pt[1] = p1
-                pt[2] = p2
-                qt[0] = v0
-                qt[1] = v1
-                qt[2] = v2
-                st[ST_WGEN] += 1
-                ok, c = _los(occ, pt, qt, g, rel, rhs, full, wv, wvis, wgen, st[ST_WGEN], wq)
+                ok, c = _sight(occ, st, pt, qt, p0, p1, p2, v0, v1, v2, g, rel, rhs, full, wv,
+                               wvis, wgen, wq)
                 lookups += c
                 if ok:
                     gt = ng[ps] + _dist(g, p0, p1, p2, v0, v1, v2)
