@@ -1,7 +1,7 @@
 """OMPL baseline speed and quality on the office map.
 
 (a) Validity checks per second: the compiled callable OMPL calls
-(:class:`planner.baseline.CompiledChecker`) vs a pure Python checker calling
+(``world.checker.is_valid``, :class:`planner.world.ValidityChecker`) vs a pure Python checker calling
 ``world.points_free`` once per state, in this process; the exact motion check in cells/s;
 and the checks/s reached inside OMPL planning (cell lookups / planning wall time).
 
@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from planner import api, baseline, search
+from planner import api, ompl, search
 
 ROOT = Path(__file__).resolve().parent.parent
 PLANNERS = ("rrtconnect", "rrtstar", "informedrrtstar", "bitstar", "prmstar")
@@ -36,13 +36,13 @@ def checks_per_second(world, n: int, rng: np.random.Generator) -> dict:
     exact motion check (all in this process, random points in the bounds)."""
     lo, hi = world.bounds
     pts = rng.uniform(lo, hi, size=(n, 3))
-    chk = baseline.CompiledChecker(world)
-    chk.point_free(*pts[0])  # load the kernels
-    chk.segment_free(pts[0], pts[1])
+    chk = world.checker
+    chk.is_valid(pts[0])  # load the kernels
+    chk.check_motion(pts[0], pts[1])
     chk.checks = 0
     t0 = time.perf_counter()
     for p in pts.tolist():
-        chk.point_free(p[0], p[1], p[2])
+        chk.is_valid(p)
     compiled = n / (time.perf_counter() - t0)
     m = max(n // 10, 100)
     t0 = time.perf_counter()
@@ -54,7 +54,7 @@ def checks_per_second(world, n: int, rng: np.random.Generator) -> dict:
     chk.checks = 0
     t0 = time.perf_counter()
     for a, c in zip(pts[:m].tolist(), b.tolist(), strict=True):
-        chk.segment_free(a, c)
+        chk.check_motion(a, c)
     dt = time.perf_counter() - t0
     return {"compiled_states_per_s": compiled, "python_states_per_s": python,
             "ratio": compiled / python, "motion_cells_per_s": chk.checks / dt,
@@ -124,17 +124,17 @@ def main(argv=None) -> int:
         th = theta_length(world, s, g)
         for name in args.planners:
             for limit in args.limits:
-                rs = baseline.run_seeds(world, s, g, range(args.seeds), planner=name,
-                                        time_limit=limit)
-                ok = [r for r in rs if r["found"]]
-                raw = _med(r["length_raw"] for r in ok)
-                simp = _med(r["length_simplified"] or r["length_raw"] for r in ok)
+                rs = ompl.run_seeds(world, s, g, range(args.seeds), planner=name,
+                                    time_limit=limit)
+                ok = [r for r in rs if r.found]
+                raw = _med(r.length_raw for r in ok)
+                simp = _med(r.length_simplified or r.length_raw for r in ok)
                 row = {"query": qi, "planner": name, "limit": limit,
                        "success": len(ok) / len(rs),
-                       "t_first": _med(r["time_to_first_solution"] for r in ok),
+                       "t_first": _med(r.time_to_first_solution for r in ok),
                        "raw": raw, "simplified": simp, "theta": th,
-                       "checks_per_s": _med(r["checks_per_second"] for r in rs),
-                       "reasons": sorted({r["reason"] for r in rs if r["reason"]})}
+                       "checks_per_s": _med(r.checks_per_second for r in rs),
+                       "reasons": sorted({r.reason for r in rs if r.reason})}
                 rows.append(row)
                 print(f"{qi:>2} {name:<16}{limit:>6g}{row['success']:>6.0%}"
                       f"{row['t_first']:>9.3f}{raw:>8.2f}{simp:>8.2f}{th:>8.2f}"

@@ -42,6 +42,15 @@ class PlanResult:
         Occupancy lookups, node expansions and generated nodes of the search.
     seconds : float
         Search wall time (excludes building the world).
+    status : str
+        ``"found"``, ``"unreachable"`` or ``"budget"`` (lattice methods, see
+        :class:`planner.search.SearchResult`); OMPL: ``"found"``, ``"no path"``, ``"timeout"``
+        or ``"crashed"``.
+    guarantee : bool
+        The path keeps the robot radius from every obstacle (world built with exact
+        inflation): True for OMPL (exact motion checks) and for lattice methods unless
+        ``corner_cutting`` lets moves cut blocked corners
+        (:func:`planner.search.stencils.carries_guarantee`).
     """
 
     found: bool
@@ -60,6 +69,8 @@ class PlanResult:
     peak_bytes: int = 0
     build_seconds: float = 0.0
     extra: dict = field(default_factory=dict)
+    status: str = "found"
+    guarantee: bool = True
 
     def to_dict(self) -> dict:
         """JSON-ready dict (arrays as nested lists, inf as None)."""
@@ -178,8 +189,9 @@ def build_world(
     bounds = np.asarray(bounds, dtype=float)
     if bounds.shape != (2, 3) or not np.isfinite(bounds).all() or np.any(bounds[1] < bounds[0]):
         raise MapError(f"bounds must be [[xmin, ymin, zmin], [xmax, ymax, zmax]], got {bounds}")
-    if not math.isfinite(radius) or radius < 0:
-        raise PlanError(f"radius must be a non-negative number of metres, got {radius}")
+    if (isinstance(radius, bool) or not isinstance(radius, int | float | np.floating)
+            or not math.isfinite(radius) or radius < 0):
+        raise PlanError(f"radius must be a non-negative number of metres, got {radius!r}")
     if isinstance(lattice, Lattice):
         if cell_volume is not None:
             lat = lattice.scaled(cell_volume)
@@ -189,12 +201,9 @@ def build_world(
         if cell_volume is None:
             cell_volume = side.get("cell_volume") or default_cell_volume(obst, bounds)
         lat = Lattice.named(lattice, cell_volume=cell_volume)
-    world = World(lat, inflated_obstacles(obst, lat, radius).indices, bounds)
-    world.radius = float(radius)
-    world.source = obst.source
-    world.obstacles = obst
-    world.build_seconds = time.perf_counter() - t0
-    return world
+    cells = inflated_obstacles(obst, lat, radius).indices
+    return World(lat, cells, bounds, source=obst.source, radius=float(radius), obstacles=obst,
+                 build_seconds=time.perf_counter() - t0)
 
 
 def inflated_obstacles(obst, lattice: Lattice, radius: float):
@@ -241,6 +250,8 @@ def plan(
     shortcut: bool = False,
     time_limit: float = 1.0,
     seed: int = 0,
+    max_expansions: int | None = None,
+    memory_budget: int | None = None,
 ) -> PlanResult:
     """Plan a path from ``start`` to ``goal`` (world points, metres).
 
@@ -256,8 +267,17 @@ def plan(
     neighbors : str
         ``full`` (every touching cell), ``face`` (the paper's Delta adjacency) or
         ``face+k`` / ``full+k`` (k further shells).
+    corner_cutting : bool
+        Check only each move's target cell instead of every cell its segment touches.
+        Results then carry ``guarantee=False`` (no clearance guarantee) unless the move
+        set makes both rules equal.
     shortcut : bool
         Post-process the lattice path by line-of-sight shortcutting.
+    time_limit, seed
+        OMPL planning time (s) and RNG seed (an integer in [0, 2**32)).
+    max_expansions, memory_budget
+        Search budget (:func:`planner.search.search`): status ``"budget"`` when exceeded.
+        Defaults: the nodes that fit in a quarter of the physical memory.
 
     Returns
     -------
@@ -268,6 +288,12 @@ def plan(
 
     as_point(start, "start")  # malformed input fails before any map is built
     as_point(goal, "goal")
+    if not isinstance(method, str):
+        raise PlanError(f"method must be a string, got {method!r}")
+    if method.startswith("ompl:"):
+        from planner.ompl import check_seed
+
+        check_seed(seed)
     if isinstance(map_or_points, World):
         world = map_or_points
     else:
@@ -277,7 +303,7 @@ def plan(
     lat = world.lattice
     common = dict(
         lattice=lat.name or "custom", cell_volume=lat.cell_volume, method=method,
-        neighbors=neighbors, build_seconds=getattr(world, "build_seconds", 0.0),
+        neighbors=neighbors, build_seconds=world.build_seconds or 0.0,
     )
     s, s_cell = world.endpoint(start, "start")
     g, g_cell = world.endpoint(goal, "goal")
@@ -285,14 +311,15 @@ def plan(
         return _plan_ompl(world, s, g, method.split(":", 1)[1], time_limit, seed, common)
     res = search.search(
         world, s_cell, g_cell, method=method, neighbors=neighbors,
-        corner_cutting=corner_cutting, backend=backend,
+        corner_cutting=corner_cutting, backend=backend, max_expansions=max_expansions,
+        memory_budget=memory_budget,
     )
     if not res.found:
         return PlanResult(
             found=False, path=np.zeros((0, 3)), cells=np.zeros((0, 3), np.int64),
             length=math.inf, cell_checks=res.cell_checks, expansions=res.expansions,
             generated=res.generated, seconds=res.seconds, reason=res.reason,
-            peak_bytes=res.peak_bytes, **common,
+            peak_bytes=res.peak_bytes, status=res.status, guarantee=res.guarantee, **common,
         )
     path_cells = res.cells
     checks = res.cell_checks
@@ -308,24 +335,21 @@ def plan(
     return PlanResult(
         found=True, path=path, cells=path_cells, length=length, cell_checks=checks,
         expansions=res.expansions, generated=res.generated, seconds=seconds,
-        peak_bytes=res.peak_bytes, extra={"cost_between_centres": res.cost}, **common,
+        peak_bytes=res.peak_bytes, extra={"cost_between_centres": res.cost},
+        guarantee=res.guarantee, **common,
     )
 
 
 def _plan_ompl(world, s, g, planner_name, time_limit, seed, common) -> PlanResult:
-    from planner import baseline
+    from planner import ompl
 
-    r = baseline.plan_ompl(world, s, g, planner=planner_name, time_limit=time_limit, seed=seed)
-    d = r if isinstance(r, dict) else r.to_dict()
-    found = bool(d["found"])
-    path = np.asarray(d.get("path_simplified") if d.get("path_simplified") is not None
-                      else d.get("path", np.zeros((0, 3))), dtype=float).reshape(-1, 3)
-    length = float(np.linalg.norm(np.diff(path, axis=0), axis=1).sum()) if found else math.inf
+    r = ompl.plan_ompl(world, s, g, planner=planner_name, time_limit=time_limit, seed=seed)
+    path = r.path_simplified if r.path_simplified is not None else r.path
+    d = r.to_dict()
     return PlanResult(
-        found=found, path=path if found else np.zeros((0, 3)),
-        cells=np.zeros((0, 3), np.int64), length=length,
-        cell_checks=int(d.get("cell_checks", 0)), expansions=0, generated=0,
-        seconds=float(d.get("seconds", 0.0)), reason=str(d.get("reason", "") or ""),
-        extra={k: v for k, v in d.items() if k not in ("path", "path_simplified")},
-        **common,
+        found=r.found, path=path if r.found else np.zeros((0, 3)),
+        cells=np.zeros((0, 3), np.int64), length=r.length if r.found else math.inf,
+        cell_checks=r.cell_checks, expansions=0, generated=0, seconds=r.seconds,
+        reason=r.reason, extra={k: v for k, v in d.items() if k not in ("path", "path_simplified")},
+        status="found" if r.found else r.status, guarantee=True, **common,
     )

@@ -1,4 +1,5 @@
-"""The planning world: a lattice, its blocked cells and a bounding box, with fast lookups.
+"""The planning world: a lattice, its blocked cells and a bounding box, and its one validity
+checker.
 
 Occupancy storage (chosen per world, see :attr:`World.storage`):
 
@@ -10,27 +11,104 @@ Occupancy storage (chosen per world, see :attr:`World.storage`):
   keys (power-of-two size, load <= 0.5, splitmix64 mixing) plus an in-bounds test of the
   cell centre. Memory proportional to the number of blocked cells.
 
-Both are plain numpy arrays used by the numba kernels in :mod:`planner._search_kernels`;
-they are built lazily and dropped when pickling (OMPL runs the world in a worker process).
+Both live in a typed :class:`Occupancy` struct of plain numpy arrays read by the numba
+kernels (:mod:`planner._world_kernels`). :attr:`World.checker` (a :class:`ValidityChecker`)
+owns it with the segment-walk data: lattice search, shortcutting and the OMPL baseline all
+check states and motions through it. It is built lazily and dropped when pickling (OMPL
+ships the checker itself to its worker process).
 """
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 
-from planner import _search_kernels as sk
+from planner import _world_kernels as wk
+from planner._world_kernels import Occupancy, Quantizer, Walk
 from planner.errors import MapError, PlanError
 from planner.keys import pack
 from planner.lattice import Lattice
 
-__all__ = ["World", "DENSE_BUDGET", "as_point"]
+__all__ = ["World", "DENSE_BUDGET", "Occupancy", "ValidityChecker", "Walk", "as_point"]
 
 DENSE_BUDGET = 256 * 2**20  # bytes: above this the hash set is used
 _BOUNDS_TOL = 1e-9
 
 
+class ValidityChecker:
+    """State and motion validity on one world: the single checker every planner uses.
+
+    A state (point, m) is valid iff the lattice cell containing it is in bounds and free
+    (one occupancy lookup). A motion a -> b is valid iff every cell whose *closed* Voronoi
+    cell the segment touches is free (the exact segment walk; no resolution involved).
+    Lattice searches use the same structs directly inside their kernels
+    (:attr:`occupancy`, :attr:`walk`).
+
+    Parameters
+    ----------
+    occupancy : Occupancy
+    walk : Walk
+    lattice : Lattice
+        For the point quantizer tables (derived on the first :meth:`is_valid`).
+
+    Attributes
+    ----------
+    checks : int
+        Occupancy lookups made through :meth:`is_valid` / :meth:`check_motion`.
+    states, motions : int
+        Number of state and motion queries.
+    """
+
+    def __init__(self, occupancy: Occupancy, walk: Walk, lattice: Lattice):
+        self.occupancy = occupancy
+        self.walk = walk
+        self._lattice = lattice
+        self._quant: Quantizer | None = None
+        self._buf = np.zeros((2, 3))
+        self._out = np.zeros((1, 3), dtype=np.int64)
+        self.checks = 0
+        self.states = 0
+        self.motions = 0
+
+    @property
+    def quantizer(self) -> Quantizer:
+        """The compiled point quantizer's tables (derived once; shipped when pickled)."""
+        if self._quant is None:
+            self._quant = _quantizer(self._lattice)
+        return self._quant
+
+    def __getstate__(self) -> dict:
+        self.quantizer  # noqa: B018 - a worker would otherwise redo the lattice geometry
+        return self.__dict__.copy()
+
+    def is_valid(self, point) -> bool:
+        """The cell containing ``point`` ((3,), m) is in bounds and free (one lookup)."""
+        self.checks += 1
+        self.states += 1
+        return bool(wk.point_free(self.occupancy, self.quantizer, float(point[0]),
+                                  float(point[1]), float(point[2]), self._buf, self._out))
+
+    def check_motion(self, a, b) -> bool:
+        """Exact segment walk a -> b ((3,) each, m): every touched cell free. Counts every
+        cell looked at (the walk stops at the first blocked one)."""
+        free, n = wk.motion_free(self.occupancy, self.walk, self.quantizer, float(a[0]),
+                                 float(a[1]), float(a[2]), float(b[0]), float(b[1]),
+                                 float(b[2]), self._buf, self._out)
+        self.checks += int(n)
+        self.motions += 1
+        return bool(free)
+
+    def cells_free(self, cells: np.ndarray) -> np.ndarray:
+        """(N,) bool: each cell of ``cells`` ((N, 3) int64, C-contiguous) in bounds and free.
+        Not counted here (the world counts its own lookups)."""
+        out = np.empty(len(cells), dtype=np.bool_)
+        wk.free_many(self.occupancy, cells, out)
+        return out
+
+
 class World:
-    """Lattice + blocked cells + bounds.
+    """Lattice + blocked cells + bounds, built complete.
 
     Parameters
     ----------
@@ -41,6 +119,14 @@ class World:
     bounds : array_like, shape (2, 3)
         World box ``[min, max]`` in metres. A cell is in bounds iff its centre lies in the
         closed box (with ``1e-9`` relative tolerance).
+    source : str, optional
+        Where the obstacles came from (a path or ``"<array>"``), for reports.
+    radius : float
+        Robot radius (m) the blocked cells were inflated for (0: not inflated).
+    obstacles : planner.io.Obstacles, optional
+        The obstacles the cells were built from (for clearance measurements).
+    build_seconds : float, optional
+        Time it took to build the world from its source (s).
     dense_budget : int
         Largest dense occupancy grid in bytes; beyond it the hash set is used.
 
@@ -56,6 +142,10 @@ class World:
         blocked_indices: np.ndarray,
         bounds: np.ndarray,
         *,
+        source: str | None = None,
+        radius: float = 0.0,
+        obstacles=None,
+        build_seconds: float | None = None,
         dense_budget: int = DENSE_BUDGET,
     ):
         if not isinstance(lattice, Lattice):
@@ -69,19 +159,30 @@ class World:
             raise MapError(f"blocked indices must be an (M, 3) integer array, got {b.shape}")
         bb = np.asarray(bounds, dtype=float)
         if bb.shape != (2, 3) or not np.isfinite(bb).all() or np.any(bb[1] < bb[0]):
-            raise MapError(f"bounds must be [[xmin, ymin, zmin], [xmax, ymax, zmax]], got {bb}")
+            raise MapError(f"bounds must be [[xmin, ymin, zmin], [xmax, ymax, zmax]], got "
+                           f"{bb.tolist() if bb.ndim else bb}")
+        try:
+            r = float(radius)
+        except (TypeError, ValueError):
+            raise MapError(f"radius must be a number of metres, got {radius!r}") from None
+        if not (np.isfinite(r) and r >= 0):
+            raise MapError(f"radius must be a non-negative number of metres, got {radius!r}")
         self._lattice = lattice
         self._blocked = np.ascontiguousarray(b, dtype=np.int64)
         pack(self._blocked)  # range check now, not inside a kernel
         self._bounds = bb
+        self.source = source
+        self.radius = r
+        self.obstacles = obstacles
+        self.build_seconds = build_seconds
         self.dense_budget = int(dense_budget)
         self.cell_checks = 0
-        self._occ = None
+        self._checker: ValidityChecker | None = None
 
     # -- pickling: plain arrays only; lookup structures rebuilt on first use -----------
     def __getstate__(self) -> dict:
         state = self.__dict__.copy()
-        state["_occ"] = None
+        state["_checker"] = None
         return state
 
     def __setstate__(self, state: dict) -> None:
@@ -115,7 +216,7 @@ class World:
     @property
     def storage(self) -> str:
         """``"dense"`` or ``"hash"`` (module docstring)."""
-        return "dense" if self.occupancy[0] == 0 else "hash"
+        return "dense" if self.occupancy.mode == 0 else "hash"
 
     def blocked_centres(self) -> np.ndarray:
         """(M, 3) centres of the blocked cells (m)."""
@@ -133,34 +234,38 @@ class World:
         return lo - tol, hi + tol
 
     @property
-    def occupancy(self) -> tuple:
-        """The numba occupancy tuple (see :mod:`planner._search_kernels`); built lazily."""
-        if self._occ is None:
-            self._occ = self._build()
-        return self._occ
+    def checker(self) -> ValidityChecker:
+        """The world's :class:`ValidityChecker` (built on first use)."""
+        if self._checker is None:
+            self._checker = ValidityChecker(self._build(), _walk(self._lattice), self._lattice)
+        return self._checker
 
-    def _build(self) -> tuple:
-        g = np.ascontiguousarray(self._lattice.generator, dtype=float)
-        blo, bhi = self._tol_bounds()
+    @property
+    def occupancy(self) -> Occupancy:
+        """The numba :class:`Occupancy` struct (module docstring); built lazily."""
+        return self.checker.occupancy
+
+    def _build(self) -> Occupancy:
+        g = _c(self._lattice.generator, float)
+        blo, bhi = (_c(x, float) for x in self._tol_bounds())
         corners = np.array([[(blo, bhi)[c][a] for a, c in enumerate(bits)]
                             for bits in np.ndindex(2, 2, 2)])
         w = corners @ np.linalg.inv(g).T
         lo = np.floor(w.min(axis=0)).astype(np.int64) - 1
         hi = np.ceil(w.max(axis=0)).astype(np.int64) + 1
         dims = hi - lo + 1
-        empty_i = np.zeros(1, dtype=np.int64)
         if float(np.prod(dims.astype(float))) <= self.dense_budget:
             grid = np.empty(int(np.prod(dims)), dtype=np.uint8)
-            sk.fill_in_bounds(grid, lo, dims, g, blo, bhi)
-            sk.clear_cells(grid, lo, dims, self._blocked)
-            return (0, grid, lo, dims, np.full(1, -1, np.int64), 0, g, blo, bhi)
+            wk.fill_in_bounds(grid, lo, dims, g, blo, bhi)
+            wk.clear_cells(grid, lo, dims, self._blocked)
+            return Occupancy(0, grid, lo, dims, np.full(1, -1, np.int64), 0, g, blo, bhi)
         keys = np.unique(pack(self._blocked))
         size = 16
         while size < 2 * len(keys):
             size *= 2
-        table = sk.build_key_set(keys, size)
-        return (1, np.zeros(1, np.uint8), empty_i, empty_i.repeat(3), table, size - 1, g,
-                blo, bhi)
+        table = wk.build_key_set(keys, size)
+        return Occupancy(1, np.zeros(1, np.uint8), np.zeros(3, np.int64),
+                         np.zeros(3, np.int64), table, size - 1, g, blo, bhi)
 
     # -- queries ----------------------------------------------------------------------
     def in_bounds(self, indices: np.ndarray) -> np.ndarray:
@@ -178,8 +283,7 @@ class World:
         indices : array_like of int, shape (N, 3) or (3,)
         """
         w = _cells(indices)
-        out = np.empty(len(w), dtype=np.bool_)
-        sk.free_many(self.occupancy, w, out)
+        out = self.checker.cells_free(w)
         self.cell_checks += len(w)
         return out
 
@@ -193,8 +297,8 @@ class World:
         if not (np.isfinite(a).all() and np.isfinite(b).all()):
             raise PlanError("segment end points must be finite")
         s = self._lattice.quantize(a[None])[0]
-        g, rel, rhs, full = _walk_data(self._lattice)
-        return sk.segment_walk(self.occupancy, a, b, s, g, rel, rhs, full, check)
+        chk = self.checker
+        return wk.segment_walk(chk.occupancy, chk.walk, a, b, s, check)
 
     def segment_cells(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Cells whose closed Voronoi cell the segment a-b (points, m) touches.
@@ -225,14 +329,30 @@ class World:
         if np.any(a < lo - _BOUNDS_TOL) or np.any(a > hi + _BOUNDS_TOL):
             raise PlanError(f"{what} {_fmt(a)} is outside the map bounds {_fmt(lo)} .. {_fmt(hi)}")
         cell = self._lattice.quantize(a[None])[0]
-        if not self.is_free(cell[None])[0]:
-            where = "outside the map bounds" if not self.in_bounds(cell[None])[0] else (
-                "inside an obstacle (after inflation for the robot radius)")
-            near = self.nearest_free(cell)
-            hint = "; no free cell nearby" if near is None else (
-                f"; nearest free cell centre: {_fmt(self._lattice.to_world(near[None])[0])}")
-            raise PlanError(f"{what} {_fmt(a)} is {where}{hint}")
+        self._require_free(cell, f"{what} {_fmt(a)}")
         return a, cell
+
+    def endpoint_cell(self, cell, what: str = "cell") -> np.ndarray:
+        """:meth:`endpoint` for a lattice cell ((3,) int): returns it as (3,) int64, or
+        raises the same PlanError (naming the cell and its centre)."""
+        c = _cells(cell)
+        if len(c) != 1:
+            raise PlanError(f"{what} must be one cell (i, j, k), got shape {c.shape}")
+        c = c[0]
+        centre = self._lattice.to_world(c[None])[0]
+        self._require_free(c, f"{what} cell {c.tolist()} (centre {_fmt(centre)})")
+        return c
+
+    def _require_free(self, cell: np.ndarray, label: str) -> None:
+        """The one endpoint message: which end, where, why, and the nearest free cell."""
+        if self.is_free(cell[None])[0]:
+            return
+        where = "outside the map bounds" if not self.in_bounds(cell[None])[0] else (
+            "inside an obstacle (after inflation for the robot radius)")
+        near = self.nearest_free(cell)
+        hint = "; no free cell nearby" if near is None else (
+            f"; nearest free cell centre: {_fmt(self._lattice.to_world(near[None])[0])}")
+        raise PlanError(f"{label} is {where}{hint}")
 
     def nearest_free(self, cell: np.ndarray, max_radius: float | None = None) -> np.ndarray | None:
         """Nearest free cell to ``cell`` by centre distance, searching outward in growing
@@ -279,9 +399,6 @@ def _cells(indices) -> np.ndarray:
     return np.ascontiguousarray(w, dtype=np.int64)
 
 
-_WALK_CACHE: dict = {}
-
-
 def as_point(p, what: str = "point") -> np.ndarray:
     """``p`` as a finite (3,) float array (m); PlanError naming ``what`` otherwise."""
     try:
@@ -297,17 +414,32 @@ def _fmt(p: np.ndarray) -> str:
     return "(" + ", ".join(f"{v:.3f}" for v in np.asarray(p).reshape(-1)) + ")"
 
 
-def _walk_data(lattice: Lattice) -> tuple:
-    """(G, relevant vectors, |v|^2/2, full offsets) as contiguous arrays, cached."""
-    key = lattice.generator.tobytes()
-    got = _WALK_CACHE.get(key)
-    if got is None:
-        rel = np.ascontiguousarray(lattice.relevant_vectors, dtype=float)
-        got = (
-            np.ascontiguousarray(lattice.generator, dtype=float),
-            rel,
-            0.5 * np.einsum("ij,ij->i", rel, rel),
-            np.ascontiguousarray(lattice.neighbors("full")),
-        )
-        _WALK_CACHE[key] = got
-    return got
+def _c(a, dtype) -> np.ndarray:
+    """A fresh C-contiguous writable copy: one numba type for every lattice (MCC's generator
+    is not C-contiguous, cached lattice arrays are read-only)."""
+    return np.array(a, dtype=dtype, order="C", copy=True)
+
+
+@lru_cache(maxsize=64)
+def _walk_cached(gen: bytes, lattice: Lattice) -> Walk:
+    g = _c(lattice.generator, float)
+    rel = _c(lattice.relevant_vectors, float)
+    return Walk(g, rel, _c(0.5 * np.einsum("ij,ij->i", rel, rel), float),
+                _c(lattice.neighbors("full"), np.int64), _c(rel @ g, float))
+
+
+def _walk(lattice: Lattice) -> Walk:
+    """The segment-walk struct of a lattice (cached; shared, do not write)."""
+    return _walk_cached(lattice.generator.tobytes(), lattice)
+
+
+def _quantizer(lattice: Lattice) -> Quantizer:
+    """Tables of the exact generic quantizer, as in ``Lattice.quantize_generic``.
+
+    Reads the lattice's private geometry: belongs in the lattice module as a public helper.
+    """
+    geo = lattice._geo
+    b = _c(geo["reduced"], float)
+    cand_z = _c(geo["orthant_offsets"], np.int64)
+    return Quantizer(b, _c(np.linalg.inv(b), float), _c(cand_z.astype(float) @ b.T, float),
+                     cand_z, _c(geo["orthant_counts"], np.int64), _c(geo["reduction"], float))

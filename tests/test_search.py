@@ -44,16 +44,17 @@ def test_world_pickles_without_numba_state():
     w = _box_world(blocked=[(1, 1, 1)])
     w.is_free(np.zeros((1, 3), np.int64))
     w2 = pickle.loads(pickle.dumps(w))
-    assert w2._occ is None
+    assert w2._checker is None
     assert w2.is_free(np.array([[1, 1, 1], [2, 2, 2]])).tolist() == [False, True]
     assert w2.lattice == w.lattice and np.array_equal(w2.bounds, w.bounds)
 
 
 def test_nearest_free_and_endpoint_errors():
     w = _box_world(blocked=[(2, 2, 2)])
-    with pytest.raises(PlanError, match=r"start cell \[2, 2, 2\].*blocked.*nearest free"):
+    with pytest.raises(PlanError, match=r"start cell \[2, 2, 2\] \(centre \(2\.000, 2\.000, "
+                                        r"2\.000\)\) is inside an obstacle.*nearest free"):
         S.search(w, [2, 2, 2], [0, 0, 0])
-    with pytest.raises(PlanError, match=r"goal cell .*outside the bounds"):
+    with pytest.raises(PlanError, match=r"goal cell .*outside the map bounds"):
         S.search(w, [0, 0, 0], [20, 0, 0])
     near = w.nearest_free(np.array([2, 2, 2]))
     assert np.abs(near - 2).sum() == 1

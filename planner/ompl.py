@@ -3,13 +3,15 @@
 The OMPL planners search ``RealVectorStateSpace(3)`` with the world's bounds on exactly the
 same occupancy as the lattice planners:
 
-* **State validity**: the lattice cell containing the state is in bounds and free. A Python
-  callable reads the three coordinates and calls one compiled (numba) kernel that quantizes
-  the point (the exact generic closest-point kernel of :mod:`planner._quantize_kernels`)
-  and does one occupancy lookup (:func:`planner._search_kernels.cell_free`). One check.
-* **Motion validity**: the 2.0.1 bindings let Python subclass ``ob.MotionValidator``
-  (``checkMotion(s1, s2)``), so motions are validated with the EXACT lattice segment walk
-  (:func:`planner._search_kernels.segment_walk`, the lattice planners' line-of-sight test):
+Both checks go through the world's one :class:`planner.world.ValidityChecker`, the same
+structs and kernels the lattice searches use:
+
+* **State validity** (``checker.is_valid``): the lattice cell containing the state is in
+  bounds and free. One compiled kernel quantizes the point (the exact generic closest-point
+  kernel of :mod:`planner._quantize_kernels`) and does one occupancy lookup. One check.
+* **Motion validity** (``checker.check_motion``): the 2.0.1 bindings let Python subclass
+  ``ob.MotionValidator`` (``checkMotion(s1, s2)``), so motions are validated with the EXACT
+  lattice segment walk (the lattice planners' line-of-sight test):
   a motion is valid iff every cell whose closed Voronoi cell the segment touches is free.
   Every cell looked at is counted. No interpolation resolution is involved, so no blocked
   cell can be skipped (a resolution-based check would need a step below the smallest
@@ -22,7 +24,12 @@ same occupancy as the lattice planners:
 
 Process guard: OMPL runs in a worker process (``forkserver`` context with ``ompl`` and this
 module preloaded, so a query costs a fork, not a fresh interpreter) with a hard timeout.
-A segfault or a hang gives ``found=False`` and a reason. The worker leaves with
+A hang gives ``status="timeout"``, a worker killed by a signal or segfaulting
+``status="crashed"`` with "worker crashed (signal N)" (the exit code is read before any
+liveness test: the forkserver reports a death late). The worker dies with its caller: it asks
+the kernel for SIGKILL when its parent (the forkserver) dies (Linux ``PR_SET_PDEATHSIG``)
+and a watchdog thread exits when the calling process is gone (Ctrl-C, SIGKILL). The worker
+leaves with
 ``os._exit`` after sending its result, which skips interpreter finalisation and with it
 nanobind's "leaked instances" report (the bindings' object graph is cyclic via Python
 callbacks; the report is noise at exit).
@@ -45,8 +52,7 @@ goal" with a goal state; InformedRRT* found no solution on the office query with
 where RRT* needs 0.3-0.5 s, with identical check counts for seeds 0 and 1 (its informed
 sampler seems not to follow ``RNG.setSeed``); ``RealVectorBounds.low[i] = x`` writes to a
 copy and is silently lost (use ``setLow(i, x)``); a forked worker must get the lattice
-tables and occupancy from the parent (rebuilding them means ~0.7 s of lattice geometry
-LPs) and arrays of the same writability as at warm-up (else numba recompiles).
+validity checker from the parent (rebuilding it means ~0.7 s of lattice geometry LPs).
 """
 
 from __future__ import annotations
@@ -55,20 +61,21 @@ import math
 import multiprocessing as mp
 import os
 import pickle
+import signal
 import sys
+import threading
 import time
 import types
+from dataclasses import asdict, dataclass, field
 from typing import Any
 
 import numpy as np
-from numba import njit
 
-from planner import _quantize_kernels as qk
-from planner import _search_kernels as sk
 from planner.errors import PlanError
-from planner.world import World, _walk_data
+from planner.world import ValidityChecker, World
 
-__all__ = ["PLANNERS", "ANYTIME", "plan_ompl", "run_seeds", "CompiledChecker", "lattice_tables"]
+__all__ = ["PLANNERS", "ANYTIME", "OmplResult", "plan_ompl", "run_seeds", "check_seed",
+           "canonical_planner"]
 
 #: canonical name -> ``ompl.geometric`` class name (what the 2.0.1 bindings expose).
 PLANNERS: dict[str, str] = {
@@ -99,95 +106,83 @@ _EXTRA_TIMEOUT = 30.0  # s beyond the time limit before the worker is killed
 _WARM_ENV = "PLANNER_BASELINE_WARM"
 
 
-# -- compiled validity ---------------------------------------------------------------------
-@njit(cache=True)
-def _state_free(occ, q, x0, x1, x2, buf, out):  # pragma: no cover - compiled
-    """Is the cell containing point (x0, x1, x2) (m) in bounds and free? One lookup."""
-    qb, qbinv, cand, cand_z, counts, t = q
-    buf[0, 0] = x0
-    buf[0, 1] = x1
-    buf[0, 2] = x2
-    qk.quantize_generic3(buf[:1], qb, qbinv, cand, cand_z, counts, t, out)
-    return sk.cell_free(occ, out[0, 0], out[0, 1], out[0, 2])
-
-
-@njit(cache=True)
-def _motion_free(occ, q, walk, a0, a1, a2, b0, b1, b2, buf, out):  # pragma: no cover
-    """Exact segment test a -> b (m): ``(all touched cells free, lookups made)``."""
-    qb, qbinv, cand, cand_z, counts, t = q
-    g, rel, rhs, full = walk
-    buf[0, 0] = a0
-    buf[0, 1] = a1
-    buf[0, 2] = a2
-    buf[1, 0] = b0
-    buf[1, 1] = b1
-    buf[1, 2] = b2
-    qk.quantize_generic3(buf[:1], qb, qbinv, cand, cand_z, counts, t, out)
-    _, free, n = sk.segment_walk(occ, buf[0], buf[1], out[0], g, rel, rhs, full, True)
-    return free, n
-
-
-class CompiledChecker:
-    """Counting state / motion checks on a world through compiled kernels.
-
-    Parameters
-    ----------
-    world : World
-    tables : tuple, optional
-        :func:`lattice_tables` of the world's lattice (computed if not given).
+# -- result ------------------------------------------------------------------------------
+@dataclass
+class OmplResult:
+    """Outcome of one OMPL run (:func:`plan_ompl`).
 
     Attributes
     ----------
-    checks : int
-        Occupancy lookups made (one per state, one per cell looked at per motion).
-    states, motions : int
-        Number of state and motion queries.
+    found : bool
+    path : ndarray, shape (K, 3)
+        The raw path (m), start first, goal last; empty when not found.
+    path_simplified : ndarray (K', 3) or None
+        After ``og.PathSimplifier`` (None when not run or rejected).
+    length_raw, length_simplified : float or None
+        Path lengths (m).
+    planner : str
+        Canonical planner name.
+    seed : int
+    status : str
+        ``"found"``, ``"no path"`` (time or check budget used up), ``"timeout"`` (worker
+        killed at the hard limit), ``"crashed"`` (killed by a signal / exited without a
+        result) or ``"error"`` (an exception in the worker).
+    reason : str
+        Why there is no path ("" when found).
+    cell_checks, state_checks, motion_checks : int
+        Occupancy lookups made in the worker, and the number of state / motion queries.
+    seconds : float
+        Planning + simplification wall time in the worker (s).
+    wall_seconds : float
+        Including the worker process (s).
+    time_to_first_solution, final_cost : float or None
+    valid_raw, valid_simplified : bool or None
+        Re-validated here with :meth:`World.segment_free`.
+    checks_per_second : float
     """
 
-    def __init__(self, world: World, tables: tuple | None = None):
-        self._q, self._walk = tables if tables is not None else lattice_tables(world.lattice)
-        # One numba signature for every world: read-only arrays (cached lattice data) are a
-        # different numba type and would force a multi-second recompile in each worker.
-        self._occ = _writable(world.occupancy)
-        self._buf = np.zeros((2, 3))
-        self._out = np.zeros((1, 3), dtype=np.int64)
-        self.checks = 0
-        self.states = 0
-        self.motions = 0
+    found: bool
+    planner: str
+    seed: int
+    path: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    path_simplified: np.ndarray | None = None
+    length_raw: float | None = None
+    length_simplified: float | None = None
+    status: str = ""
+    reason: str = ""
+    cell_checks: int = 0
+    state_checks: int = 0
+    motion_checks: int = 0
+    seconds: float = 0.0
+    wall_seconds: float = 0.0
+    time_to_first_solution: float | None = None
+    final_cost: float | None = None
+    valid_raw: bool | None = None
+    valid_simplified: bool | None = None
+    checks_per_second: float = 0.0
 
-    def point_free(self, x: float, y: float, z: float) -> bool:
-        """Cell of the point (m) in bounds and free (one counted lookup)."""
-        self.checks += 1
-        self.states += 1
-        return bool(_state_free(self._occ, self._q, float(x), float(y), float(z), self._buf,
-                                self._out))
+    @property
+    def path_raw(self) -> np.ndarray:
+        """The raw path (same as :attr:`path`)."""
+        return self.path
 
-    def segment_free(self, a: tuple[float, float, float], b: tuple[float, float, float]) -> bool:
-        """Exact lattice segment walk a -> b (m); counts every cell looked at."""
-        free, n = _motion_free(self._occ, self._q, self._walk, float(a[0]), float(a[1]),
-                               float(a[2]), float(b[0]), float(b[1]), float(b[2]), self._buf,
-                               self._out)
-        self.checks += n
-        self.motions += 1
-        return bool(free)
+    @property
+    def length(self) -> float:
+        """Length of the simplified path if any, else of the raw path (m; inf if none)."""
+        if not self.found:
+            return math.inf
+        if self.length_simplified is not None:
+            return self.length_simplified
+        return self.length_raw if self.length_raw is not None else math.inf
 
-
-def lattice_tables(lat) -> tuple[tuple, tuple]:
-    """Kernel inputs of a lattice: the exact generic quantizer's tables (as in
-    ``Lattice.quantize_generic``) and the segment-walk data. Computed in the parent and
-    shipped to the worker: deriving them (``Lattice._geo``) costs ~0.8 s per new lattice."""
-    geo = lat._geo
-    b = np.array(geo["reduced"], dtype=float)
-    cand_z = np.array(geo["orthant_offsets"], dtype=np.int64)
-    q = (b, np.linalg.inv(b), np.ascontiguousarray(cand_z.astype(float) @ b.T), cand_z,
-         np.array(geo["orthant_counts"], dtype=np.int64),
-         np.array(geo["reduction"], dtype=float))
-    return _writable(q), _writable(_walk_data(lat))
-
-
-def _writable(items: tuple) -> tuple:
-    return tuple(np.array(x) if isinstance(x, np.ndarray) and not x.flags.writeable else x
-                 for x in items)
+    def to_dict(self) -> dict:
+        """JSON-ready dict (paths as nested lists), with ``path_raw`` as well."""
+        d = asdict(self)
+        d["path"] = self.path.tolist()
+        d["path_raw"] = d["path"]
+        d["path_simplified"] = (None if self.path_simplified is None
+                                else self.path_simplified.tolist())
+        return d
 
 
 # -- public API ----------------------------------------------------------------------------
@@ -206,11 +201,22 @@ def _length(path) -> float:
     return float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum()) if len(p) > 1 else 0.0
 
 
-def _path_valid(world: World, path) -> bool:
+def _path_valid(world: World, path: np.ndarray) -> bool:
     p = np.asarray(path, dtype=float).reshape(-1, 3)
     if len(p) < 1 or not world.points_free(p[:1])[0]:
         return False
     return all(world.segment_free(p[i], p[i + 1]) for i in range(len(p) - 1))
+
+
+SEED_LIMIT = 2**32
+
+
+def check_seed(seed) -> int:
+    """``seed`` as an int in [0, 2**32) (OMPL's RNG seed); PlanError otherwise."""
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or not (
+            0 <= seed < SEED_LIMIT):
+        raise PlanError(f"seed must be an integer in [0, 2**32), got {seed!r}")
+    return int(seed)
 
 
 def plan_ompl(
@@ -225,21 +231,21 @@ def plan_ompl(
     simplify: bool = True,
     verbose: bool = False,
     timeout: float | None = None,
-) -> dict:
-    """Plan with an OMPL planner on the world's occupancy, in a guarded worker process.
+) -> OmplResult:
+    """Plan with an OMPL planner on the world's validity checker, in a guarded worker.
 
     Parameters
     ----------
     world : World
     start, goal : array_like, shape (3,)
-        Points (m); each must lie in a free cell (else PlanError).
+        Points (m); each must lie in a free cell (else PlanError, :meth:`World.endpoint`).
     planner : str
         A key of :data:`PLANNERS` (unknown names raise PlanError listing them).
     time_limit : float
         Planning budget (s). Anytime planners (:data:`ANYTIME`) use all of it; the others
         stop at the first solution.
     seed : int
-        OMPL's global RNG seed (``ou.RNG.setSeed``) in the worker.
+        OMPL's global RNG seed (``ou.RNG.setSeed``) in the worker, in [0, 2**32).
     max_cell_checks : int, optional
         Also stop once this many occupancy lookups were made.
     simplify : bool
@@ -251,58 +257,50 @@ def plan_ompl(
 
     Returns
     -------
-    dict
-        ``found``, ``path`` / ``path_raw`` ((K, 3) list, start first, goal last),
-        ``path_simplified`` ((K', 3) list or None), ``length_raw``, ``length_simplified``
-        (m, None if absent), ``cell_checks`` (worker lookups), ``seconds`` (planning +
-        simplification wall time in the worker), ``time_to_first_solution`` (s or None),
-        ``final_cost`` (m), ``planner``, ``seed``, ``valid_raw``, ``valid_simplified``
-        (re-validated here with :meth:`World.segment_free`), ``checks_per_second``,
-        ``reason`` ('' on success), plus ``wall_seconds`` (including the process),
-        ``state_checks``, ``motion_checks``, ``status``.
+    OmplResult
+        A path is reported found only if every segment passes :meth:`World.segment_free`
+        here as well.
     """
     name = canonical_planner(planner)
-    if not (isinstance(time_limit, int | float) and math.isfinite(time_limit) and time_limit > 0):
+    seed = check_seed(seed)
+    if isinstance(time_limit, bool) or not (isinstance(time_limit, int | float)
+                                            and math.isfinite(time_limit) and time_limit > 0):
         raise PlanError(f"time_limit must be a positive number of seconds, got {time_limit!r}")
     s, _ = world.endpoint(start, "start")
     g, _ = world.endpoint(goal, "goal")
     hard = float(timeout) if timeout is not None else float(time_limit) + _EXTRA_TIMEOUT
-    base: dict[str, Any] = {
-        "found": False, "path": [], "path_raw": [], "path_simplified": None,
-        "length_raw": None, "length_simplified": None, "cell_checks": 0, "seconds": 0.0,
-        "time_to_first_solution": None, "final_cost": None, "planner": name, "seed": int(seed),
-        "valid_raw": None, "valid_simplified": None, "checks_per_second": 0.0, "reason": "",
-        "wall_seconds": 0.0, "state_checks": 0, "motion_checks": 0, "status": "",
-    }
     t0 = time.perf_counter()
-    # Ship the occupancy and lattice tables: the worker would otherwise rederive the
-    # lattice geometry (LPs, ~0.7 s) that the parent has cached.
-    tables = (lattice_tables(world.lattice), world.occupancy)
-    out = _run_guarded(world, tables, s, g, name, float(time_limit), int(seed),
+    # Ship the checker (occupancy, walk and quantizer tables): the worker would otherwise
+    # rederive the lattice geometry (LPs, ~0.7 s) that the parent has cached.
+    out = _run_guarded(world.bounds, world.checker, s, g, name, float(time_limit), seed,
                        max_cell_checks, bool(simplify), bool(verbose), hard)
-    base.update(out)
-    base["wall_seconds"] = time.perf_counter() - t0
-    raw = base.get("path_raw") or []
-    if base["found"]:
-        base["valid_raw"] = _path_valid(world, raw)
-        if not base["valid_raw"]:
-            base.update(found=False, reason="raw path touched a blocked cell (rejected)")
-        elif base["path_simplified"] is not None:
-            base["valid_simplified"] = _path_valid(world, base["path_simplified"])
-            if not base["valid_simplified"]:
-                base.update(path_simplified=None, length_simplified=None,
-                            reason="simplified path touched a blocked cell; kept raw path")
-    if not base["found"]:
-        base.update(path=[], path_raw=[], path_simplified=None, length_raw=None,
-                    length_simplified=None)
-    else:
-        base["path"] = raw
-    return base
+    raw = np.asarray(out.pop("path_raw", None) or np.zeros((0, 3)), dtype=float).reshape(-1, 3)
+    simp = out.pop("path_simplified", None)
+    simp = None if simp is None else np.asarray(simp, dtype=float).reshape(-1, 3)
+    out.pop("path", None)
+    res = OmplResult(found=bool(out.pop("found", False)), planner=name, seed=seed, path=raw,
+                     path_simplified=simp, **out)
+    res.wall_seconds = time.perf_counter() - t0
+    if res.found:
+        res.valid_raw = _path_valid(world, raw)
+        if not res.valid_raw:
+            res.found, res.status = False, "invalid"
+            res.reason = "raw path touched a blocked cell (rejected)"
+        elif simp is not None:
+            res.valid_simplified = _path_valid(world, simp)
+            if not res.valid_simplified:
+                res.path_simplified = res.length_simplified = None
+                res.reason = "simplified path touched a blocked cell; kept raw path"
+    if not res.found:
+        res.path = np.zeros((0, 3))
+        res.path_simplified = res.length_raw = res.length_simplified = None
+        res.status = res.status if res.status not in ("", "found") else "no path"
+    return res
 
 
-def run_seeds(world: World, start, goal, seeds, **kw) -> list[dict]:
-    """:func:`plan_ompl` once per seed (same keyword arguments); list of result dicts."""
-    return [plan_ompl(world, start, goal, seed=int(sd), **kw) for sd in seeds]
+def run_seeds(world: World, start, goal, seeds, **kw) -> list[OmplResult]:
+    """:func:`plan_ompl` once per seed (same keyword arguments)."""
+    return [plan_ompl(world, start, goal, seed=sd, **kw) for sd in seeds]
 
 
 # -- process guard -------------------------------------------------------------------------
@@ -318,7 +316,7 @@ def _context():
 
             _CTX = mp.get_context("forkserver")
             _CTX.set_forkserver_preload(["numpy", "numba", "ompl.base", "ompl.geometric",
-                                         "ompl.util", "planner.baseline"])
+                                         "ompl.util", "planner.ompl"])
             # Start the server now with the warm-up flag so that it loads the compiled
             # kernels once and every forked worker inherits them (saves ~1 s per query).
             os.environ[_WARM_ENV] = "1"
@@ -331,12 +329,13 @@ def _context():
     return _CTX
 
 
-def _run_guarded(world, tables, s, g, name, time_limit, seed, max_checks, simplify, verbose,
+def _run_guarded(bounds, checker, s, g, name, time_limit, seed, max_checks, simplify, verbose,
                  hard) -> dict:
     ctx = _context()
     recv, send = ctx.Pipe(duplex=False)
-    proc = ctx.Process(target=_worker, args=(send, world, tables, s, g, name, time_limit,
-                                             seed, max_checks, simplify, verbose), daemon=True)
+    proc = ctx.Process(target=_worker, args=(send, os.getpid(), bounds, checker, s, g, name,
+                                             time_limit, seed, max_checks, simplify, verbose),
+                       daemon=True)
     # The child must not re-run the caller's script (spawn-style start methods import
     # ``__main__`` from its path): everything it runs lives in this package, so present a
     # bare ``__main__`` while the preparation data is taken. Callers then need no
@@ -351,43 +350,81 @@ def _run_guarded(world, tables, s, g, name, time_limit, seed, max_checks, simpli
     send.close()  # so that recv sees EOF if the worker dies
     deadline = time.monotonic() + hard
     result = None
+    timed_out = False
     try:
         while result is None:
             left = deadline - time.monotonic()
             if left <= 0:
+                timed_out = True
                 break
             if recv.poll(min(left, 0.5)):
                 try:
                     result = recv.recv()
-                except EOFError:
+                except EOFError:  # the worker closed its end without a result: it died
                     break
-            elif not proc.is_alive() and not recv.poll(0):
+            elif proc.exitcode is not None:
                 break
+    except BaseException:  # Ctrl-C in the caller: take the worker down with us
+        proc.kill()
+        proc.join()
+        raise
     finally:
         recv.close()
     if result is not None:
         proc.join(5.0)
-        if proc.is_alive():  # pragma: no cover - sent its result but did not exit
+        if proc.exitcode is None:  # pragma: no cover - sent its result but did not exit
             proc.kill()
             proc.join()
         return result
-    if proc.is_alive():
+    if not timed_out:  # died: wait for the exit status (the forkserver reports it late)
+        proc.join(5.0)
+    return _failure(proc, hard)
+
+
+def _failure(proc, hard: float) -> dict:
+    """Status and reason of a worker that gave no result, from its exit code first."""
+    code = proc.exitcode
+    if code is None:  # still running at the hard limit
         proc.kill()
         proc.join()
         return {"reason": f"timeout: worker killed after {hard:g} s", "status": "timeout"}
-    proc.join()
-    code = proc.exitcode
-    why = f"crashed (signal {-code})" if code is not None and code < 0 else (
-        f"worker exited with code {code} without a result")
-    return {"reason": why, "status": "crashed"}
+    if code < 0:
+        return {"reason": f"worker crashed (signal {-code})", "status": "crashed"}
+    return {"reason": f"worker crashed (exit code {code} without a result)",
+            "status": "crashed"}
 
 
-def _worker(conn, world, tables, s, g, name, time_limit, seed, max_checks, simplify,
-            verbose):
+def _die_with(caller: int) -> None:
+    """Make this worker exit when the caller (or the forkserver between) goes away."""
+    if sys.platform.startswith("linux"):
+        try:
+            import ctypes
+
+            libc = ctypes.CDLL(None, use_errno=True)
+            libc.prctl(1, signal.SIGKILL, 0, 0, 0)  # PR_SET_PDEATHSIG
+        except (OSError, AttributeError):  # pragma: no cover - no prctl
+            pass
+
+    def watch() -> None:
+        while True:
+            time.sleep(0.2)
+            try:
+                os.kill(caller, 0)
+            except ProcessLookupError:
+                os._exit(1)
+            except PermissionError:  # pragma: no cover - pid reused by another user
+                os._exit(1)
+
+    threading.Thread(target=watch, daemon=True).start()
+
+
+def _worker(conn, caller, bounds, checker, s, g, name, time_limit, seed, max_checks,
+            simplify, verbose):
     """Worker body: plan, send a plain dict, leave without finalisation (module doc)."""
     try:
+        _die_with(caller)
         try:
-            res = _solve(world, tables, s, g, name, time_limit, seed, max_checks, simplify,
+            res = _solve(bounds, checker, s, g, name, time_limit, seed, max_checks, simplify,
                          verbose)
         except Exception as exc:  # report, not raise: the parent decides
             res = {"found": False, "reason": f"worker error: {type(exc).__name__}: {exc}",
@@ -404,7 +441,7 @@ def _states(path) -> list[list[float]]:
     return [[float(st[0]), float(st[1]), float(st[2])] for st in path.getStates()]
 
 
-def _solve(world, tables, s, g, name, time_limit, seed, max_checks, simplify,
+def _solve(box, chk: ValidityChecker, s, g, name, time_limit, seed, max_checks, simplify,
            verbose) -> dict:
     from ompl import base as ob
     from ompl import geometric as og
@@ -412,26 +449,23 @@ def _solve(world, tables, s, g, name, time_limit, seed, max_checks, simplify,
 
     ou.setLogLevel(ou.LogLevel.LOG_INFO if verbose else ou.LogLevel.LOG_NONE)
     ou.RNG.setSeed(int(seed))
-    tables, occ = tables
-    world._occ = occ  # dropped by World pickling; rebuilding needs the lattice geometry
-    chk = CompiledChecker(world, tables)
-    chk.point_free(*s)  # compile / load the kernels before the clock starts
-    chk.segment_free(s, g)
+    chk.is_valid(s)  # compile / load the kernels before the clock starts
+    chk.check_motion(s, g)
     chk.checks = chk.states = chk.motions = 0
 
     space = ob.RealVectorStateSpace(3)
     bounds = ob.RealVectorBounds(3)
-    lo, hi = world.bounds
+    lo, hi = box
     for i in range(3):
         bounds.setLow(i, float(lo[i]))  # bounds.low[i] = x edits a copy (silently lost)
         bounds.setHigh(i, float(hi[i]))
     space.setBounds(bounds)
     si = ob.SpaceInformation(space)
-    si.setStateValidityChecker(lambda st: chk.point_free(st[0], st[1], st[2]))
+    si.setStateValidityChecker(lambda st: chk.is_valid((st[0], st[1], st[2])))
 
     class _Exact(ob.MotionValidator):
         def checkMotion(self, a, b):  # noqa: N802 - OMPL's name
-            return chk.segment_free((a[0], a[1], a[2]), (b[0], b[1], b[2]))
+            return chk.check_motion((a[0], a[1], a[2]), (b[0], b[1], b[2]))
 
     mv = _Exact(si)
     si.setMotionValidator(mv)
@@ -473,12 +507,11 @@ def _solve(world, tables, s, g, name, time_limit, seed, max_checks, simplify,
     if name in _THREADED:
         # Python conditions deadlock here (module doc): C++ timed slices, checks between.
         piece = min(max(0.02, time_limit / 50.0), time_limit)
-        status = None
         while True:
             left = time_limit - (time.perf_counter() - t0)
             if left <= 1e-4:
                 break
-            status = pl.solve(ob.timedPlannerTerminationCondition(min(piece, left)))
+            pl.solve(ob.timedPlannerTerminationCondition(min(piece, left)))
             now = time.perf_counter() - t0
             if first[0] is None and pdef.hasExactSolution():
                 first[0] = now
@@ -486,12 +519,12 @@ def _solve(world, tables, s, g, name, time_limit, seed, max_checks, simplify,
                 over[0] = True
                 break
     else:
-        status = pl.solve(ob.PlannerTerminationCondition(stop))
+        pl.solve(ob.PlannerTerminationCondition(stop))
     plan_secs = time.perf_counter() - t0
     exact = pdef.hasExactSolution() and not pdef.hasApproximateSolution()
     if exact and first[0] is None:
         first[0] = plan_secs  # planner returned at its first solution before we polled
-    res: dict[str, Any] = {"status": str(status) if status is not None else "",
+    res: dict[str, Any] = {"status": "found" if exact else "no path",
                            "time_to_first_solution": first[0] if exact else None}
     if not exact:
         if over[0]:
@@ -539,17 +572,15 @@ def _pin_ends(pts: list[list[float]], s: np.ndarray, g: np.ndarray) -> list[list
 
 
 def _warm() -> None:
-    """Load (or compile) the kernels on a tiny world: dense and hash storage share types."""
+    """Load (or compile) the checker kernels on a tiny world, through a pickle round trip as
+    the workers receive it."""
     from planner.lattice import Lattice
 
     w = World(Lattice.named("cubic", cell_volume=1.0), np.array([[2, 2, 2]]),
               np.array([[0.0, 0.0, 0.0], [4.0, 4.0, 4.0]]))
-    # Round trip: workers get unpickled (writable) arrays, another numba signature than
-    # the read-only cached ones of a fresh lattice (the occupancy build kernels care).
-    for x in (w, pickle.loads(pickle.dumps(w))):
-        c = CompiledChecker(x, pickle.loads(pickle.dumps(lattice_tables(x.lattice))))
-        c.point_free(0.3, 0.3, 0.3)
-        c.segment_free((0.3, 0.3, 0.3), (3.4, 3.6, 3.5))
+    c = pickle.loads(pickle.dumps(w.checker))
+    c.is_valid((0.3, 0.3, 0.3))
+    c.check_motion((0.3, 0.3, 0.3), (3.4, 3.6, 3.5))
 
 
 if os.environ.get(_WARM_ENV) == "1":  # pragma: no cover - runs inside the forkserver

@@ -1,0 +1,254 @@
+"""Graph search over lattice cells: A*, Dijkstra, Theta*, Lazy Theta*, path shortcutting.
+
+Nodes are lattice cells, edges the offsets ``lattice.neighbors(neighbors)``, edge cost the
+Euclidean distance between cell centres (m). The movement rule, the radius guarantee and
+the heuristic are described in :mod:`planner.search.stencils`.
+
+Layout: :mod:`~planner.search.stencils` (move sets, safe-rule cells, heuristic),
+:mod:`~planner.search._heap` (binary heap kernels), :mod:`~planner.search._nodes` (node
+table, cell -> slot map), :mod:`~planner.search._astar` (the kernel),
+:mod:`~planner.search._theta` (any-angle parent rules), :mod:`~planner.search._los` (line
+of sight, shortcutting), :mod:`~planner.search.reference` (networkx backend).
+
+Budget: every search is bounded. ``max_expansions`` (default: the memory budget divided by
+the bytes a node costs, :data:`planner.search._nodes.BYTES_PER_NODE`) stops it with status
+``"budget"``; the memory budget defaults to a quarter of the physical memory
+(:func:`default_memory_budget`).
+
+Examples
+--------
+>>> import numpy as np
+>>> from planner.lattice import Lattice
+>>> from planner.world import World
+>>> w = World(Lattice.named("cubic", 1.0), [[2, 2, 2]], [[0, 0, 0], [4, 4, 4]])
+>>> r = search(w, [0, 0, 0], [4, 4, 4])
+>>> r.status, round(r.cost, 4), r.guarantee
+('found', 6.9282, True)
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from planner.errors import PlanError
+from planner.keys import unpack
+from planner.search import _astar, _driver
+from planner.search._astar import SearchParams
+from planner.search._los import new_scratch, shortcut_kernel
+from planner.search._nodes import BYTES_PER_NODE, ST_EXP, ST_LOOK, ST_N
+from planner.search.stencils import (
+    H_EUCLID,
+    H_GAUGE,
+    H_ZERO,
+    carries_guarantee,
+    move_heuristic,
+    move_set,
+    move_stencils,
+)
+from planner.world import World, _cells
+
+__all__ = ["SearchResult", "search", "shortcut", "move_stencils", "move_heuristic", "METHODS",
+           "carries_guarantee", "default_memory_budget", "default_max_expansions"]
+
+METHODS = ("astar", "dijkstra", "theta", "lazy-theta")
+_ANYANGLE = {"astar": 0, "dijkstra": 0, "theta": 1, "lazy-theta": 2}
+_HKIND = {"astar": H_GAUGE, "dijkstra": H_ZERO, "theta": H_EUCLID, "lazy-theta": H_EUCLID}
+MEMORY_SHARE = 0.25  # of physical memory, the default search memory budget
+
+
+def default_memory_budget() -> int:
+    """Bytes a search may use by default: a quarter of the physical memory (4 GiB where
+    the platform does not say)."""
+    try:
+        total = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (ValueError, OSError, AttributeError):  # pragma: no cover - non-POSIX
+        total = 16 * 2**30
+    return int(MEMORY_SHARE * total)
+
+
+def default_max_expansions(memory_budget: int | None = None) -> int:
+    """Expansions allowed within ``memory_budget`` bytes (default
+    :func:`default_memory_budget`): the node budget ``budget // BYTES_PER_NODE``."""
+    b = default_memory_budget() if memory_budget is None else int(memory_budget)
+    return max(1, b // BYTES_PER_NODE)
+
+
+@dataclass
+class SearchResult:
+    """Outcome of one search.
+
+    Attributes
+    ----------
+    found : bool
+    cells : ndarray, shape (K, 3), int64
+        Path cells from start to goal (any-angle methods: only the turning cells).
+        Empty when not found.
+    cost : float
+        Path length between cell centres (m); ``inf`` when not found.
+    cell_checks : int
+        Occupancy lookups made by this search (each actual lookup counted once).
+    expansions : int
+        Nodes removed from the open list (the goal included).
+    generated : int
+        Distinct nodes created (start included).
+    seconds : float
+        Wall time of the search (numba backend: the kernel calls; networkx: build + search).
+    peak_bytes : int
+        Peak size of the search's own arrays (node table, heap, slot map, scratch).
+    reason : str
+        Why no path was found ("" when found).
+    status : str
+        ``"found"``, ``"unreachable"`` (the start's free component is exhausted) or
+        ``"budget"`` (stopped by ``max_expansions`` / ``max_nodes``).
+    guarantee : bool
+        Whether the path carries the radius guarantee
+        (:func:`planner.search.stencils.carries_guarantee`).
+    """
+
+    found: bool
+    cells: np.ndarray
+    cost: float
+    cell_checks: int
+    expansions: int
+    generated: int
+    seconds: float
+    peak_bytes: int
+    reason: str = ""
+    extra: dict = field(default_factory=dict)
+    status: str = "found"
+    guarantee: bool = True
+
+
+def _limit(value, name: str) -> int:
+    if value is None:
+        return 0
+    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value <= 0:
+        raise PlanError(f"{name} must be a positive integer, got {value!r}")
+    return int(value)
+
+
+def search(
+    world: World,
+    start_cell: np.ndarray,
+    goal_cell: np.ndarray,
+    *,
+    method: str = "astar",
+    neighbors: str = "full",
+    corner_cutting: bool = False,
+    backend: str = "numba",
+    max_nodes: int | None = None,
+    max_expansions: int | None = None,
+    memory_budget: int | None = None,
+) -> SearchResult:
+    """Shortest path between two cells.
+
+    Parameters
+    ----------
+    world : World
+    start_cell, goal_cell : array_like of int, shape (3,)
+        Lattice indices; both must be free (else PlanError naming which, where, and the
+        nearest free cell: :meth:`World.endpoint_cell`).
+    method : {"astar", "dijkstra", "theta", "lazy-theta"}
+    neighbors : str
+        ``lattice.neighbors`` kind: ``face``, ``full``, ``face+k``, ``full+k``.
+    corner_cutting : bool
+        False: the safe rule (:mod:`planner.search.stencils`); True: only the target cell
+        is checked (no radius guarantee unless the move set makes both rules equal).
+    backend : {"numba", "networkx"}
+        ``networkx`` (A*/Dijkstra only) builds the explicit free-cell graph of the start's
+        component (at most ``max_nodes`` or 1,000,000 cells) and runs
+        ``networkx.astar_path``: a slow readable reference.
+    max_nodes : int, optional
+        Give up (status "budget") once this many nodes exist.
+    max_expansions : int, optional
+        Give up (status "budget") after this many expansions. Default:
+        :func:`default_max_expansions` of ``memory_budget``.
+    memory_budget : int, optional
+        Bytes the search may use (default :func:`default_memory_budget`); also caps the
+        nodes created.
+
+    Returns
+    -------
+    SearchResult
+        Lookups are also added to ``world.cell_checks``.
+    """
+    if method not in METHODS:
+        raise PlanError(f"unknown method {method!r}; expected one of {', '.join(METHODS)}")
+    if backend not in ("numba", "networkx"):
+        raise PlanError(f"unknown backend {backend!r}; expected numba or networkx")
+    max_nodes = _limit(max_nodes, "max_nodes")
+    budget_nodes = default_max_expansions(_limit(memory_budget, "memory_budget") or None)
+    max_exp = _limit(max_expansions, "max_expansions") or budget_nodes
+    s = world.endpoint_cell(start_cell, "start")
+    gl = world.endpoint_cell(goal_cell, "goal")
+    lat = world.lattice
+    guarantee = carries_guarantee(lat, neighbors, corner_cutting)
+    ms = move_set(lat, neighbors, corner_cutting, _HKIND[method])
+    anyangle = _ANYANGLE[method]
+    if backend == "networkx":
+        if anyangle:
+            raise PlanError("the networkx backend supports astar and dijkstra only")
+        from planner.search.reference import search_networkx
+
+        res = search_networkx(world, s, gl, ms, max_nodes or None)
+        res.guarantee = guarantee
+        return res
+    chk = world.checker
+    node_cap = min(max_nodes, budget_nodes) if max_nodes else budget_nodes
+    params = SearchParams(anyangle, node_cap, max_exp)
+    t0 = time.perf_counter()
+    status, keys, cost, st, peak = _driver.run(chk.occupancy, chk.walk, ms, s, gl, params,
+                                               _span(world) if anyangle else 0.0)
+    secs = time.perf_counter() - t0
+    exp, gen, look = int(st[ST_EXP]), int(st[ST_N]), int(st[ST_LOOK])
+    world.cell_checks += look
+    checks = look + 2  # and the two endpoint checks
+    if status == _astar.RUN_FOUND:
+        return SearchResult(True, unpack(keys, 3), cost, checks, exp, gen, secs, peak,
+                            guarantee=guarantee)
+    if status == _astar.RUN_EXHAUSTED:
+        why, kind = f"goal unreachable: explored {gen} cells", "unreachable"
+    elif status == _astar.RUN_LIMIT and max_nodes and gen >= max_nodes:
+        why, kind = f"node limit {max_nodes} reached after {exp} expansions", "budget"
+    else:
+        why, kind = f"search budget exhausted after {exp} expansions ({peak} bytes)", "budget"
+    return SearchResult(False, np.zeros((0, 3), np.int64), math.inf, checks, exp, gen, secs,
+                        peak, why, status=kind, guarantee=guarantee)
+
+
+def _span(world: World) -> float:
+    """Longest line of sight inside the world (m): sizes the any-angle walk scratch."""
+    return float(np.linalg.norm(world.bounds[1] - world.bounds[0]))
+
+
+def shortcut(world: World, cells: np.ndarray) -> np.ndarray:
+    """Greedy line-of-sight shortcutting of a cell path.
+
+    From each kept cell, jump to the farthest later cell that is still in sight (every cell
+    the centre-to-centre segment touches is free, the safe rule), scanning forward until
+    the first cell out of sight. The result keeps the first and last cell, is a
+    subsequence of the input, and each consecutive pair is in sight (or was consecutive in
+    the input). Lookups are added to ``world.cell_checks``.
+
+    Parameters
+    ----------
+    cells : array_like of int, shape (K, 3)
+
+    Returns
+    -------
+    ndarray, shape (K', 3), int64
+    """
+    c = _cells(cells)
+    if len(c) <= 2:
+        return c.copy()
+    chk = world.checker
+    # Longest possible sight line: from the first cell to the farthest one (x2 headroom).
+    span = 2.0 * float(np.linalg.norm((c - c[0]) @ chk.walk.g.T, axis=1).max())
+    keep, n = shortcut_kernel(chk.occupancy, chk.walk, c, new_scratch(span, chk.walk))
+    world.cell_checks += int(n)
+    return c[keep]

@@ -1,0 +1,249 @@
+"""The search kernel (numba): A* / Dijkstra over lattice cells, with the any-angle parent
+rules of :mod:`planner.search._theta` for Theta* and Lazy Theta*. Resumable: the driver
+(:mod:`planner.search._driver`) grows the arrays when the kernel asks.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from planner._world_kernels import _free, mix64
+from planner.keys import pack3, unpack3
+from planner.search import _heap
+from planner.search._nodes import (
+    PAGE,
+    ST_EXP,
+    ST_GOAL,
+    ST_HN,
+    ST_LOOK,
+    ST_N,
+    ST_NP,
+    block_key,
+    local,
+    new_page,
+)
+from planner.search._theta import euclid, lazy_set_vertex, theta_parent
+from planner.search.stencils import H_EUCLID, H_GAUGE
+
+_EMPTY = -1
+RUN_EXHAUSTED, RUN_FOUND, RUN_LIMIT, RUN_GROW, RUN_BUDGET = 0, 1, 2, 3, 4
+
+
+class SearchParams(NamedTuple):
+    """Scalar settings of one search."""
+
+    anyangle: int  # 0 lattice A* / Dijkstra, 1 Theta*, 2 Lazy Theta*
+    max_nodes: int  # stop (RUN_LIMIT) once this many nodes exist; <= 0 no limit
+    max_expansions: int  # stop (RUN_BUDGET) after this many expansions; <= 0 no limit
+
+
+@njit(cache=True, inline="always")
+def heuristic(ms, g, e0, e1, e2):  # pragma: no cover - compiled
+    """h of the index difference e = goal - w (module docstring of ``stencils``)."""
+    hv = 0.0
+    if ms.hkind == H_GAUGE:
+        hmat = ms.hmat
+        for f in range(hmat.shape[0]):
+            x = hmat[f, 0] * e0 + hmat[f, 1] * e1 + hmat[f, 2] * e2
+            if x > hv:
+                hv = x
+    elif ms.hkind == H_EUCLID:
+        hv = euclid(g, 0, 0, 0, e0, e1, e2)
+    return hv
+
+
+@njit(cache=True)
+def search_init(start, goal, ms, g, nodes, heap, slots, st):  # pragma: no cover - compiled
+    """Put the start node in empty node arrays (slot 0), the slot map and the heap."""
+    bmask = slots.btab.shape[0] - 1
+    nodes.key[0] = pack3(start[0], start[1], start[2])
+    nodes.g[0] = 0.0
+    nodes.h[0] = heuristic(ms, g, goal[0] - start[0], goal[1] - start[1], goal[2] - start[2])
+    nodes.f[0] = nodes.h[0]
+    nodes.par[0] = 0
+    st[ST_NP] = 0
+    st[ST_HN] = _heap.push(heap, nodes.pos, 0, 0, nodes.f[0], 0.0)
+    bk = block_key(start[0], start[1], start[2])
+    q = new_page(slots, st, bk, mix64(bk) & bmask)
+    slots.pages[q * PAGE + local(start[0], start[1], start[2])] = 0
+    st[ST_N] = 1
+
+
+@njit(cache=True)
+def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st):
+    # pragma: no cover - compiled
+    """A* / Dijkstra / Theta* / Lazy Theta* over lattice cells, resumable.
+
+    The node arrays are fixed-size inside the kernel: before each expansion it checks that
+    the arrays and the slot map (load <= 0.5) can take every possible new node, else it
+    returns ``RUN_GROW`` and the driver doubles them and calls again. Not reassigning arrays
+    inside the loop lets numba drop per-iteration reference counting (measured ~10x).
+
+    Parameters
+    ----------
+    occ : Occupancy
+    walk : Walk
+        Lattice data of the line-of-sight walk (any-angle methods).
+    ms : MoveSet
+        Moves, their safe-rule cells and the heuristic.
+    nodes : NodeTable
+    heap : planner.search._heap.Heap
+    slots : SlotMap
+    sc : SightScratch
+    ufree : (U,) bool
+        Scratch for the union stencil lookups of one expansion.
+    params : SearchParams
+    goal : (3,) int64
+    st : (ST_SIZE,) int64
+        State (``planner.search._nodes.ST_*``): node count, heap size, expansions, lookups,
+        goal slot, page count, walk generation.
+
+    Returns
+    -------
+    int
+        RUN_FOUND, RUN_EXHAUSTED, RUN_LIMIT, RUN_BUDGET or RUN_GROW.
+    """
+    mode, grid, lo, dims, otable, otmask, gg, blo, bhi = occ
+    lo0, lo1, lo2 = lo[0], lo[1], lo[2]
+    d0, d1, d2 = dims[0], dims[1], dims[2]
+    moves, mcost, ust, mptr, midx, hmat, hkind = ms
+    nkey, ng, nf, nh, npar, npos = nodes
+    pages, btab, bkeys = slots
+    anyangle, max_nodes, max_exp = params
+    g = walk.g
+    gl0, gl1, gl2 = goal[0], goal[1], goal[2]
+    g00, g01, g02 = g[0, 0], g[0, 1], g[0, 2]
+    g10, g11, g12 = g[1, 0], g[1, 1], g[1, 2]
+    g20, g21, g22 = g[2, 0], g[2, 1], g[2, 2]
+    nfac = hmat.shape[0]
+    cap = nkey.shape[0]
+    pcap = bkeys.shape[0]
+    bsize = btab.shape[0]
+    bmask = bsize - 1
+    last_bk = np.int64(-1)
+    last_pg = np.int64(0)
+    nu = ust.shape[0]
+    nm = moves.shape[0]
+    gk = pack3(goal[0], goal[1], goal[2])
+    fq = 1e-9 * mcost.min()
+    fq_inv = 1.0 / fq
+    n = st[ST_N]
+    hn = st[ST_HN]
+    expansions = st[ST_EXP]
+    lookups = st[ST_LOOK]
+    status = RUN_EXHAUSTED
+    while hn > 0:
+        if n + nm > cap or st[ST_NP] + nm > pcap or 2 * (st[ST_NP] + nm) > bsize:
+            status = RUN_GROW
+            break
+        if max_exp > 0 and expansions >= max_exp:
+            status = RUN_BUDGET
+            break
+        s, hn = _heap.pop(heap, npos, hn)
+        npos[s] = -1
+        expansions += 1
+        u0, u1, u2 = unpack3(nkey[s])
+        if mode == 0:
+            # Dense grid lookups written out here: numba does not reliably inline the
+            # helper inside this large loop and a call costs ~50 ns of refcounting.
+            for j in range(nu):
+                a = u0 + ust[j, 0] - lo0
+                b = u1 + ust[j, 1] - lo1
+                c = u2 + ust[j, 2] - lo2
+                ufree[j] = (a >= 0 and b >= 0 and c >= 0 and a < d0 and b < d1 and c < d2
+                            and grid[(a * d1 + b) * d2 + c] != 0)
+        else:
+            for j in range(nu):
+                ufree[j] = _free(mode, grid, lo, dims, otable, otmask, gg, blo, bhi,
+                                 u0 + ust[j, 0], u1 + ust[j, 1], u2 + ust[j, 2])
+        lookups += nu
+        if anyangle == 2:
+            lookups += lazy_set_vertex(occ, walk, ms, nodes, slots, sc, st, ufree, s, u0, u1,
+                                       u2)
+        if nkey[s] == gk:
+            status = RUN_FOUND
+            st[ST_GOAL] = s
+            break
+        if max_nodes > 0 and n >= max_nodes:
+            status = RUN_LIMIT
+            break
+        ps = npar[s]
+        if anyangle != 0 and ps != s:
+            p0, p1, p2 = unpack3(nkey[ps])
+        else:
+            p0, p1, p2 = u0, u1, u2
+        for m in range(nm):
+            v0 = u0 + moves[m, 0]
+            v1 = u1 + moves[m, 1]
+            v2 = u2 + moves[m, 2]
+            bk = block_key(v0, v1, v2)
+            if bk != last_bk:
+                p = mix64(bk) & bmask
+                while True:
+                    q = btab[p]
+                    if q == _EMPTY or bkeys[q] == bk:
+                        break
+                    p = (p + 1) & bmask
+                if q == _EMPTY:
+                    q = new_page(slots, st, bk, p)
+                last_bk = bk
+                last_pg = q
+            loc = last_pg * PAGE + local(v0, v1, v2)
+            t = np.int64(pages[loc])
+            if t != _EMPTY and npos[t] == -1:
+                continue  # closed: a consistent heuristic never improves it
+            # Safe rule after the closed test: most neighbours of an expanded cell are closed.
+            allowed = True
+            for e in range(mptr[m], mptr[m + 1]):
+                if not ufree[midx[e]]:
+                    allowed = False
+                    break
+            if not allowed:
+                continue
+            if t == _EMPTY:
+                t = n
+                n += 1
+                pages[loc] = t
+                nkey[t] = pack3(v0, v1, v2)
+                ng[t] = np.inf
+                e0 = gl0 - v0
+                e1 = gl1 - v1
+                e2 = gl2 - v2
+                hv = 0.0
+                if hkind == H_GAUGE:  # written out for the same reason as the lookups
+                    for f in range(nfac):
+                        x = hmat[f, 0] * e0 + hmat[f, 1] * e1 + hmat[f, 2] * e2
+                        if x > hv:
+                            hv = x
+                elif hkind == H_EUCLID:
+                    x = g00 * e0 + g01 * e1 + g02 * e2
+                    y = g10 * e0 + g11 * e1 + g12 * e2
+                    z = g20 * e0 + g21 * e1 + g22 * e2
+                    hv = np.sqrt(x * x + y * y + z * z)
+                nh[t] = hv
+                npos[t] = -2
+            if anyangle == 0:
+                gt = ng[s] + mcost[m]
+                par = s
+            else:
+                gt, par, c = theta_parent(occ, walk, sc, st, nodes, anyangle, s, ps, p0, p1,
+                                          p2, v0, v1, v2, mcost[m])
+                lookups += c
+            if gt < ng[t]:
+                ng[t] = gt
+                # f on a 1e-9-cell grid: equal-cost paths tie exactly (float noise would
+                # otherwise decide), so the larger-g tie-break can dive; costs stay exact.
+                nf[t] = np.floor((gt + nh[t]) * fq_inv + 0.5) * fq
+                npar[t] = par
+                if npos[t] == -2:
+                    hn = _heap.push(heap, npos, hn, t, nf[t], gt)
+                else:
+                    _heap.decrease_key(heap, npos, t, nf[t], gt)
+    st[ST_N] = n
+    st[ST_HN] = hn
+    st[ST_EXP] = expansions
+    st[ST_LOOK] = lookups
+    return status

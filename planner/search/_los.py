@@ -1,0 +1,90 @@
+"""Line of sight between cell centres (numba): the exact segment walk of the validity
+checker (:mod:`planner._world_kernels`) on reusable scratch, and greedy path shortcutting.
+
+Two cells see each other iff every cell whose closed Voronoi cell the centre-to-centre
+segment touches is free (the same test as a motion check of :class:`planner.world.
+ValidityChecker`).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from planner._world_kernels import segment_walk, walk_on, walk_scratch
+
+
+class SightScratch(NamedTuple):
+    """Reusable scratch of the walk (see ``walk_scratch``) plus two cell buffers."""
+
+    vis: np.ndarray  # (S,) int64 visited keys
+    vgen: np.ndarray  # (S,) int64 generation stamp per entry
+    queue: np.ndarray  # (Q, 3) int64 BFS queue
+    p: np.ndarray  # (3,) int64
+    q: np.ndarray  # (3,) int64
+
+
+def new_scratch(span: float, walk) -> SightScratch:
+    """Scratch for sight lines up to ``span`` metres (longer ones fall back to fresh
+    arrays inside the kernel)."""
+    vis, vgen, queue = walk_scratch(span, math.sqrt(2.0 * walk.rhs.min()), len(walk.full))
+    return SightScratch(vis, vgen, queue, np.empty(3, np.int64), np.empty(3, np.int64))
+
+
+@njit(cache=True)
+def los(occ, walk, p, q, sc, gen):  # pragma: no cover - compiled
+    """Line of sight between the centres of cells p and q ((3,) int64 each) on scratch ``sc``
+    with a fresh generation ``gen``. Returns ``(free, lookups)``."""
+    g = walk.g
+    a = g @ p.astype(np.float64)
+    b = g @ q.astype(np.float64)
+    _, free, n, ok = walk_on(occ, walk, a, b, p, True, sc.vis, sc.vgen, gen, sc.queue)
+    if not ok:  # longer than the scratch was sized for: walk again on fresh arrays
+        _, free, n = segment_walk(occ, walk, a, b, p, True)
+    return free, n
+
+
+@njit(cache=True, inline="always")
+def sight(occ, walk, sc, st, wslot, p0, p1, p2, q0, q1, q2):  # pragma: no cover - compiled
+    """:func:`los` between cells p and q given by components, inside a search: the
+    generation counter lives in ``st[wslot]``."""
+    sc.p[0] = p0
+    sc.p[1] = p1
+    sc.p[2] = p2
+    sc.q[0] = q0
+    sc.q[1] = q1
+    sc.q[2] = q2
+    st[wslot] += 1
+    return los(occ, walk, sc.p, sc.q, sc, st[wslot])
+
+
+@njit(cache=True)
+def shortcut_kernel(occ, walk, cells, sc):  # pragma: no cover - compiled
+    """Greedy shortcutting: from each kept cell go to the farthest later cell still in
+    sight (scanning forward, stopping at the first cell out of sight). Consecutive input
+    cells that are not in sight of each other (corner-cutting paths) are kept as they are.
+    Returns ``(kept indices into cells, lookups)``."""
+    n = cells.shape[0]
+    keep = np.empty(n, dtype=np.int64)
+    nk = 0
+    lookups = 0
+    gen = 0
+    i = 0
+    keep[nk] = 0
+    nk += 1
+    while i < n - 1:
+        j = i + 1
+        while j + 1 < n:
+            gen += 1
+            ok, c = los(occ, walk, cells[i], cells[j + 1], sc, gen)
+            lookups += c
+            if not ok:
+                break
+            j += 1
+        keep[nk] = j
+        nk += 1
+        i = j
+    return keep[:nk].copy(), lookups

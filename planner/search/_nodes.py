@@ -1,0 +1,134 @@
+"""The search's node table and its cell -> node slot map (numba kernels and their structs).
+
+Node slots are dense integers in creation order; :class:`NodeTable` holds one row per slot.
+The slot map (:class:`SlotMap`) finds a cell's slot: pages of ``PAGE`` int32 slots, one per
+touched ``PB x PB x PB`` block of cells, found through a small open-addressing table of block
+keys. Neighbouring cells share a page, so a lookup is usually a cached-page hit plus one
+nearby load: memory stays proportional to the region the search touches, with near-dense
+locality.
+
+Both are fixed-size inside the kernels; the driver (:func:`planner.search._driver.run`)
+doubles them when a kernel asks (``RUN_GROW``).
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from planner._world_kernels import mix64
+from planner.keys import pack3
+
+_EMPTY = -1
+
+# Slots of the int64 state vector shared by the resumable kernel and its driver.
+ST_N, ST_HN, ST_EXP, ST_LOOK, ST_GOAL, ST_NP, ST_WGEN = 0, 1, 2, 3, 4, 5, 6
+ST_SIZE = 7
+
+PB_SHIFT = 2
+PB_MASK = (1 << PB_SHIFT) - 1
+PAGE = 1 << (3 * PB_SHIFT)
+
+#: bytes per node of the node table and heap (9 eight-byte fields) plus the slot map's share
+#: (a page of int32 per block, pages about 1/4 full) and the x2 of array doubling.
+BYTES_PER_NODE = 2 * (9 * 8 + 16)
+
+
+class NodeTable(NamedTuple):
+    """One row per node slot (capacity ``len(key)``)."""
+
+    key: np.ndarray  # (cap,) int64 packed cell
+    g: np.ndarray  # (cap,) float64 cost from the start (m)
+    f: np.ndarray  # (cap,) float64 g + h, rounded (see the kernel)
+    h: np.ndarray  # (cap,) float64 heuristic to the goal (m)
+    par: np.ndarray  # (cap,) int64 parent slot (the start is its own parent)
+    pos: np.ndarray  # (cap,) int64 heap position, -1 closed, -2 generated but not queued
+
+
+class SlotMap(NamedTuple):
+    """Cell -> node slot map (module docstring)."""
+
+    pages: np.ndarray  # (P * PAGE,) int32 node slot per cell of each page, -1 none
+    btab: np.ndarray  # (T,) int64 open-addressing table block key -> page, -1 empty
+    bkeys: np.ndarray  # (P,) int64 block key of each page
+
+
+def new_nodes(cap: int) -> NodeTable:
+    f8, i8 = np.float64, np.int64
+    return NodeTable(np.empty(cap, i8), np.empty(cap, f8), np.empty(cap, f8),
+                     np.empty(cap, f8), np.empty(cap, i8), np.empty(cap, i8))
+
+
+def new_slots(pcap: int) -> SlotMap:
+    return SlotMap(np.empty(pcap * PAGE, np.int32), np.full(2 * pcap, _EMPTY, np.int64),
+                   np.empty(pcap, np.int64))
+
+
+@njit(cache=True, inline="always")
+def local(v0, v1, v2):  # pragma: no cover - compiled
+    """Index of a cell inside its page."""
+    return ((v0 & PB_MASK) << (2 * PB_SHIFT)) | ((v1 & PB_MASK) << PB_SHIFT) | (v2 & PB_MASK)
+
+
+@njit(cache=True, inline="always")
+def block_key(v0, v1, v2):  # pragma: no cover - compiled
+    return pack3(v0 >> PB_SHIFT, v1 >> PB_SHIFT, v2 >> PB_SHIFT)
+
+
+@njit(cache=True)
+def find_slot(sm, v0, v1, v2):  # pragma: no cover - compiled
+    """Node slot of cell (v0, v1, v2), or -1 when the search has not generated it."""
+    btab, bkeys = sm.btab, sm.bkeys
+    bmask = btab.shape[0] - 1
+    bk = block_key(v0, v1, v2)
+    p = mix64(bk) & bmask
+    while True:
+        q = btab[p]
+        if q == _EMPTY:
+            return _EMPTY
+        if bkeys[q] == bk:
+            return np.int64(sm.pages[q * PAGE + local(v0, v1, v2)])
+        p = (p + 1) & bmask
+
+
+@njit(cache=True)
+def new_page(sm, st, bk, p):  # pragma: no cover - compiled
+    """Open a page for block ``bk`` at free table position ``p``; returns its number."""
+    q = st[ST_NP]
+    st[ST_NP] = q + 1
+    sm.btab[p] = q
+    sm.bkeys[q] = bk
+    for i in range(q * PAGE, (q + 1) * PAGE):
+        sm.pages[i] = _EMPTY
+    return q
+
+
+@njit(cache=True)
+def rehash(sm, npages):  # pragma: no cover - compiled
+    """Insert pages 0..npages-1 (by their block keys) into an empty block table."""
+    btab, bkeys = sm.btab, sm.bkeys
+    bmask = btab.shape[0] - 1
+    for x in range(npages):
+        q = mix64(bkeys[x]) & bmask
+        while btab[q] != _EMPTY:
+            q = (q + 1) & bmask
+        btab[q] = x
+
+
+@njit(cache=True)
+def trace_path(nodes, goal_slot):  # pragma: no cover - compiled
+    """Packed keys from the start (its own parent) to ``goal_slot``."""
+    key, par = nodes.key, nodes.par
+    k = 1
+    x = goal_slot
+    while par[x] != x:
+        x = par[x]
+        k += 1
+    path = np.empty(k, dtype=np.int64)
+    x = goal_slot
+    for i in range(k - 1, -1, -1):
+        path[i] = key[x]
+        x = par[x]
+    return path

@@ -1,0 +1,79 @@
+"""Any-angle parent rules (numba, inlined into the search kernel): Theta* and Lazy Theta*.
+
+Theta* (``anyangle`` 1) checks line of sight from the expanded node's parent to each
+neighbour when it is generated and links the neighbour to that parent when it can see it.
+Lazy Theta* (``anyangle`` 2) assumes the sight line and verifies it once, when the node is
+expanded (:func:`lazy_set_vertex`), falling back to its best closed lattice neighbour.
+Both use the Euclidean heuristic and the exact walk of :mod:`planner.search._los`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from planner.keys import unpack3
+from planner.search._los import sight
+from planner.search._nodes import ST_WGEN, find_slot
+
+THETA, LAZY_THETA = 1, 2
+
+
+@njit(cache=True, inline="always")
+def euclid(g, p0, p1, p2, q0, q1, q2):  # pragma: no cover - compiled
+    """|G (q - p)| (m) for cells p and q."""
+    d0, d1, d2 = q0 - p0, q1 - p1, q2 - p2
+    x = g[0, 0] * d0 + g[0, 1] * d1 + g[0, 2] * d2
+    y = g[1, 0] * d0 + g[1, 1] * d1 + g[1, 2] * d2
+    z = g[2, 0] * d0 + g[2, 1] * d1 + g[2, 2] * d2
+    return np.sqrt(x * x + y * y + z * z)
+
+
+@njit(cache=True, inline="always")
+def lazy_set_vertex(occ, walk, ms, nodes, slots, sc, st, ufree, s, u0, u1, u2):
+    # pragma: no cover - compiled
+    """Lazy Theta* SetVertex for slot ``s`` at cell u: verify the assumed line of sight to
+    its parent; else take the best closed neighbour that an allowed move reaches (one
+    exists: the node that generated s). ``ufree`` holds the union stencil lookups of u.
+    Returns the lookups made."""
+    par = nodes.par
+    if par[s] == s:
+        return 0
+    p0, p1, p2 = unpack3(nodes.key[par[s]])
+    ok, c = sight(occ, walk, sc, st, ST_WGEN, p0, p1, p2, u0, u1, u2)
+    if ok:
+        return c
+    moves, mcost, mptr, midx = ms.moves, ms.cost, ms.ptr, ms.idx
+    best = np.inf
+    bp = -1
+    for m in range(moves.shape[0]):
+        allowed = True
+        for e in range(mptr[m], mptr[m + 1]):
+            if not ufree[midx[e]]:
+                allowed = False
+                break
+        if not allowed:
+            continue
+        t = find_slot(slots, u0 + moves[m, 0], u1 + moves[m, 1], u2 + moves[m, 2])
+        if t == -1 or nodes.pos[t] != -1:
+            continue
+        v = nodes.g[t] + mcost[m]
+        if v < best:
+            best = v
+            bp = t
+    par[s] = bp
+    nodes.g[s] = best
+    return c
+
+
+@njit(cache=True, inline="always")
+def theta_parent(occ, walk, sc, st, nodes, anyangle, s, ps, p0, p1, p2, v0, v1, v2, mc):
+    # pragma: no cover - compiled
+    """Any-angle (g, parent, lookups) of neighbour v generated from slot s whose parent is
+    ``ps`` at cell p (``mc``: the lattice move's length s -> v)."""
+    if anyangle == LAZY_THETA or ps == s:
+        return nodes.g[ps] + euclid(walk.g, p0, p1, p2, v0, v1, v2), ps, 0
+    ok, c = sight(occ, walk, sc, st, ST_WGEN, p0, p1, p2, v0, v1, v2)
+    if ok:
+        return nodes.g[ps] + euclid(walk.g, p0, p1, p2, v0, v1, v2), ps, c
+    return nodes.g[s] + mc, s, c
