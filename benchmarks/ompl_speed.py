@@ -1,7 +1,7 @@
 """OMPL baseline speed and quality on the office map.
 
-(a) Validity checks per second: the compiled callable OMPL calls
-(``world.checker.is_valid``, :class:`planner.world.ValidityChecker`) vs a pure Python checker calling
+(a) Validity checks per second: the compiled callable OMPL calls (``world.checker.
+is_valid``, :class:`planner.world.ValidityChecker`) vs a pure Python checker calling
 ``world.points_free`` once per state, in this process; the exact motion check in cells/s;
 and the checks/s reached inside OMPL planning (cell lookups / planning wall time).
 

@@ -147,3 +147,33 @@ def test_cli_compare_prints_every_lattice(wall_file, capsys):
                  "--goal", "8,3,1.5"]) == 0
     out = capsys.readouterr().out
     assert "cubic" in out and "fcc" in out and "vs cubic" in out
+
+
+@pytest.mark.parametrize("lattice", ["cubic", "fcc", "hex"])
+def test_radius_guarantee_in_every_mode_that_claims_it(lattice):
+    """Every neighbour set x corner cutting x method: a path with guarantee=True keeps the
+    radius from every obstacle point (exact segment-point distance); only corner cutting
+    over moves that cross other cells drops the guarantee."""
+    from planner.search.stencils import move_stencils
+
+    rng = np.random.default_rng(7)
+    pts = rng.uniform(0.0, 4.0, (60, 3))
+    radius = 0.3
+    world = planner.build_world(pts, lattice, cell_volume=0.15**3, radius=radius,
+                                bounds=[[0, 0, 0], [4, 4, 4]])
+    ends = rng.uniform(0.2, 3.8, (400, 3))
+    ends = ends[world.points_free(ends)]
+    far = np.linalg.norm(ends[:, None] - ends[None], axis=2)
+    i, j = np.unravel_index(np.argmax(far), far.shape)
+    checked = 0
+    for nb in ("face", "full", "face+1", "full+1"):
+        for cc in (False, True):
+            crossing = any(len(c) > 1 for c in move_stencils(world.lattice, nb, False)[5])
+            for method in ("astar", "lazy-theta"):
+                res = planner.plan(world, ends[i], ends[j], neighbors=nb, corner_cutting=cc,
+                                   method=method)
+                assert res.guarantee == (not cc or not crossing), (nb, cc)
+                if res.found and res.guarantee:
+                    assert _min_distance(res.path, pts) >= radius - 1e-9, (nb, cc, method)
+                    checked += 1
+    assert checked >= 8

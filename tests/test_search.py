@@ -277,3 +277,50 @@ def test_warframe_optimal_costs(name):
         r = S.search(world, q[:3].astype(np.int64), q[3:6].astype(np.int64))
         assert r.found
         assert r.cost == pytest.approx(q[6], rel=1e-6)
+
+
+# -- budget, one compilation -----------------------------------------------------------------
+def _sealed_goal_world(n=60):
+    """A big empty cubic world whose goal cell (n-5, n-5, n-5) is walled in."""
+    c = np.array([n - 5] * 3)
+    shell = np.array([c + d for d in itertools.product(range(-2, 3), repeat=3)
+                      if max(map(abs, d)) == 2])
+    return _box_world(n=n, blocked=shell), np.array([1, 1, 1]), c
+
+
+def test_sealed_goal_ends_with_budget_status():
+    w, s, g = _sealed_goal_world()
+    r = S.search(w, s, g, max_expansions=5000)
+    assert not r.found and r.status == "budget" and r.expansions == 5000
+    assert r.reason == f"search budget exhausted after 5000 expansions ({r.peak_bytes} bytes)"
+    r = S.search(w, s, g, memory_budget=200_000)
+    assert r.status == "budget" and r.generated <= 200_000 // 100
+    with pytest.raises(PlanError, match="max_expansions must be a positive integer"):
+        S.search(w, s, g, max_expansions=-1)
+
+
+def test_unreachable_and_found_statuses():
+    blocked = [(x, y, 4) for x in range(9) for y in range(9)]
+    w = _box_world(blocked=blocked, n=8)
+    assert S.search(w, [1, 1, 1], [1, 1, 7]).status == "unreachable"
+    assert S.search(w, [1, 1, 1], [7, 7, 1]).status == "found"
+    assert S.search(w, [1, 1, 1], [1, 1, 7], max_nodes=50).status == "budget"
+
+
+def test_every_lattice_shares_one_compiled_kernel():
+    """Every array the kernels get has one numba type on every lattice (MCC's generator is
+    not C-contiguous and once forced a second compilation)."""
+    from planner._world_kernels import free_many, segment_walk
+    from planner.search import _astar, _los
+
+    for name in NAMED_LATTICES:
+        for budget in ({}, {"dense_budget": 0}):
+            world, s, g = _random_world(name, 1)
+            world = World(world.lattice, world.blocked, world.bounds, **budget)
+            for method in ("astar", "dijkstra", "lazy-theta", "theta"):
+                r = S.search(world, s, g, method=method)
+            S.shortcut(world, r.cells)
+            world.segment_free(world.lattice.to_world(s[None])[0], [0.5, 0.5, 0.5])
+    for kernel in (_astar.search_run, _astar.search_init, _los.shortcut_kernel,
+                   segment_walk, free_many):
+        assert len(kernel.signatures) == 1, (kernel, kernel.signatures)

@@ -23,7 +23,7 @@ Examples
 >>> w = World(Lattice.named("cubic", 1.0), [[2, 2, 2]], [[0, 0, 0], [4, 4, 4]])
 >>> r = search(w, [0, 0, 0], [4, 4, 4])
 >>> r.status, round(r.cost, 4), r.guarantee
-('found', 6.9282, True)
+('found', 8.2925, True)
 """
 
 from __future__ import annotations

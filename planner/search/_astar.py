@@ -26,7 +26,7 @@ from planner.search._nodes import (
     new_page,
 )
 from planner.search._theta import euclid, lazy_set_vertex, theta_parent
-from planner.search.stencils import H_EUCLID, H_GAUGE
+from planner.search.stencils import H_EUCLID, H_GAUGE, move_allowed
 
 _EMPTY = -1
 RUN_EXHAUSTED, RUN_FOUND, RUN_LIMIT, RUN_GROW, RUN_BUDGET = 0, 1, 2, 3, 4
@@ -196,12 +196,7 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st):
             if t != _EMPTY and npos[t] == -1:
                 continue  # closed: a consistent heuristic never improves it
             # Safe rule after the closed test: most neighbours of an expanded cell are closed.
-            allowed = True
-            for e in range(mptr[m], mptr[m + 1]):
-                if not ufree[midx[e]]:
-                    allowed = False
-                    break
-            if not allowed:
+            if not move_allowed(ufree, mptr, midx, m):
                 continue
             if t == _EMPTY:
                 t = n

@@ -15,6 +15,7 @@ from numba import njit
 from planner.keys import unpack3
 from planner.search._los import sight
 from planner.search._nodes import ST_WGEN, find_slot
+from planner.search.stencils import move_allowed
 
 THETA, LAZY_THETA = 1, 2
 
@@ -47,12 +48,7 @@ def lazy_set_vertex(occ, walk, ms, nodes, slots, sc, st, ufree, s, u0, u1, u2):
     best = np.inf
     bp = -1
     for m in range(moves.shape[0]):
-        allowed = True
-        for e in range(mptr[m], mptr[m + 1]):
-            if not ufree[midx[e]]:
-                allowed = False
-                break
-        if not allowed:
+        if not move_allowed(ufree, mptr, midx, m):
             continue
         t = find_slot(slots, u0 + moves[m, 0], u1 + moves[m, 1], u2 + moves[m, 2])
         if t == -1 or nodes.pos[t] != -1:

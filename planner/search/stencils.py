@@ -29,12 +29,14 @@ from functools import lru_cache
 from typing import NamedTuple
 
 import numpy as np
+from numba import njit
 
 from planner._world_kernels import Occupancy, segment_walk
 from planner.lattice import Lattice
 from planner.world import _walk
 
-__all__ = ["MoveSet", "move_set", "move_stencils", "move_heuristic", "carries_guarantee"]
+__all__ = ["MoveSet", "move_allowed", "move_set", "move_stencils", "move_heuristic",
+           "carries_guarantee"]
 
 H_ZERO, H_GAUGE, H_EUCLID = 0, 1, 2
 
@@ -50,6 +52,16 @@ class MoveSet(NamedTuple):
     idx: np.ndarray  # (nnz,) int64
     hmat: np.ndarray  # (F, 3) float64 heuristic facets in index coordinates
     hkind: int  # H_ZERO (Dijkstra), H_GAUGE (A*) or H_EUCLID (any-angle)
+
+
+@njit(cache=True, inline="always")
+def move_allowed(ufree, ptr, idx, m):  # pragma: no cover - compiled
+    """Move ``m`` is allowed: every cell it needs is free (``ufree``: the union stencil's
+    lookups around the expanded cell)."""
+    for e in range(ptr[m], ptr[m + 1]):
+        if not ufree[idx[e]]:
+            return False
+    return True
 
 
 def _empty_occupancy(g: np.ndarray) -> Occupancy:

@@ -1,0 +1,91 @@
+"""The search's indexed binary heap (planner.search._heap) against heapq."""
+
+from __future__ import annotations
+
+import heapq
+
+import numpy as np
+import pytest
+
+from planner.search import _heap as H
+
+
+def _heap(cap=64):
+    return H.new_heap(cap), np.full(cap, -2, np.int64)
+
+
+def _drain(h, pos, n):
+    out = []
+    while n:
+        s, n = H.pop(h, pos, n)
+        out.append(int(s))
+    return out
+
+
+def test_pops_in_key_order():
+    h, pos = _heap()
+    n = 0
+    for slot, f in enumerate([5.0, 1.0, 4.0, 2.0, 3.0]):
+        n = H.push(h, pos, n, slot, f, 0.0)
+    assert _drain(h, pos, n) == [1, 3, 4, 2, 0]
+
+
+def test_equal_keys_pop_larger_g_first():
+    h, pos = _heap()
+    n = 0
+    for slot, g in enumerate([1.0, 3.0, 2.0]):
+        n = H.push(h, pos, n, slot, 7.0, g)
+    n = H.push(h, pos, n, 3, 6.5, 0.0)
+    assert _drain(h, pos, n) == [3, 1, 2, 0]
+
+
+def test_decrease_key_moves_entry_forward_and_positions_stay_exact():
+    h, pos = _heap()
+    n = 0
+    for slot in range(10):
+        n = H.push(h, pos, n, slot, 10.0 + slot, 0.0)
+    H.decrease_key(h, pos, 9, 0.5, 0.0)
+    H.decrease_key(h, pos, 5, 10.5, 0.0)
+    for i in range(n):  # every held slot knows where it is
+        assert pos[h.slot[i]] == i
+    assert _drain(h, pos, n) == [9, 0, 5, 1, 2, 3, 4, 6, 7, 8]
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_matches_heapq_on_random_sequences(seed):
+    """Random push / pop / decrease-key with many ties: the popped (f, g) keys equal those
+    of a heapq reference keyed on (f, -g) with lazy deletion."""
+    rng = np.random.default_rng(seed)
+    cap = 2000
+    h, pos = _heap(cap)
+    n = 0
+    ref: list = []
+    key: dict[int, tuple[float, float]] = {}
+    nxt = 0
+    got, want = [], []
+    for _ in range(3000):
+        op = rng.random()
+        if (op < 0.45 or not key) and nxt < cap:
+            f, g = float(rng.integers(0, 20)), float(rng.integers(0, 4))
+            n = H.push(h, pos, n, nxt, f, g)
+            key[nxt] = (f, g)
+            heapq.heappush(ref, (f, -g, nxt))
+            nxt += 1
+        elif op < 0.75 and key:
+            while key.get(ref[0][2]) != (ref[0][0], -ref[0][1]):  # stale (lazy deletion)
+                heapq.heappop(ref)
+            want.append((ref[0][0], -ref[0][1]))
+            s, n = H.pop(h, pos, n)
+            pos[s] = -1
+            got.append(key.pop(int(s)))
+        elif key:
+            x = int(rng.choice(list(key)))
+            f, g = key[x]
+            nf = f - float(rng.integers(0, 5))
+            if nf < f:
+                H.decrease_key(h, pos, x, nf, g)
+                key[x] = (nf, g)
+                heapq.heappush(ref, (nf, -g, x))
+        assert n == len(key)
+    assert got == want
+    assert len(got) > 500
