@@ -1,9 +1,7 @@
 """OMPL (PyPI ``ompl`` 2.0.1, nanobind bindings) as the continuous-space baseline.
 
 The OMPL planners search ``RealVectorStateSpace(3)`` with the world's bounds on exactly the
-same occupancy as the lattice planners:
-
-Both checks go through the world's one :class:`planner.world.ValidityChecker`, the same
+same occupancy as the lattice planners. Both checks go through the world's one :class:`planner.world.ValidityChecker`, the same
 structs and kernels the lattice searches use:
 
 * **State validity** (``checker.is_valid``): the lattice cell containing the state is in
@@ -22,17 +20,10 @@ structs and kernels the lattice searches use:
 * The parent process re-validates every returned segment with :meth:`World.segment_free`
   anyway (defence in depth: a path is never reported found unless that passes).
 
-Process guard: OMPL runs in a worker process (``forkserver`` context with ``ompl`` and this
-module preloaded, so a query costs a fork, not a fresh interpreter) with a hard timeout.
-A hang gives ``status="timeout"``, a worker killed by a signal or segfaulting
-``status="crashed"`` with "worker crashed (signal N)" (the exit code is read before any
-liveness test: the forkserver reports a death late). The worker dies with its caller: it asks
-the kernel for SIGKILL when its parent (the forkserver) dies (Linux ``PR_SET_PDEATHSIG``)
-and a watchdog thread exits when the calling process is gone (Ctrl-C, SIGKILL). The worker
-leaves with
-``os._exit`` after sending its result, which skips interpreter finalisation and with it
-nanobind's "leaked instances" report (the bindings' object graph is cyclic via Python
-callbacks; the report is noise at exit).
+Process guard (:mod:`planner._guard`): OMPL runs in a worker process (``forkserver`` with
+``ompl`` and this module preloaded and the checker kernels warmed up once) with a hard
+timeout. A hang gives ``status="timeout"``; a worker killed by a signal or segfaulting
+``status="crashed"`` with "worker crashed (signal N)"; the worker dies with its caller.
 
 Termination and time to first solution: a ``PlannerTerminationCondition`` built from a
 Python function stops at the time limit, when the cell-check budget is exceeded, or (for
@@ -58,19 +49,15 @@ validity checker from the parent (rebuilding it means ~0.7 s of lattice geometry
 from __future__ import annotations
 
 import math
-import multiprocessing as mp
 import os
 import pickle
-import signal
-import sys
-import threading
 import time
-import types
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
 import numpy as np
 
+from planner._guard import run_guarded
 from planner.errors import PlanError
 from planner.world import ValidityChecker, World
 
@@ -103,7 +90,8 @@ ANYTIME = frozenset({"rrtstar", "informedrrtstar", "sorrtstar", "bitstar", "prm"
 #: planners that evaluate the termination condition in a helper thread (see module doc).
 _THREADED = frozenset({"prm", "prmstar"})
 _EXTRA_TIMEOUT = 30.0  # s beyond the time limit before the worker is killed
-_WARM_ENV = "PLANNER_BASELINE_WARM"
+_WARM_ENV = "PLANNER_OMPL_WARM"
+_PRELOAD = ("numpy", "numba", "ompl.base", "ompl.geometric", "ompl.util", "planner.ompl")
 
 
 # -- result ------------------------------------------------------------------------------
@@ -272,8 +260,9 @@ def plan_ompl(
     t0 = time.perf_counter()
     # Ship the checker (occupancy, walk and quantizer tables): the worker would otherwise
     # rederive the lattice geometry (LPs, ~0.7 s) that the parent has cached.
-    out = _run_guarded(world.bounds, world.checker, s, g, name, float(time_limit), seed,
-                       max_cell_checks, bool(simplify), bool(verbose), hard)
+    out = run_guarded(_solve, (world.bounds, world.checker, s, g, name, float(time_limit),
+                               seed, max_cell_checks, bool(simplify), bool(verbose)),
+                      hard, _PRELOAD, _WARM_ENV)
     raw = np.asarray(out.pop("path_raw", None) or np.zeros((0, 3)), dtype=float).reshape(-1, 3)
     simp = out.pop("path_simplified", None)
     simp = None if simp is None else np.asarray(simp, dtype=float).reshape(-1, 3)
@@ -301,140 +290,6 @@ def plan_ompl(
 def run_seeds(world: World, start, goal, seeds, **kw) -> list[OmplResult]:
     """:func:`plan_ompl` once per seed (same keyword arguments)."""
     return [plan_ompl(world, start, goal, seed=sd, **kw) for sd in seeds]
-
-
-# -- process guard -------------------------------------------------------------------------
-_CTX = None
-
-
-def _context():
-    """forkserver (preloading ompl and this module) where available, else spawn."""
-    global _CTX
-    if _CTX is None:
-        if "forkserver" in mp.get_all_start_methods():
-            from multiprocessing import forkserver
-
-            _CTX = mp.get_context("forkserver")
-            _CTX.set_forkserver_preload(["numpy", "numba", "ompl.base", "ompl.geometric",
-                                         "ompl.util", "planner.ompl"])
-            # Start the server now with the warm-up flag so that it loads the compiled
-            # kernels once and every forked worker inherits them (saves ~1 s per query).
-            os.environ[_WARM_ENV] = "1"
-            try:
-                forkserver.ensure_running()
-            finally:
-                os.environ.pop(_WARM_ENV, None)
-        else:  # pragma: no cover - non-POSIX
-            _CTX = mp.get_context("spawn")
-    return _CTX
-
-
-def _run_guarded(bounds, checker, s, g, name, time_limit, seed, max_checks, simplify, verbose,
-                 hard) -> dict:
-    ctx = _context()
-    recv, send = ctx.Pipe(duplex=False)
-    proc = ctx.Process(target=_worker, args=(send, os.getpid(), bounds, checker, s, g, name,
-                                             time_limit, seed, max_checks, simplify, verbose),
-                       daemon=True)
-    # The child must not re-run the caller's script (spawn-style start methods import
-    # ``__main__`` from its path): everything it runs lives in this package, so present a
-    # bare ``__main__`` while the preparation data is taken. Callers then need no
-    # ``if __name__ == "__main__"`` guard.
-    main = sys.modules.get("__main__")
-    sys.modules["__main__"] = types.ModuleType("__main__")
-    try:
-        proc.start()
-    finally:
-        if main is not None:
-            sys.modules["__main__"] = main
-    send.close()  # so that recv sees EOF if the worker dies
-    deadline = time.monotonic() + hard
-    result = None
-    timed_out = False
-    try:
-        while result is None:
-            left = deadline - time.monotonic()
-            if left <= 0:
-                timed_out = True
-                break
-            if recv.poll(min(left, 0.5)):
-                try:
-                    result = recv.recv()
-                except EOFError:  # the worker closed its end without a result: it died
-                    break
-            elif proc.exitcode is not None:
-                break
-    except BaseException:  # Ctrl-C in the caller: take the worker down with us
-        proc.kill()
-        proc.join()
-        raise
-    finally:
-        recv.close()
-    if result is not None:
-        proc.join(5.0)
-        if proc.exitcode is None:  # pragma: no cover - sent its result but did not exit
-            proc.kill()
-            proc.join()
-        return result
-    if not timed_out:  # died: wait for the exit status (the forkserver reports it late)
-        proc.join(5.0)
-    return _failure(proc, hard)
-
-
-def _failure(proc, hard: float) -> dict:
-    """Status and reason of a worker that gave no result, from its exit code first."""
-    code = proc.exitcode
-    if code is None:  # still running at the hard limit
-        proc.kill()
-        proc.join()
-        return {"reason": f"timeout: worker killed after {hard:g} s", "status": "timeout"}
-    if code < 0:
-        return {"reason": f"worker crashed (signal {-code})", "status": "crashed"}
-    return {"reason": f"worker crashed (exit code {code} without a result)",
-            "status": "crashed"}
-
-
-def _die_with(caller: int) -> None:
-    """Make this worker exit when the caller (or the forkserver between) goes away."""
-    if sys.platform.startswith("linux"):
-        try:
-            import ctypes
-
-            libc = ctypes.CDLL(None, use_errno=True)
-            libc.prctl(1, signal.SIGKILL, 0, 0, 0)  # PR_SET_PDEATHSIG
-        except (OSError, AttributeError):  # pragma: no cover - no prctl
-            pass
-
-    def watch() -> None:
-        while True:
-            time.sleep(0.2)
-            try:
-                os.kill(caller, 0)
-            except ProcessLookupError:
-                os._exit(1)
-            except PermissionError:  # pragma: no cover - pid reused by another user
-                os._exit(1)
-
-    threading.Thread(target=watch, daemon=True).start()
-
-
-def _worker(conn, caller, bounds, checker, s, g, name, time_limit, seed, max_checks,
-            simplify, verbose):
-    """Worker body: plan, send a plain dict, leave without finalisation (module doc)."""
-    try:
-        _die_with(caller)
-        try:
-            res = _solve(bounds, checker, s, g, name, time_limit, seed, max_checks, simplify,
-                         verbose)
-        except Exception as exc:  # report, not raise: the parent decides
-            res = {"found": False, "reason": f"worker error: {type(exc).__name__}: {exc}",
-                   "status": "error"}
-        conn.send(res)
-        conn.close()
-    finally:
-        sys.stdout.flush()
-        sys.stderr.flush()
-        os._exit(0)
 
 
 def _states(path) -> list[list[float]]:

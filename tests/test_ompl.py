@@ -195,7 +195,7 @@ def test_invalid_seed_is_refused_before_any_work(door, seed, monkeypatch):
     def no_work(*a, **k):
         raise AssertionError("a worker was started")
 
-    monkeypatch.setattr(baseline, "_run_guarded", no_work)
+    monkeypatch.setattr(baseline, "run_guarded", no_work)
     with pytest.raises(PlanError, match="seed must be an integer"):
         baseline.plan_ompl(w, START, GOAL, seed=seed)
     monkeypatch.setattr("planner.api.build_world", no_work)
