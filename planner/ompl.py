@@ -1,8 +1,8 @@
 """OMPL (PyPI ``ompl`` 2.0.1, nanobind bindings) as the continuous-space baseline.
 
 The OMPL planners search ``RealVectorStateSpace(3)`` with the world's bounds on exactly the
-same occupancy as the lattice planners. Both checks go through the world's one :class:`planner.world.ValidityChecker`, the same
-structs and kernels the lattice searches use:
+same occupancy as the lattice planners. Both checks go through the world's one
+:class:`planner.world.ValidityChecker`, the structs and kernels the lattice searches use:
 
 * **State validity** (``checker.is_valid``): the lattice cell containing the state is in
   bounds and free. One compiled kernel quantizes the point (the exact generic closest-point

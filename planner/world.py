@@ -134,6 +134,15 @@ class World:
     ----------
     cell_checks : int
         Running count of occupancy lookups made through this world (including by searches).
+
+    Examples
+    --------
+    >>> from planner.lattice import Lattice
+    >>> w = World(Lattice.named("cubic", 1.0), [[2, 2, 2]], [[0, 0, 0], [4, 4, 4]])
+    >>> w.checker.is_valid((2.1, 1.9, 2.2)), w.checker.is_valid((0.5, 3.0, 1.0))
+    (False, True)
+    >>> w.checker.check_motion((0, 0, 0), (4, 4, 4)), w.checker.check_motion((0, 0, 0), (4, 0, 0))
+    (False, True)
     """
 
     def __init__(

@@ -97,9 +97,21 @@ def test_no_path_is_reported_not_raised(wall):
     shut = np.concatenate([closed, _door_plug()])
     res = planner.plan(shut, START, GOAL, lattice="cubic", cell_volume=0.001, radius=0.3,
                        bounds=BOUNDS)
-    assert not res.found and "unreachable" in res.reason
+    assert not res.found and "unreachable" in res.reason and res.status == "unreachable"
     assert res.path.shape == (0, 3) and res.length == np.inf
     assert res.to_dict()["length"] is None
+    world = planner.build_world(shut, "cubic", cell_volume=0.001, radius=0.3, bounds=BOUNDS)
+    res = planner.plan(world, START, GOAL, max_expansions=100)
+    assert not res.found and res.status == "budget" and res.expansions == 100
+    assert res.reason.startswith("search budget exhausted after 100 expansions (")
+
+
+def test_bad_api_arguments_are_plan_errors(wall):
+    for radius in ("0.2", None, -1.0, float("nan")):
+        with pytest.raises(PlanError, match="radius must be"):
+            planner.build_world(wall, "fcc", cell_volume=0.001, radius=radius, bounds=BOUNDS)
+    with pytest.raises(PlanError, match="method must be a string"):
+        planner.plan(wall, START, GOAL, method=None)
 
 
 def _door_plug() -> np.ndarray:
