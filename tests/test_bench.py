@@ -9,7 +9,8 @@ import pytest
 
 from planner.bench import runner, summary
 from planner.bench.metrics import Clearance
-from planner.bench.suite import REPO, SuiteError, load_suite
+from planner.bench.suite import SuiteError, load_suite
+from planner.maps import map_path
 
 SUITE = """
 name = "tiny"
@@ -31,7 +32,7 @@ radii = [0.2]
 def tiny_suite(tmp_path_factory):
     d = tmp_path_factory.mktemp("suite")
     p = d / "tiny.toml"
-    p.write_text(SUITE.format(map=(REPO / "maps" / "office.ply").as_posix()))
+    p.write_text(SUITE.format(map=map_path("office").as_posix()))
     return load_suite(str(p))
 
 
