@@ -330,6 +330,7 @@ def _cmd_compare(a) -> int:
 
 def _cmd_voxels(a) -> int:
     world, label = _build(a)
+    Path(a.out).parent.mkdir(parents=True, exist_ok=True)  # as plan --out does
     world.blocked_voxels().save(a.out)
     print(f"{a.out}: {world.n_blocked} blocked {label} cells, "
           f"cell volume {world.lattice.cell_volume:.6g} m^3")
