@@ -140,3 +140,61 @@ def test_bundled_suites_load():
         s = load_suite(name)
         assert s.name == name
     assert math.isfinite(load_suite("quick").ompl_time)
+
+
+def test_progress_redraws_only_on_a_terminal():
+    import io
+
+    class Tty(io.StringIO):
+        def isatty(self):
+            return True
+
+    log = io.StringIO()
+    bar = runner._Progress(200, True, stream=log)
+    for _ in range(200):
+        bar.step(1)
+    bar.close()
+    lines = log.getvalue().splitlines()
+    assert "\r" not in log.getvalue() and 9 <= len(lines) <= 11  # a line per ~10%
+    assert lines[-1].startswith("progress 100%")
+    tty = Tty()
+    bar = runner._Progress(5, True, stream=tty)
+    bar.step(5)
+    assert tty.getvalue().startswith("\r[")
+
+
+def test_a_suite_with_an_unknown_method_is_refused_when_read(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text('methods = ["astra"]\n[[maps]]\npath = "office"\ncell_volumes = [0.01]\n')
+    with pytest.raises(SuiteError, match="astra"):
+        load_suite(str(bad))
+    bad.write_text('[ompl]\nplanners = ["rrtfast"]\n')
+    with pytest.raises(SuiteError, match="rrtfast"):
+        load_suite(str(bad))
+
+
+def test_duplicate_rows_are_counted_once(tiny_tasks, tmp_path):
+    tasks, _ = tiny_tasks
+    rows = runner.run(tasks[:2], tmp_path / "r.jsonl", progress=False)
+    once = summary.summarize([dict(r) for r in rows])
+    twice = summary.summarize([dict(r) for r in rows + rows])
+    assert [s["runs"] for s in once] == [s["runs"] for s in twice]
+
+
+def test_a_report_of_a_partial_run_says_so(tiny_tasks, tiny_suite, tmp_path):
+    tasks, record = tiny_tasks
+    rows = runner.run(tasks[:1], tmp_path / "r.jsonl", progress=False)
+    rep = summary.write_report(tmp_path, tiny_suite, rows, summary.summarize(rows), record, [],
+                               "planner bench x", partial="interrupted by SIGINT: 3 of 36 runs")
+    text = rep.read_text()
+    assert "(PARTIAL)" in text.splitlines()[0] and "interrupted by SIGINT" in text
+    assert "commit" in text and "CPU" in text and "jobs: 1" in text
+    assert "| lattice |" in text and "```" not in text  # Markdown tables, not code blocks
+
+
+def test_saved_queries_are_reused(tiny_suite):
+    _, record = runner.plan_tasks(tiny_suite, log=lambda m: None)
+    sampled = []
+    tasks, again = runner.plan_tasks(tiny_suite, log=sampled.append, saved=record)
+    assert again == record and not sampled
+    assert {q["id"] for t in tasks for q in t["queries"]} == {0, 1, 2}

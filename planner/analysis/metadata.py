@@ -16,6 +16,8 @@ _PACKAGES = ("lattice-planner", "numpy", "scipy", "numba", "matplotlib", "ompl",
 def _commit() -> str:
     """The source checkout's commit (``+dirty`` with local changes), or ``unknown``."""
     root = Path(__file__).resolve().parents[2]
+    if not (root / "pyproject.toml").is_file() or not (root / "planner").is_dir():
+        return "unknown (installed package)"  # site-packages may sit inside another repo
     try:
         sha = subprocess.run(["git", "-C", str(root), "rev-parse", "--short=12", "HEAD"],
                              capture_output=True, text=True, timeout=5, check=True).stdout.strip()

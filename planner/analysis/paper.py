@@ -77,9 +77,10 @@ TABLE1_HEADERS = {
 def default_data_dir() -> Path:
     """``../shared/data`` from the current folder, else from the source checkout."""
     here = Path.cwd() / ".." / "shared" / "data"
-    if here.is_dir():
+    checkout = Path(__file__).resolve().parents[2]
+    if here.is_dir() or not (checkout / "pyproject.toml").is_file():
         return here
-    return Path(__file__).resolve().parents[2] / ".." / "shared" / "data"
+    return checkout / ".." / "shared" / "data"
 
 
 def write_csv(path: Path, rows: Sequence[dict], fields: Sequence[str] | None = None) -> None:
