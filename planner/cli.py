@@ -363,6 +363,9 @@ def main(argv: list[str] | None = None) -> int:
         except KeyboardInterrupt:
             print("planner: interrupted", file=sys.stderr)
             return 130
+        except BrokenPipeError:  # output piped into `head`: stop quietly, as Unix tools do
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+            return 141
     for w in caught:
         with contextlib.suppress(Exception):
             print(f"planner: warning: {w.message}", file=sys.stderr)

@@ -243,3 +243,13 @@ def test_second_run_on_one_folder_is_refused_and_resume_reuses_queries(tmp_path)
     assert r.returncode == 0, r.stderr
     assert "sampling" not in r.stderr
     assert json.loads((tmp_path / "out" / "queries.json").read_text()) == saved
+
+
+def test_compare_includes_a_custom_generator_at_the_common_cell_volume():
+    r = planner("compare", "office", "--lattices", "cubic", "--generator",
+                "1,0,0;0,1,0;0,0,1", *FAST, "--json")
+    assert r.returncode == 0, r.stderr
+    cubic, custom = json.loads(r.stdout)
+    assert custom["lattice"] == "custom"
+    assert custom["cell_volume"] == pytest.approx(0.01)
+    assert custom["length"] == pytest.approx(cubic["length"])  # the same lattice

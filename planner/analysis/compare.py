@@ -91,7 +91,7 @@ def map_defaults(map_path: str, radius: float | None = None,
 def compare(
     map_path: str,
     *,
-    lattices: list[str],
+    lattices: list,
     cell_volume: float | None = None,
     radius: float | None = None,
     bounds=None,
@@ -104,6 +104,9 @@ def compare(
     format: str | None = None,
 ) -> list[dict]:
     """Plan the same queries on every lattice and return one summary row per lattice.
+
+    ``lattices`` holds names or :class:`~planner.lattice.Lattice` instances (a custom
+    generator, scaled to the common cell volume when one is given or suggested by the map).
 
     Queries are ``start``/``goal`` when given, else the map's default queries (bundled
     maps' JSON sidecar). Radius and cell volume default to the sidecar's suggestions.
@@ -121,9 +124,10 @@ def compare(
             raise PlanError(f"{map_path}: no default queries; pass --start and --goal")
     radius, cell_volume = map_defaults(map_path, radius, cell_volume)
     rows, results = [], {}
-    for name in lattices:
+    for lat in lattices:
+        name = lat if isinstance(lat, str) else (lat.name or "custom")
         t0 = time.perf_counter()
-        world = api.build_world(map_path, name, cell_volume=cell_volume, radius=radius,
+        world = api.build_world(map_path, lat, cell_volume=cell_volume, radius=radius,
                                 bounds=bounds, format=format)
         build = time.perf_counter() - t0
         per = []
