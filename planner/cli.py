@@ -130,30 +130,30 @@ def _generator(text: str):
         raise argparse.ArgumentTypeError(str(exc)) from None
 
 
-def _output(suffixes: tuple[str, ...]):
-    """An output file that can be written: checked before any work is done."""
-    def parse(text: str) -> str:
-        p = Path(text)
-        if p.suffix.lower() not in suffixes:
-            raise argparse.ArgumentTypeError(
-                f"{text}: unsupported output type {p.suffix or '(none)'!r}; use "
-                f"{', '.join(suffixes)}")
-        if p.is_dir():
-            raise argparse.ArgumentTypeError(f"{text}: is a directory")
-        parent = p.absolute().parent
-        while not parent.exists():  # missing folders are created when writing
-            parent = parent.parent
-        if not parent.is_dir():
-            raise argparse.ArgumentTypeError(f"{text}: {parent} is not a directory")
-        try:  # a real probe: permissions, read-only and virtual file systems (/proc)
-            fd, probe = tempfile.mkstemp(prefix=".planner-probe.", dir=parent)
-            os.close(fd)
-            os.unlink(probe)
-        except OSError as exc:
-            raise argparse.ArgumentTypeError(
-                f"{text}: cannot write into {parent}: {exc.strerror}") from None
-        return text
-    return parse
+_OUTPUTS = {("plan", "out"): (".csv", ".json"), ("voxels", "out"): (".npz",),
+            ("plan", "plot"): PLOT_SUFFIXES, ("compare", "plot"): PLOT_SUFFIXES}
+
+
+def _check_output(option: str, text: str, suffixes: tuple[str, ...]) -> None:
+    """Refuse an output file that cannot be written, before any work is done."""
+    p = Path(text)
+    where = f"argument --{option}: {text}"
+    if p.suffix.lower() not in suffixes:
+        raise PlannerError(f"{where}: unsupported output type {p.suffix or '(none)'!r}; use "
+                           f"{', '.join(suffixes)}")
+    if p.is_dir():
+        raise PlannerError(f"{where}: is a directory")
+    parent = p.absolute().parent
+    while not parent.exists():  # missing folders are created when writing
+        parent = parent.parent
+    if not parent.is_dir():
+        raise PlannerError(f"{where}: {parent} is not a directory")
+    try:  # a real probe: permissions, read-only and virtual file systems (/proc)
+        fd, probe = tempfile.mkstemp(prefix=".planner-probe.", dir=parent)
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as exc:
+        raise PlannerError(f"{where}: cannot write into {parent}: {exc.strerror}") from None
 
 
 # -- parser --------------------------------------------------------------------------------
@@ -217,8 +217,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--shortcut", action="store_true", help="shortcut the A* path")
     p.add_argument("--time", type=_positive, default=1.0, help="OMPL time budget (s)")
     p.add_argument("--seed", type=_int_range(0, 2**32 - 1), default=0, help="OMPL seed")
-    p.add_argument("--out", type=_output((".csv", ".json")), help="write the path (.csv/.json)")
-    p.add_argument("--plot", type=_output(PLOT_SUFFIXES), help="write a figure of the path")
+    p.add_argument("--out", help="write the path (.csv/.json)")
+    p.add_argument("--plot", help="write a figure of the path")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
 
     p = sub.add_parser("compare", help="plan the same queries on every lattice (main job)")
@@ -231,12 +231,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--goal", type=_vec3, default=None, help="x,y,z (m); None: map's queries")
     p.add_argument("--method", default="astar", help=METHODS)
     p.add_argument("--neighbors", default="full", help="full, face, face+k or full+k")
-    p.add_argument("--plot", type=_output(PLOT_SUFFIXES), help="write a figure of the paths")
+    p.add_argument("--plot", help="write a figure of the paths")
     p.add_argument("--json", action="store_true", help="print the rows as JSON")
 
     p = sub.add_parser("voxels", help="build an (inflated) occupied voxel list and save it")
     _add_world_args(p)
-    p.add_argument("--out", type=_output((".npz",)), required=True, help="output .npz")
+    p.add_argument("--out", required=True, help="output .npz")
 
     p = sub.add_parser("bench", help="run a benchmark suite (which lattice for my map?)")
     p.add_argument("suite", help="bundled suite name (quick, paper, full) or a TOML file")
@@ -355,6 +355,9 @@ def main(argv: list[str] | None = None) -> int:
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", RuntimeWarning)
         try:
+            for (cmd, option), suffixes in _OUTPUTS.items():
+                if a.command == cmd and getattr(a, option, None):
+                    _check_output(option, getattr(a, option), suffixes)
             with np.errstate(all="warn"):
                 status = _COMMANDS[a.command](a)
         except PlannerError as exc:

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from planner.analysis.tables import format_table
-from planner.errors import PlanError
+from planner.errors import MapError, PlanError
 from planner.fsutil import atomic_path
 from planner.maps import read_sidecar
 
@@ -79,6 +79,8 @@ def map_defaults(map_path: str, radius: float | None = None,
     """
     side = read_sidecar(map_path)
     if radius is None:
+        if not Path(map_path).exists():
+            raise MapError(f"{map_path}: no such file or bundled map")
         if side.get("robot_radius") is None:
             raise PlanError(f"{map_path}: the map suggests no robot radius; pass --radius "
                             "(metres, 0 for a point robot)")
