@@ -177,8 +177,15 @@ radii = [0.25]
 """
 
 
-def _start_bench(tmp_path, jobs):
-    (tmp_path / "slow.toml").write_text(SUITE)
+OMPL_ONLY = SUITE.replace('methods = ["astar", "dijkstra"]', "methods = []") + """
+[ompl]
+planners = ["rrtstar"]
+time = 3.0
+"""
+
+
+def _start_bench(tmp_path, jobs, suite=SUITE):
+    (tmp_path / "slow.toml").write_text(suite)
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     return subprocess.Popen(
         [sys.executable, "-m", "planner", "bench", str(tmp_path / "slow.toml"), "--out",
@@ -197,13 +204,19 @@ def _wait_for_rows(proc, results, n=1, timeout=240):
     raise AssertionError("no finished row appeared")
 
 
-@pytest.mark.parametrize("sig, code, jobs", [(signal.SIGINT, 130, 2), (signal.SIGTERM, 143, 1),
-                                             (signal.SIGTERM, 143, 2)])
-def test_bench_stops_cleanly_on_a_signal(tmp_path, sig, code, jobs):
-    proc = _start_bench(tmp_path, jobs)
+@pytest.mark.parametrize("sig, code, jobs, suite", [
+    (signal.SIGINT, 130, 2, SUITE),
+    (signal.SIGTERM, 143, 1, SUITE),
+    (signal.SIGTERM, 143, 2, SUITE),
+    (signal.SIGINT, 130, 2, OMPL_ONLY),  # workers with OMPL worker processes of their own
+])
+def test_bench_stops_cleanly_on_a_signal(tmp_path, sig, code, jobs, suite):
+    proc = _start_bench(tmp_path, jobs, suite)
     results = tmp_path / "out" / "results.jsonl"
     _wait_for_rows(proc, results)
     children = psutil.Process(proc.pid).children(recursive=True)
+    if suite is OMPL_ONLY:
+        assert any(c.parent() and c.parent().pid != proc.pid for c in children)  # grandchildren
     proc.send_signal(sig)
     try:
         out, err = proc.communicate(timeout=15)  # generous: the machine is shared

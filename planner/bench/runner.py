@@ -14,6 +14,7 @@ import os
 import signal
 import sys
 import time
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from multiprocessing import get_context
 from pathlib import Path
 
@@ -241,9 +242,10 @@ def _drop_partial_line(path: Path) -> None:
 class Interrupted(Exception):
     """The run was stopped by SIGINT or SIGTERM; finished rows are saved."""
 
-    def __init__(self, signum: int):
+    def __init__(self, signum: int, processes: list | None = None):
         super().__init__(f"interrupted by {signal.Signals(signum).name}")
         self.signum = signum
+        self.processes = processes or []  # every descendant when the signal came
 
     @property
     def exit_code(self) -> int:
@@ -257,7 +259,9 @@ def _signals_raise():
     def handler(signum, frame):
         for s in (signal.SIGINT, signal.SIGTERM):  # a second signal must not interrupt cleanup
             signal.signal(s, signal.SIG_IGN)
-        raise Interrupted(signum)
+        # the whole tree now: once the pool's workers die, their own children (an OMPL
+        # worker) are re-parented and could no longer be found
+        raise Interrupted(signum, _descendants())
 
     old = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM)}
     try:
@@ -265,6 +269,47 @@ def _signals_raise():
     finally:
         for s, h in old.items():
             signal.signal(s, h)
+
+
+def _descendants() -> list:
+    try:
+        import psutil
+    except ImportError:  # pragma: no cover - psutil comes with dask[distributed]
+        return []
+    out = []
+    for p in psutil.Process().children(recursive=True):
+        with contextlib.suppress(psutil.Error):
+            # multiprocessing's resource tracker ends by itself with this process; killing it
+            # makes it print a traceback
+            if not any("resource_tracker" in part for part in p.cmdline()):
+                out.append(p)
+    return out
+
+
+def _stop(processes: list, grace: float = 2.0) -> None:
+    """Terminate ``processes`` (psutil), then kill those still alive after ``grace`` s.
+
+    Never reaps them (no ``wait``): multiprocessing reaps its own workers, and a worker
+    reaped behind its back looks alive to it forever.
+    """
+    import psutil
+
+    def alive(p) -> bool:
+        try:
+            return p.is_running() and p.status() != psutil.STATUS_ZOMBIE
+        except psutil.Error:
+            return False
+
+    for p in processes:
+        with contextlib.suppress(psutil.Error):
+            p.terminate()
+    deadline = time.monotonic() + grace
+    while time.monotonic() < deadline and any(alive(p) for p in processes):
+        time.sleep(0.05)
+    for p in processes:
+        if alive(p):
+            with contextlib.suppress(psutil.Error):
+                p.kill()
 
 
 def _worker_init() -> None:
@@ -316,22 +361,26 @@ def run(tasks: list[dict], out: Path, *, jobs: int = 1, scheduler: str | None = 
                     write(run_task(t))
             else:
                 _run_pool(todo, jobs, write)
+        except Interrupted as exc:
+            _stop(exc.processes)  # local workers and their own workers (OMPL)
+            raise
         finally:
             bar.close()
     return read_rows(out)
 
 
 def _run_pool(todo: list[dict], jobs: int, write) -> None:
-    pool = get_context("spawn").Pool(jobs, initializer=_worker_init)
+    # not multiprocessing.Pool: its daemonic workers may not start OMPL's worker processes
+    ex = ProcessPoolExecutor(max_workers=jobs, mp_context=get_context("spawn"),
+                             initializer=_worker_init)
     try:
-        for rows in pool.imap_unordered(run_task, todo):
-            write(rows)
-        pool.close()
+        futs = [ex.submit(run_task, t) for t in todo]
+        for fut in as_completed(futs):
+            write(fut.result())
     except BaseException:
-        pool.terminate()  # running tasks are killed, pending ones dropped
+        ex.shutdown(wait=False, cancel_futures=True)  # running ones are stopped by the caller
         raise
-    finally:
-        pool.join()
+    ex.shutdown()
 
 
 def _run_dask(todo: list[dict], scheduler: str, write) -> None:
