@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from planner.analysis.style import LATTICE_COLORS
 from planner.analysis.tables import format_table
 from planner.errors import MapError, PlanError
 from planner.fsutil import atomic_path
@@ -237,8 +238,9 @@ def plot_paths(path: str, world, results: dict, max_cells: int = 4000) -> None:
     for label, p in paths.items():
         r = results[label]
         text = f"{label}: {r.length:.2f} m, {r.cell_checks:,} checks"
-        ax3.plot(*p.T, lw=2, label=text)
-        ax2.plot(p[:, 0], p[:, 1], lw=2, label=text)
+        colour = LATTICE_COLORS.get(label)  # None: matplotlib's next colour
+        ax3.plot(*p.T, lw=2, label=text, color=colour)
+        ax2.plot(p[:, 0], p[:, 1], lw=2, label=text, color=colour)
     first = next(iter(paths.values()))
     for ax, pts in ((ax3, (first[0], first[-1])), (ax2, (first[0][:2], first[-1][:2]))):
         ax.scatter(*np.array(pts[:1]).T, marker="o", s=60, c="green", label="start", zorder=5)

@@ -46,6 +46,7 @@ from planner.analysis.measure import (
     table1,
 )
 from planner.analysis.metadata import run_metadata
+from planner.analysis.style import LATTICE_COLORS
 from planner.errors import PlannerError
 from planner.fsutil import atomic_path, write_text_atomic
 from planner.lattice import Lattice
@@ -56,8 +57,7 @@ DATASETS = {
     "velodyne": "velodyne/251370668.pcd",
 }
 UNIFORM = "uniform_random"
-COLORS = {"cubic": "tab:blue", "bcc": "tab:orange", "fcc": "tab:green",
-          "mcc": "tab:red", "hex": "tab:purple"}
+COLORS = LATTICE_COLORS
 ADJ_LABEL = {
     "face": "face-adjacent cells (share a face)",
     "full": "all touching cells (face, edge or vertex)",

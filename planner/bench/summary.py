@@ -11,11 +11,13 @@ from pathlib import Path
 
 import numpy as np
 
+from planner.analysis.style import LATTICE_COLORS, OTHER_COLOR
 from planner.analysis.tables import format_table
 from planner.bench.runner import unique_rows
 from planner.fsutil import atomic_path, write_text_atomic
+from planner.lattice import NAMED_LATTICES
 
-LATTICE_ORDER = ("cubic", "bcc", "fcc", "mcc", "hex")
+LATTICE_ORDER = NAMED_LATTICES
 
 
 def _group_key(r: dict) -> tuple:
@@ -132,8 +134,7 @@ def plot(rows: list[dict], out_dir: Path) -> list[Path]:
     labels = sorted({_label(r) for r in rows}, key=lambda s: (
         s.startswith("ompl"), s.split()[-1], s.split()[1] if len(s.split()) > 2 else "",
         LATTICE_ORDER.index(s.split()[0]) if s.split()[0] in LATTICE_ORDER else 9))
-    colours = {"cubic": "tab:grey", "bcc": "tab:blue", "fcc": "tab:green", "mcc": "tab:purple",
-               "hex": "tab:orange"}
+    colours = LATTICE_COLORS
     files = []
     metrics = [("length_ratio", "path length / best length on the query", False, "length_ratio"),
                ("checks_vs_cubic", "cell checks / cubic's on the same query", True,
@@ -145,7 +146,8 @@ def plot(rows: list[dict], out_dir: Path) -> list[Path]:
                  and r.get(key) is not None] for lab in labels]
         fig, ax = plt.subplots(figsize=(max(7, 0.55 * len(labels) + 2), 5))
         keep = [i for i, d in enumerate(data) if d]
-        bp = ax.boxplot([data[i] for i in keep], whis=1.5, patch_artist=True)
+        bp = ax.boxplot([data[i] for i in keep], whis=1.5, patch_artist=True,
+                        medianprops={"color": "black", "linewidth": 1.5})  # visible on every box
         for patch, i in zip(bp["boxes"], keep, strict=True):
             patch.set_facecolor(colours.get(labels[i].split()[0], "white"))
             patch.set_alpha(0.6)
@@ -165,7 +167,7 @@ def plot(rows: list[dict], out_dir: Path) -> list[Path]:
     fig, ax = plt.subplots(figsize=(max(7, 0.55 * len(labels) + 2), 4))
     rates = [np.mean([bool(r.get("found")) for r in rows if _label(r) == lab]) for lab in labels]
     ax.bar(range(len(labels)), rates,
-           color=[colours.get(lab.split()[0], "tab:red") for lab in labels])
+           color=[colours.get(lab.split()[0], OTHER_COLOR) for lab in labels])
     ax.set_xticks(range(len(labels)), labels, rotation=60, ha="right", fontsize=8)
     ax.set_ylim(0, 1.05)
     ax.set_ylabel("success rate")
