@@ -286,11 +286,13 @@ def _descendants() -> list:
     return out
 
 
-def _stop(processes: list, grace: float = 2.0) -> None:
-    """Terminate ``processes`` (psutil), then kill those still alive after ``grace`` s.
+def _stop(processes: list, wait: float = 2.0) -> None:
+    """Kill ``processes`` (psutil) and wait up to ``wait`` s until they are gone.
 
-    Never reaps them (no ``wait``): multiprocessing reaps its own workers, and a worker
-    reaped behind its back looks alive to it forever.
+    SIGKILL, not SIGTERM: workers hold no output (every finished row is already on disk), and
+    an OMPL worker forked by a forkserver prints a traceback when terminated.  Never reaps
+    them (no ``wait()``): multiprocessing reaps its own workers, and a worker reaped behind
+    its back looks alive to it forever.
     """
     import psutil
 
@@ -302,14 +304,10 @@ def _stop(processes: list, grace: float = 2.0) -> None:
 
     for p in processes:
         with contextlib.suppress(psutil.Error):
-            p.terminate()
-    deadline = time.monotonic() + grace
+            p.kill()
+    deadline = time.monotonic() + wait
     while time.monotonic() < deadline and any(alive(p) for p in processes):
         time.sleep(0.05)
-    for p in processes:
-        if alive(p):
-            with contextlib.suppress(psutil.Error):
-                p.kill()
 
 
 def _worker_init() -> None:
