@@ -208,7 +208,7 @@ def test_save_failure_leaves_nothing(tmp_path, monkeypatch):
     def boom(*a, **k):
         raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr(V.np, "savez", boom)
+    monkeypatch.setattr(np, "savez", boom)
     with pytest.raises(MapError, match="No space left"):
         OccupiedVoxelList(Lattice.named("hex", 1.0), [[0, 0, 0]]).save(target)
     assert os.listdir(tmp_path) == ["m.npz"]
