@@ -7,8 +7,8 @@ boxes' frame (so a box is axis-aligned there).
 
 * :func:`overlap_keys`: cells whose Voronoi cell overlaps a box with positive volume, by the
   separating axis theorem (the axes are the facet normals of the Minkowski sum box + V).
-* :func:`within_mark`: cells whose closed Voronoi cell is closer than ``r`` to a box, by
-  ball bounds and, in the thin shell they leave undecided, GJK on support functions.
+* :func:`within_mark`: cells whose closed Voronoi cell is closer than ``r`` to a box (3D),
+  by ball bounds and, in the thin shell they leave undecided, GJK on support functions.
 """
 
 from __future__ import annotations
@@ -171,9 +171,11 @@ def gjk_within(p, half, verts, radius, tol, w, lam, scratch):  # pragma: no cove
     v = np.empty(d)
     s = np.empty(d)
     # Start at p - clamp(p): the cell centre minus the nearest box point, a point of K.
+    # It starts the simplex, so every later closest point is at least as near.
     for j in range(d):
         v[j] = p[j] - min(max(p[j], -half[j]), half[j])
-    n = 0
+        w[0, j] = v[j]
+    n = 1
     for _ in range(64):
         vv = 0.0
         for j in range(d):
@@ -223,41 +225,69 @@ def gjk_within(p, half, verts, radius, tol, w, lam, scratch):  # pragma: no cove
 def within_mark(centres, half, rot, base_flat, base_world, cand_flat, cand_world, verts,
                 packing, covering, radius, tol, grid):  # pragma: no cover - compiled
     """Mark (set to 1) every grid cell whose closed Voronoi cell is closer than ``radius``
-    to some box. Candidates of box i: flat ``base_flat[i] + cand_flat[o]``, centre
+    to some box (3D). Candidates of box i: flat ``base_flat[i] + cand_flat[o]``, centre
     ``base_world[i] + cand_world[o]``. With ``d0`` the distance of the cell centre to the
-    box, ``d0 - covering <= dist <= max(d0 - packing, 0)`` decides most candidates; GJK
-    (:func:`gjk_within`, cell vertices ``verts`` in the box frame) the rest.
-    Returns the number of GJK calls."""
-    d = centres.shape[1]
-    x = np.empty(d)
-    p = np.empty(d)
-    w = np.empty((d + 1, d))
-    lam = np.empty(d + 1)
-    scratch = np.empty((d + 1, d + 2))
+    box, ``d0 - covering <= dist <= max(d0 - packing, 0)`` decides most candidates, a
+    separating plane and the nearest cell vertex most others; GJK (:func:`gjk_within`, cell
+    vertices ``verts`` in the box frame) the rest. Returns the number of GJK calls."""
+    p = np.empty(3)
+    hb = np.empty(3)
+    w = np.empty((4, 3))
+    lam = np.empty(4)
+    scratch = np.empty((4, 5))
+    far2 = (radius + covering) ** 2
+    near2 = (radius + packing) ** 2
+    r2 = radius * radius
     calls = 0
     for i in range(centres.shape[0]):
+        h0, h1, h2 = half[i, 0], half[i, 1], half[i, 2]
+        # The base cell centre relative to the box centre, in the box frame.
+        c0 = base_world[i, 0] - centres[i, 0]
+        c1 = base_world[i, 1] - centres[i, 1]
+        c2 = base_world[i, 2] - centres[i, 2]
+        b0 = rot[0, 0] * c0 + rot[1, 0] * c1 + rot[2, 0] * c2
+        b1 = rot[0, 1] * c0 + rot[1, 1] * c1 + rot[2, 1] * c2
+        b2 = rot[0, 2] * c0 + rot[1, 2] * c1 + rot[2, 2] * c2
         for o in range(cand_flat.shape[0]):
             f = base_flat[i] + cand_flat[o]
             if grid[f] != 0:
                 continue
-            for j in range(d):
-                x[j] = base_world[i, j] + cand_world[o, j] - centres[i, j]
-            d2 = 0.0
-            for j in range(d):  # p = R^T x, the cell centre in the box frame
-                t = 0.0
-                for c in range(d):
-                    t += rot[c, j] * x[c]
-                p[j] = t
-                e = abs(t) - half[i, j]
-                if e > 0.0:
-                    d2 += e * e
-            d0 = math.sqrt(d2)
-            if d0 - covering >= radius:
+            # cand_world is already in the box frame (see exact_box_inflation).
+            p0 = b0 + cand_world[o, 0]
+            p1 = b1 + cand_world[o, 1]
+            p2 = b2 + cand_world[o, 2]
+            q0 = min(max(p0, -h0), h0)
+            q1 = min(max(p1, -h1), h1)
+            q2 = min(max(p2, -h2), h2)
+            u0, u1, u2 = p0 - q0, p1 - q1, p2 - q2
+            d2 = u0 * u0 + u1 * u1 + u2 * u2
+            if d2 >= far2:
                 continue
-            if d0 - packing < radius:
+            if d2 < near2:
+                grid[f] = 1
+                continue
+            # The plane through the nearest box point q, normal u = (p - q) / d0, separates
+            # the box: dist >= d0 - h_V(u). The cell vertex v* furthest along -u gives
+            # dist <= dist(p + v*, box). One pass over the vertices decides most of the rest.
+            best = np.inf
+            bi = 0
+            for m in range(verts.shape[0]):
+                t = verts[m, 0] * u0 + verts[m, 1] * u1 + verts[m, 2] * u2
+                if t < best:
+                    best = t
+                    bi = m
+            d0 = math.sqrt(d2)
+            if d0 + best / d0 >= radius:
+                continue
+            e0 = max(abs(p0 + verts[bi, 0]) - h0, 0.0)
+            e1 = max(abs(p1 + verts[bi, 1]) - h1, 0.0)
+            e2 = max(abs(p2 + verts[bi, 2]) - h2, 0.0)
+            if e0 * e0 + e1 * e1 + e2 * e2 < r2:
                 grid[f] = 1
                 continue
             calls += 1
-            if gjk_within(p, half[i], verts, radius, tol, w, lam, scratch):
+            p[0], p[1], p[2] = p0, p1, p2
+            hb[0], hb[1], hb[2] = h0, h1, h2
+            if gjk_within(p, hb, verts, radius, tol, w, lam, scratch):
                 grid[f] = 1
     return calls

@@ -316,6 +316,8 @@ def exact_box_inflation(lo: np.ndarray, hi: np.ndarray, lattice: Lattice, radius
     centres, half, rot = _box_frame(lo, hi, rotation, translation, d)
     if r == 0 or not len(centres):
         return OccupiedVoxelList._from_keys(lat, _overlap_keys(centres, half, rot, lat))
+    if d != 3:
+        raise MapError(f"box inflation with a radius needs a 3D lattice, got {d}D")
     cell = lat.voronoi
     tol = REL_TOL * cell_diameter(lat)
     base = lat.quantize(centres)
@@ -338,10 +340,12 @@ def exact_box_inflation(lo: np.ndarray, hi: np.ndarray, lattice: Lattice, radius
     cand_flat = cand @ strides
     corder = np.argsort(cand_flat, kind="stable")
     grid = np.zeros(int(cells), dtype=np.uint8)
+    # Candidate centres are passed in the box frame (R^T G w): the kernel then adds the
+    # base cell's box-frame position only.
     bk.within_mark(centres[order], half[order], rot, np.ascontiguousarray(base_flat[order]),
                    np.ascontiguousarray(lat.to_world(base[order])),
                    np.ascontiguousarray(cand_flat[corder]),
-                   np.ascontiguousarray(cand[corder] @ lat.generator.T, dtype=float),
+                   np.ascontiguousarray(cand[corder] @ lat.generator.T @ rot, dtype=float),
                    np.ascontiguousarray(cell.vertices @ rot), cell.packing_radius,
                    cell.covering_radius, r, tol, grid)
     out = np.empty(int(np.count_nonzero(grid)), dtype=np.int64)
