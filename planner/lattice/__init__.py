@@ -133,7 +133,14 @@ class Lattice:
 
     @property
     def voronoi(self) -> VoronoiCell:
-        """The Voronoi cell of the origin as a polytope (facets, vertices, edges, radii)."""
+        """The Voronoi cell of the origin as a polytope (facets, vertices, edges, radii).
+
+        Examples
+        --------
+        >>> cell = Lattice.named("fcc").voronoi  # the rhombic dodecahedron
+        >>> len(cell.normals), len(cell.vertices), len(cell.edges[0])
+        (12, 14, 24)
+        """
         return self._geo["cell"]
 
     @property

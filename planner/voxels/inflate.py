@@ -309,6 +309,17 @@ def exact_box_inflation(lo: np.ndarray, hi: np.ndarray, lattice: Lattice, radius
     Returns
     -------
     OccupiedVoxelList
+
+    Examples
+    --------
+    >>> lat = Lattice.named("cubic", 1.0)
+    >>> lo, hi = np.full((1, 3), -0.25), np.full((1, 3), 0.25)  # a cube inside one cell
+    >>> len(exact_box_inflation(lo, hi, lat, 0.0))
+    1
+    >>> len(exact_box_inflation(lo, hi, lat, 0.3))  # + 6 face neighbours 0.25 m away
+    7
+    >>> len(exact_box_inflation(lo, hi, lat, 0.3, rotation=[[0, -1, 0], [1, 0, 0], [0, 0, 1]]))
+    7
     """
     lat = check_lattice(lattice)
     r = check_radius(radius)
