@@ -24,9 +24,7 @@ from planner.lattice import _quantize as qk
 from planner.lattice._geometry import (
     TOL,
     VoronoiCell,
-    box_for_radius,
     geometry,
-    grid,
     reduce_basis,
     rounding_offsets,
     sorted_offsets,
@@ -214,15 +212,13 @@ class Lattice:
         r = lengths.max()
         # Enough vectors to see `shells` further distinct distances: grow until found.
         radius = r + (shells + 1) * 2 * self.packing_radius
-        b = self._geo["reduced"]
         need = self.voronoi.count_within(radius)
         if need > _SHELL_LIMIT:
             raise LatticeError(f"{shells} extra neighbour shells would enumerate ~{need:.3g} "
                                f"lattice vectors (limit {_SHELL_LIMIT:,}); ask for fewer")
-        z = grid(box_for_radius(b, radius))
-        w = z @ self._geo["reduction"].T
+        w = self.voronoi.offsets_within(radius, budget=float("inf"))
         n = np.linalg.norm(w @ self._g.T, axis=1)
-        sel = (n > r + tol) & (n <= radius)
+        sel = n > r + tol
         dists = np.unique(np.round(n[sel] / tol) * tol)
         if shells and len(dists):
             cut = dists[min(shells, len(dists)) - 1]
