@@ -113,6 +113,25 @@ def test_radius_zero_is_box_keys_and_radius_grows_the_set(name):
     assert abs(len(moved) - len(grown)) < 0.05 * len(grown)
 
 
+def test_large_boxes_equal_their_pieces():
+    """A slab much larger than the radius is cut into pieces internally; the result is
+    the same as for the pieces given explicitly, and both match the reference."""
+    lat = Lattice.named("bcc", 0.1**3)
+    rot = _rotation(np.random.default_rng(5))
+    lo, hi = np.array([[0.0, 0.0, 0.0]]), np.array([[3.0, 2.0, 0.05]])
+    whole = exact_box_inflation(lo, hi, lat, 0.15, rotation=rot)
+    xs = np.linspace(0, 3, 4)
+    parts_lo = np.array([[a, 0.0, 0.0] for a in xs[:-1]])
+    parts_hi = np.array([[b, 2.0, 0.05] for b in xs[1:]])
+    np.testing.assert_array_equal(
+        whole.keys, exact_box_inflation(parts_lo, parts_hi, lat, 0.15, rotation=rot).keys)
+    corners = _corners(lo[0], hi[0]) @ rot.T
+    verts = lat.voronoi_vertices
+    rng = np.random.default_rng(6)
+    for w in rng.choice(whole.indices, 60, replace=False):  # blocked cells are within r
+        assert _reference(verts + lat.to_world(w)[0], corners)[0] < 0.15 + 1e-9
+
+
 def test_bad_boxes_raise_map_error():
     lat = Lattice.named("fcc", 1.0)
     z = np.zeros((1, 3))

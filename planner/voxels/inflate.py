@@ -278,6 +278,28 @@ def _box_frame(lo, hi, rotation, translation, d: int) -> tuple[np.ndarray, ...]:
     return centres, np.ascontiguousarray((b - a) / 2), np.ascontiguousarray(rot)
 
 
+def _split_boxes(centres: np.ndarray, half: np.ndarray, rot: np.ndarray, max_half: float
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """Boxes cut into equal sub-boxes of half sizes <= ``max_half`` (same union, so the same
+    distances): per-box candidate balls then stay proportionate to the box (a large slab
+    would otherwise enumerate a ball of its half diagonal)."""
+    pieces = np.maximum(np.ceil(half / max_half - 1e-9), 1).astype(np.int64)
+    if (pieces == 1).all():
+        return centres, half
+    out_c, out_h = [], []
+    for n in np.unique(pieces, axis=0):
+        sel = np.flatnonzero((pieces == n).all(axis=1))
+        sub = half[sel] / n  # (k, d) half sizes of the pieces
+        steps = np.stack(np.meshgrid(*[np.arange(m) for m in n], indexing="ij"),
+                         axis=-1).reshape(-1, len(n))
+        # Piece centres in the box frame: -half + (2 i + 1) sub, i per axis.
+        local = -half[sel, None, :] + (2 * steps[None, :, :] + 1) * sub[:, None, :]
+        out_c.append((centres[sel, None, :] + local @ rot.T).reshape(-1, len(n)))
+        out_h.append(np.repeat(sub, len(steps), axis=0))
+    return np.ascontiguousarray(np.concatenate(out_c)), np.ascontiguousarray(
+        np.concatenate(out_h))
+
+
 def exact_box_inflation(lo: np.ndarray, hi: np.ndarray, lattice: Lattice, radius: float, *,
                         rotation: np.ndarray | None = None,
                         translation: np.ndarray | None = None,
@@ -331,6 +353,7 @@ def exact_box_inflation(lo: np.ndarray, hi: np.ndarray, lattice: Lattice, radius
         raise MapError(f"box inflation with a radius needs a 3D lattice, got {d}D")
     cell = lat.voronoi
     tol = REL_TOL * cell_diameter(lat)
+    centres, half = _split_boxes(centres, half, rot, max(r, 2 * cell_diameter(lat)))
     base = lat.quantize(centres)
     # A cell closer than r has its centre within r + covering of the box, whose centre is
     # within covering of the base cell's centre.
