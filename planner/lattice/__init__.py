@@ -275,6 +275,12 @@ class Lattice:
         -------
         ndarray, shape (N, d), int64
             Lattice indices ``w`` with ``G @ w`` the nearest lattice point.
+
+        Raises
+        ------
+        LatticeError
+            Bad shape, NaN or infinite coordinates, or points so far from the origin that
+            their indices would pass 2**52 (no longer exact in float64).
         """
         x = self._check_points(points)
         out = np.empty(x.shape, dtype=np.int64)
@@ -299,8 +305,8 @@ class Lattice:
             if max(-lo, hi) > reach:
                 bad = s + int(np.flatnonzero(np.abs(blk).max(axis=1) > reach)[0])
                 raise LatticeError(
-                    f"point {bad} lies {np.abs(blk[bad - s]).max():.3g} m from the origin, "
-                    f"beyond the {reach:.3g} m where lattice indices stay exact (+-2**52)")
+                    f"point {bad} has a coordinate of {np.abs(blk[bad - s]).max():.3g} m, beyond "
+                    f"the +-{reach:.3g} m where lattice indices stay exact (+-2**52)")
 
     def quantize_generic(self, points: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
         """Generic exact quantizer: round in the reduced basis, then test the minimal
