@@ -82,7 +82,11 @@ def load_sidecar(map_path: str | Path, *, required: tuple[str, ...] = ()) -> dic
             for end in ("start", "goal"):
                 if end not in q:
                     raise MapError(f"{where}: 'queries'[{i}] lacks '{end}'")
-                q[end] = _vectors([q[end]], 1, f"{where}: 'queries'[{i}].{end}")[0]
+                what = f"{where}: 'queries'[{i}].{end}"
+                q[end] = _vectors([q[end]], 1, what)[0]
+                if "bounds" in info and len(q[end]) != len(info["bounds"][0]):
+                    raise MapError(f"{what} must have {len(info['bounds'][0])} numbers like "
+                                   f"'bounds', got {len(q[end])}")
     return info
 
 
