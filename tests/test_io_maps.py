@@ -279,3 +279,8 @@ def test_sidecar_not_an_object_or_missing_required(tmp_path, text, match):
     (tmp_path / "m.json").write_text(text)
     with pytest.raises(MapError, match=match):
         load_sidecar(tmp_path / "m.json", required=("queries",))
+
+
+def test_absurd_finite_coordinates_are_refused(tmp_path):
+    (tmp_path / "far.xyz").write_text("1 2 3\n1e300 0 0\n")
+    _raises(tmp_path / "far.xyz", "1 points have coordinates beyond 1e\\+09 m")

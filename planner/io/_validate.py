@@ -7,6 +7,9 @@ import numpy as np
 from planner.errors import MapError
 from planner.io._obstacles import Obstacles
 
+# Coordinates beyond this (m) are corrupt values, not places: they would overflow every
+# lattice index downstream.  Geodetic coordinates (UTM, ECEF) stay far below it.
+MAX_ABS_COORDINATE = 1e9
 # A filled box set larger than this is refused (a corrupt coarse OctoMap leaf would otherwise
 # expand to billions of points); no real map comes near it.
 MAX_FILLED_POINTS = 100_000_000
@@ -34,7 +37,8 @@ def finite_points(values, name: str, dim: int = 3) -> tuple[np.ndarray, np.ndarr
     Raises
     ------
     MapError
-        Wrong shape or a non-numeric dtype.
+        Wrong shape, a non-numeric dtype, or a finite coordinate beyond
+        :data:`MAX_ABS_COORDINATE`.
     """
     arr = np.asarray(values)
     if arr.dtype.kind not in "fiub":
@@ -46,7 +50,12 @@ def finite_points(values, name: str, dim: int = 3) -> tuple[np.ndarray, np.ndarr
     with np.errstate(over="ignore", invalid="ignore"):  # float128/int64 -> float64 may overflow
         pts = np.ascontiguousarray(arr, dtype=np.float64)
     keep = np.isfinite(pts).all(axis=1)
-    return (pts if keep.all() else pts[keep]), keep
+    pts = pts if keep.all() else pts[keep]
+    far = int((np.abs(pts) > MAX_ABS_COORDINATE).any(axis=1).sum())
+    if far:
+        raise MapError(f"{name}: {far} points have coordinates beyond {MAX_ABS_COORDINATE:g} m "
+                       f"(corrupt values?)")
+    return pts, keep
 
 
 def no_return_mask(pts: np.ndarray) -> np.ndarray:

@@ -17,6 +17,7 @@ def read_las(p: Path) -> Obstacles:
     laspy = require("laspy", ".las/.laz", p.name)
     if p.suffix.lower() == ".laz":
         require("lazrs", ".laz", p.name)
+    check_las_header(p)
     try:
         las = laspy.read(str(p))
         # laspy's x/y/z are the stored integers times scale plus offset.
@@ -28,6 +29,36 @@ def read_las(p: Path) -> Obstacles:
     except Exception as exc:  # laspy / lazrs raise their own error types on corrupt files
         raise MapError(f"{p.name}: unreadable LAS/LAZ ({first_line(exc)})") from None
     return cloud(xyz, p.name)
+
+
+# A LAZ point takes at least this many bytes of compressed data on average (bounding the point
+# count a file of a given size can honestly declare).
+_MIN_LAZ_BYTES_PER_POINT = 0.05
+
+
+def check_las_header(p: Path) -> None:
+    """Refuse a LAS/LAZ header whose counts its file cannot hold, before laspy reads it
+    (laspy trusts them: a flipped VLR count makes it read millions of empty records)."""
+    size = p.stat().st_size
+    with open(p, "rb") as f:
+        head = f.read(375)
+    if len(head) < 227 or head[:4] != b"LASF":
+        raise MapError(f"{p.name}: not a LAS/LAZ file (no 'LASF' signature)")
+    header_size, = np.frombuffer(head, "<u2", 1, 94)
+    offset, n_vlrs = np.frombuffer(head, "<u4", 2, 96)
+    record, = np.frombuffer(head, "<u2", 1, 105)
+    count = int(np.frombuffer(head, "<u4", 1, 107)[0])
+    if head[25] >= 4 and len(head) >= 255:  # LAS 1.4: the 64-bit count
+        count = max(count, int(np.frombuffer(head, "<u8", 1, 247)[0]))
+    if not (header_size <= offset <= size) or int(n_vlrs) * 54 > offset - header_size:
+        raise MapError(f"{p.name}: corrupt LAS header ({int(n_vlrs)} VLRs and point data at "
+                       f"byte {int(offset)} do not fit the {size}-byte file)")
+    body = size - int(offset)
+    compressed = (head[104] & 0x80) or p.suffix.lower() == ".laz"
+    fits = count * _MIN_LAZ_BYTES_PER_POINT <= body if compressed else count * int(record) <= body
+    if not fits:
+        raise MapError(f"{p.name}: LAS header declares {count} points, the file holds "
+                       f"{body} bytes of point data")
 
 
 def read_e57(p: Path) -> Obstacles:

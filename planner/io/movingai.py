@@ -38,7 +38,8 @@ def read_3dmap(p: Path) -> Obstacles:
         raise MapError(f"{p.name}: .3dmap voxel coordinates must be integers")
     if (vox < 0).any() or (vox >= dims).any():
         row = int(np.nonzero(((vox < 0) | (vox >= dims)).any(axis=1))[0][0])
-        raise MapError(f"{p.name}: voxel {vox[row].astype(int).tolist()} on line {row + 2} "
+        where = " ".join(f"{v:.0f}" for v in vox[row])
+        raise MapError(f"{p.name}: voxel ({where}) on line {row + 2} "
                        f"lies outside the {dims.tolist()} grid")
     bounds = np.stack([np.full(3, -0.5), dims - 0.5])
     return Obstacles(points=np.zeros((0, 3)), boxes=vox, box_size=1.0, bounds=bounds,
