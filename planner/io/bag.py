@@ -83,7 +83,8 @@ def read_bag(p: Path, topic: str | None = None, fixed_frame: str | None = None,
         tree = TfTree(p.name)
         tf_conns = [c for c in reader.connections if c.topic in TF_TOPICS and
                     c.msgtype == TF_TYPE]
-        for conn, _, raw in reader.messages(connections=tf_conns):
+        # An empty connection list means "all messages" to rosbags: skip it explicitly.
+        for conn, _, raw in reader.messages(connections=tf_conns) if tf_conns else ():
             msg = reader.deserialize(raw, conn.msgtype)
             for tf in msg.transforms:
                 tree.add(tf, static=conn.topic == "/tf_static")

@@ -254,6 +254,10 @@ def _robot_cases(root: Path, start: int) -> list[Case]:
         seeds.append(("e57", ".e57", tmp.read_bytes()))
     except ImportError:
         pass
+    try:
+        seeds.append(("bag", ".bag", _bag_seed(root / "seed.bag")))
+    except ImportError:
+        pass
     for reader, ext, seed in seeds:
         lies = []
         if reader == "las":  # a VLR count and a point count the file cannot hold
@@ -269,6 +273,28 @@ def _robot_cases(root: Path, start: int) -> list[Case]:
         path.write_bytes(v)
         out.append(Case(path, "bag"))
     return out
+
+
+def _bag_seed(path: Path) -> bytes:
+    """A ROS 1 bag with one PointCloud2 of PTS (no tf: the cloud's frame is the fixed one)."""
+    from rosbags.rosbag1 import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    ts = get_typestore(Stores.ROS1_NOETIC)
+    T = ts.types
+    field = T["sensor_msgs/msg/PointField"]
+    msg = T["sensor_msgs/msg/PointCloud2"](
+        header=T["std_msgs/msg/Header"](seq=0, stamp=T["builtin_interfaces/msg/Time"](
+            sec=1, nanosec=0), frame_id="lidar"),
+        height=1, width=len(PTS), is_bigendian=False, point_step=12, row_step=12 * len(PTS),
+        fields=[field(name=c, offset=4 * i, datatype=7, count=1) for i, c in enumerate("xyz")],
+        data=np.frombuffer(PTS.astype("<f4").tobytes(), dtype=np.uint8), is_dense=True)
+    if path.exists():
+        path.unlink()
+    with Writer(path) as writer:
+        conn = writer.add_connection("/points", msg.__msgtype__, typestore=ts)
+        writer.write(conn, 1_000_000_000, ts.serialize_ros1(msg, msg.__msgtype__))
+    return path.read_bytes()
 
 
 if __name__ == "__main__":
