@@ -782,3 +782,25 @@ def test_real_text_written_back_compressed(data, tmp_path):
     save_points(tmp_path / "scan.xyz.bz2", pts)
     np.testing.assert_array_equal(load_points(tmp_path / "scan.xyz.bz2"), pts)
     assert bz2.decompress((tmp_path / "scan.xyz.bz2").read_bytes()).count(b"\n") == len(pts)
+
+
+def test_the_ply_writer_writes_what_plyfile_writes(tmp_path, cloud):
+    from planner.io.ply import write_ply as io_write_ply
+
+    vert = np.empty(len(cloud), dtype=[("x", "<f4"), ("y", "<f4"), ("z", "<f4")])
+    for i, c in enumerate("xyz"):
+        vert[c] = cloud[:, i]
+    PlyData([PlyElement.describe(vert, "vertex")], text=False, byte_order="<",
+            comments=["made by a test"]).write(str(tmp_path / "a.ply"))
+    io_write_ply(tmp_path / "b.ply", cloud, np.float32, ("made by a test",))
+    assert (tmp_path / "a.ply").read_bytes() == (tmp_path / "b.ply").read_bytes()
+
+
+def test_obstacles_from_points_keeps_the_origin_and_drops_nan():
+    from planner.io import obstacles_from_points
+
+    ob = obstacles_from_points([[0.0, 0, 0], [1, np.nan, 2], [3, 4, 5]])
+    np.testing.assert_array_equal(ob.points, [[0, 0, 0], [3, 4, 5]])
+    assert ob.dropped_nonfinite == 1 and ob.source == "<array>" and ob.unknown_default == "free"
+    with pytest.raises(MapError, match="every point"):
+        obstacles_from_points([[np.nan, 0, 0]])

@@ -56,6 +56,7 @@ __all__ = [
     "load_scenarios",
     "load_sidecar",
     "merge_scans",
+    "obstacles_from_points",
     "robust_extent",
     "save_points",
 ]
@@ -167,6 +168,29 @@ def _read(p: Path, fmt: str, compression: str | None, budget: int | None,
         return read_las(p)
     from planner.io.lidar import read_e57
     return read_e57(p)
+
+
+def obstacles_from_points(points, source: str = "<array>") -> Obstacles:
+    """World-frame obstacle points (an in-memory array) as :class:`Obstacles`.
+
+    Validated like every cloud a reader returns: rows with NaN / inf are dropped and counted;
+    ``(0, 0, 0)`` is kept (it is a place, not a no-return, in the world frame).
+
+    Parameters
+    ----------
+    points : array_like, shape (N, 3)
+        Metres.
+    source : str
+        Name for messages.
+
+    Raises
+    ------
+    MapError
+        Bad shape or dtype, no finite point, or absurd coordinates.
+    """
+    from planner.io._validate import cloud
+
+    return cloud(points, source, sensor_frame=False)
 
 
 def load_points(path: PathLike, format: str | None = None, **kwargs) -> np.ndarray:

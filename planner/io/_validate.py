@@ -66,11 +66,12 @@ def no_return_mask(pts: np.ndarray) -> np.ndarray:
     return (pts == 0.0).all(axis=1)
 
 
-def cloud(values, name: str, *, dim: int = 3, **extra) -> Obstacles:
-    """Validate a sensor-frame cloud and wrap it as :class:`Obstacles`.
+def cloud(values, name: str, *, dim: int = 3, sensor_frame: bool = True,
+          **extra) -> Obstacles:
+    """Validate a cloud and wrap it as :class:`Obstacles`.
 
-    Non-finite rows are dropped and counted (``dropped_nonfinite``), then no-return
-    ``(0, 0, 0)`` rows are dropped.  Nothing left is an error.
+    Non-finite rows are dropped and counted (``dropped_nonfinite``), then, in a sensor-frame
+    cloud, no-return ``(0, 0, 0)`` rows are dropped.  Nothing left is an error.
 
     Parameters
     ----------
@@ -78,6 +79,9 @@ def cloud(values, name: str, *, dim: int = 3, **extra) -> Obstacles:
         Coordinates, metres.
     name : str
         Source name for messages and ``Obstacles.source``.
+    sensor_frame : bool
+        True for a file's cloud (origin rows are no-returns); False for world-frame points
+        (the origin is a place like any other).
     **extra
         Further :class:`Obstacles` fields (``resolution``, ``bounds``).
 
@@ -92,7 +96,7 @@ def cloud(values, name: str, *, dim: int = 3, **extra) -> Obstacles:
         raise MapError(f"{name}: point cloud is empty (no points)")
     if not len(pts):
         raise MapError(f"{name}: every point ({dropped}) has NaN or infinite coordinates")
-    zero = no_return_mask(pts)
+    zero = no_return_mask(pts) if sensor_frame else np.zeros(len(pts), dtype=bool)
     if zero.all():
         raise MapError(f"{name}: point cloud is empty (only no-return (0,0,0) points, "
                        f"{len(pts)})")

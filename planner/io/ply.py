@@ -132,8 +132,11 @@ def _read_with_plyfile(p: Path) -> Obstacles:
     return cloud(pts.reshape(-1, 3), p.name)
 
 
-def write_ply(path: str | Path, points: np.ndarray, dtype=np.float32) -> None:
+def write_ply(path: str | Path, points: np.ndarray, dtype=np.float32,
+              comments: tuple[str, ...] = ()) -> None:
     """Write points atomically as a binary little-endian PLY (vertex ``x, y, z``).
+
+    The bytes are those ``plyfile`` writes for the same data.
 
     Parameters
     ----------
@@ -143,13 +146,18 @@ def write_ply(path: str | Path, points: np.ndarray, dtype=np.float32) -> None:
         Metres.
     dtype : float32 or float64
         Stored precision.
+    comments : tuple of str
+        Header ``comment`` lines (one line each).
     """
     dt = np.dtype(dtype).newbyteorder("<")
     name = {"f4": "float", "f8": "double"}[dt.str[1:]]
     pts = np.asarray(points, dtype=np.float64)
     vert = np.empty(len(pts), dtype=[("x", dt), ("y", dt), ("z", dt)])
     vert["x"], vert["y"], vert["z"] = pts[:, 0], pts[:, 1], pts[:, 2]
-    header = (f"ply\nformat binary_little_endian 1.0\nelement vertex {len(pts)}\n"
+    if any("\n" in c for c in comments):
+        raise MapError("PLY comments must be single lines")
+    notes = "".join(f"comment {c}\n" for c in comments)
+    header = (f"ply\nformat binary_little_endian 1.0\n{notes}element vertex {len(pts)}\n"
               f"property {name} x\nproperty {name} y\nproperty {name} z\nend_header\n")
     with atomic_path(path) as tmp, open(tmp, "wb") as f:
         f.write(header.encode("ascii"))
