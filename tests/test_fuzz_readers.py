@@ -21,6 +21,9 @@ from hypothesis import strategies as st
 from planner.errors import MapError
 from planner.io import Obstacles, Scenarios, load_obstacles, load_scenarios, load_sidecar
 
+# numpy warnings must not precede the one error line either.
+pytestmark = pytest.mark.filterwarnings("error::RuntimeWarning")
+
 _spec = importlib.util.spec_from_file_location(
     "make_corpus", Path(__file__).parent / "fuzz" / "make_corpus.py")
 corpus = importlib.util.module_from_spec(_spec)

@@ -120,7 +120,11 @@ def load_obstacles(path: PathLike, format: str | None = None, *,
     if options and fmt != "bag":
         raise MapError(f"{p.name}: options {sorted(options)} apply to bags only")
     try:
-        return _read(p, fmt, compression, max_decompressed, options)
+        # Corrupt bytes can hold signalling NaNs or huge values whose casts set FP flags; the
+        # readers check every result for finiteness, so numpy's warnings would only be noise
+        # printed ahead of the one error line.
+        with np.errstate(all="ignore"):
+            return _read(p, fmt, compression, max_decompressed, options)
     except MapError:
         raise
     except OSError as exc:  # permission denied, I/O error, ...
