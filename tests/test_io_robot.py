@@ -124,6 +124,13 @@ def test_bag_clouds_are_moved_into_the_fixed_frame_by_tf_at_their_stamp(tmp_path
     assert obst.dropped_nonfinite == 3 and obst.unknown_default == "blocked"
 
 
+def test_ros2_bag_by_folder_storage_file_or_metadata(tmp_path):
+    _write_bag(tmp_path / "run", ros1=False)
+    want = load_points(tmp_path / "run")
+    for name in ("run/run.db3", "run/metadata.yaml"):
+        np.testing.assert_array_equal(load_points(tmp_path / name), want)
+
+
 def test_bag_options_topic_fixed_frame_max_clouds(tmp_path):
     path = tmp_path / "run.bag"
     _write_bag(path, ros1=True, topic="/velodyne_points")

@@ -289,8 +289,8 @@ def _resolve_format(p: Path, format: str | None) -> tuple[str, str | None]:
         if fmt is None:
             raise MapError(f"{p.name}: unknown format '{format}' (known: "
                            f"{', '.join(sorted(_FORMAT_ALIASES))})")
-    elif p.is_dir() and (p / "metadata.yaml").is_file():
-        fmt = "bag"  # a rosbag2 folder
+    elif (p.is_dir() and (p / "metadata.yaml").is_file()) or p.name == "metadata.yaml":
+        fmt = "bag"  # a rosbag2 folder, or its metadata file
     else:
         ext = suffixes[-2] if compression and len(suffixes) >= 2 else (
             suffixes[-1] if suffixes and not compression else "")

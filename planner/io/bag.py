@@ -65,7 +65,8 @@ def read_bag(p: Path, topic: str | None = None, fixed_frame: str | None = None,
 
     if max_clouds is not None and (not isinstance(max_clouds, int) or max_clouds < 1):
         raise MapError(f"{p.name}: max_clouds must be a positive integer, got {max_clouds!r}")
-    bag_path = p.parent if p.suffix.lower() in (".db3", ".mcap") else p
+    # A rosbag2 is a folder; its storage or metadata file stands for it.
+    bag_path = p.parent if p.suffix.lower() in (".db3", ".mcap", ".yaml") else p
     try:
         reader = AnyReader([bag_path], default_typestore=get_typestore(Stores.LATEST))
         reader.open()
