@@ -480,19 +480,19 @@ def test_over_budget_radius_raises():
 # -- real data -----------------------------------------------------------------------------------
 @pytest.mark.skipif(not GEB079.exists(), reason="shared OctoMap data not present")
 def test_geb079_cubic_cells():
-    from planner.io import load_obstacles
+    from planner.io import load_points
 
-    ob = load_obstacles(GEB079)
-    res = ob.resolution
+    centres = load_points(GEB079)  # occupied leaves filled with their 0.08 m voxel centres
+    res = 0.08
     lat = Lattice.named("cubic", 0.08**3)
     # OctoMap voxel centres sit at (k + 1/2) res: exactly on cubic cell faces. Shifted by half
     # a voxel they are the lattice points themselves, one cell per voxel.
-    occ = OccupiedVoxelList.from_points(ob.points - res / 2, lat)
+    occ = OccupiedVoxelList.from_points(centres - res / 2, lat)
     assert len(occ) == 185_673
     # As boxes, each 0.08 m voxel meets exactly the 2x2x2 cells around its centre.
     boxes = OccupiedVoxelList.from_obstacles(
-        Obstacles(points=np.zeros((0, 3)), boxes=ob.boxes, box_size=res, bounds=None,
-                  resolution=res, source=ob.source), lat)
+        Obstacles(points=np.zeros((0, 3)), boxes=centres, box_size=res, bounds=None,
+                  resolution=res, source="geb079.bt"), lat)
     shifted = occ.indices
     corners = np.array(list(itertools.product((0, 1), repeat=3)))
     assert boxes == OccupiedVoxelList(lat, (shifted[:, None, :] + corners[None]).reshape(-1, 3))
