@@ -163,10 +163,12 @@ def _box_table(data: Path, names: list[str], radius: float) -> str:
     if not geb.exists():
         return f"geb079.bt: not found under {data}, box table skipped"
     obst = load_obstacles(geb)
-    half = obst.box_size / 2
+    half = obst.box_sizes[:, None] / 2  # OctoMap leaves, pruned ones larger
     lo, hi = obst.boxes - half, obst.boxes + half
-    vol = obst.box_size**3
-    lines = [f"exact box inflation, geb079.bt: {len(lo):,} leaves of {obst.box_size:g} m as "
+    vol = obst.resolution**3
+    sizes = ", ".join(f"{n:,} of {s:g} m" for s, n in zip(
+        *np.unique(obst.box_sizes, return_counts=True), strict=True))
+    lines = [f"exact box inflation, geb079.bt: {len(lo):,} occupied leaves ({sizes}) as "
              f"boxes, radius {radius:g} m, cell volume {vol:.3g} m^3:",
              f"  {'lattice':7s} {'wall s':>7s} {'cpu s':>7s} {'cells':>11s}   "
              f"{'centres-as-points s':>19s} {'cells':>11s}"]
@@ -177,7 +179,7 @@ def _box_table(data: Path, names: list[str], radius: float) -> str:
         t0, c0 = time.perf_counter(), time.process_time()
         boxes = exact_box_inflation(lo, hi, lat, radius)
         wall, cpu = time.perf_counter() - t0, time.process_time() - c0
-        pts, t_pts = _timed(exact_inflation, obst.boxes, lat, radius)
+        pts, t_pts = _timed(exact_inflation, obst.boxes, lat, radius)  # centres only
         lines.append(f"  {name:7s} {wall:7.3f} {cpu:7.3f} {len(boxes):11,}   {t_pts:19.3f} "
                      f"{len(pts):11,}")
     return "\n".join(lines)

@@ -3,6 +3,8 @@ reference (convex hull of the Minkowski difference, exact point-triangle distanc
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from scipy.spatial import ConvexHull
@@ -10,6 +12,8 @@ from scipy.spatial import ConvexHull
 from planner import Lattice, MapError
 from planner.lattice import NAMED_LATTICES
 from planner.voxels import box_keys, exact_box_inflation
+
+GEB079 = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "octomap" / "geb079.bt"
 
 
 def _point_triangles_distance(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> float:
@@ -130,6 +134,45 @@ def test_large_boxes_equal_their_pieces():
     rng = np.random.default_rng(6)
     for w in rng.choice(whole.indices, 60, replace=False):  # blocked cells are within r
         assert _reference(verts + lat.to_world(w)[0], corners)[0] < 0.15 + 1e-9
+
+
+def _children(centres: np.ndarray, sizes: np.ndarray, unit: float) -> np.ndarray:
+    """Centres of the unit cubes that tile each cube (OctoMap children of pruned leaves)."""
+    out = []
+    for c, s in zip(centres, sizes, strict=True):
+        n = int(round(s / unit))
+        g = np.stack(np.meshgrid(*[np.arange(n)] * 3, indexing="ij"), -1).reshape(-1, 3)
+        out.append(c + (g + 0.5) * unit - s / 2)
+    return np.concatenate(out)
+
+
+@pytest.mark.parametrize("name", ["cubic", "fcc"])
+def test_aligned_ties_do_not_depend_on_how_boxes_are_cut(name):
+    """Boxes on the cubic lattice's own grid put many cells at exactly the radius; a tie
+    counts as blocked whichever bound decides it, so big boxes and their children agree."""
+    rng = np.random.default_rng(8)
+    lat = Lattice.named(name, 1.0)
+    sizes = rng.choice([1.0, 2.0, 4.0], size=40)
+    centres = rng.integers(-10, 10, size=(40, 3)) * 4.0 + sizes[:, None] / 2
+    kids = _children(centres, sizes, 1.0)
+    for r in (1.0, 1.5):
+        whole = exact_box_inflation(centres - sizes[:, None] / 2, centres + sizes[:, None] / 2,
+                                    lat, r)
+        assert whole == exact_box_inflation(kids - 0.5, kids + 0.5, lat, r)
+
+
+@pytest.mark.skipif(not GEB079.exists(), reason="shared OctoMap data not present")
+def test_geb079_pruned_leaves_block_what_their_children_block():
+    from planner.io import load_obstacles
+
+    ob = load_obstacles(GEB079)
+    kids = _children(ob.boxes, ob.box_sizes, ob.resolution)
+    assert len(kids) == 185_673
+    lat = Lattice.named("cubic", ob.resolution**3)
+    half = ob.box_sizes[:, None] / 2
+    leaves = exact_box_inflation(ob.boxes - half, ob.boxes + half, lat, 0.2)
+    assert leaves == exact_box_inflation(kids - ob.resolution / 2, kids + ob.resolution / 2,
+                                         lat, 0.2)
 
 
 def test_bad_boxes_raise_map_error():

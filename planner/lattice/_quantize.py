@@ -92,17 +92,19 @@ def _indices3(p0, p1, p2, ginv, out, i):  # pragma: no cover - compiled
         out[i, j] = np.int64(np.rint(ginv[j, 0] * p0 + ginv[j, 1] * p1 + ginv[j, 2] * p2))
 
 
+@njit_cached(inline="always")
+def _scaled3(x, i, inv):  # pragma: no cover - compiled
+    """Row i of x times inv, and its rounding."""
+    u0, u1, u2 = x[i, 0] * inv, x[i, 1] * inv, x[i, 2] * inv
+    return u0, u1, u2, np.rint(u0), np.rint(u1), np.rint(u2)
+
+
 @njit_cached(nogil=True)
 def quantize_fcc(x, b, ginv, out):  # pragma: no cover - compiled
     """FCC = b * D3 (integer vectors with even coordinate sum)."""
     inv_b = 1.0 / b
     for i in range(x.shape[0]):
-        u0 = x[i, 0] * inv_b
-        u1 = x[i, 1] * inv_b
-        u2 = x[i, 2] * inv_b
-        f0 = np.rint(u0)
-        f1 = np.rint(u1)
-        f2 = np.rint(u2)
+        u0, u1, u2, f0, f1, f2 = _scaled3(x, i, inv_b)
         s = int(f0 + f1 + f2)
         if s & 1:
             # Odd sum: re-round the coordinate with the largest rounding error the other way.
@@ -124,12 +126,7 @@ def quantize_bcc(x, a, ginv, out):  # pragma: no cover - compiled
     """BCC = a * (Z3 u (Z3 + 1/2)): the nearer of the two roundings."""
     inv_a = 1.0 / a
     for i in range(x.shape[0]):
-        u0 = x[i, 0] * inv_a
-        u1 = x[i, 1] * inv_a
-        u2 = x[i, 2] * inv_a
-        p0 = np.rint(u0)
-        p1 = np.rint(u1)
-        p2 = np.rint(u2)
+        u0, u1, u2, p0, p1, p2 = _scaled3(x, i, inv_a)
         q0 = np.rint(u0 - 0.5) + 0.5
         q1 = np.rint(u1 - 0.5) + 0.5
         q2 = np.rint(u2 - 0.5) + 0.5

@@ -162,12 +162,13 @@ def gjk_within(p, half, verts, radius, tol, w, lam, scratch):  # pragma: no cove
 
     Each step gives an upper bound ``|v|`` (v a point of K) and a lower bound ``v.w / |v|``
     (w the support point of K along -v); the answer is returned as soon as one bound
-    decides it. When they come within ``tol`` of each other (the distance is within ``tol``
-    of ``radius``) the answer is True: conservative for the clearance guarantee.
+    decides it. A distance within ``tol`` of ``radius`` counts as closer (a tie is blocked,
+    whichever bound sees it: conservative for the clearance guarantee).
     ``w`` (d + 1, d), ``lam`` (d + 1,), ``scratch`` (d + 1, d + 2): work arrays.
     """
     d = p.shape[0]
     r2 = radius * radius
+    out2 = (radius + tol) ** 2  # "not closer" needs a margin of tol: ties count as blocked
     v = np.empty(d)
     s = np.empty(d)
     # Start at p - clamp(p): the cell centre minus the nearest box point, a point of K.
@@ -196,7 +197,7 @@ def gjk_within(p, half, verts, radius, tol, w, lam, scratch):  # pragma: no cove
         for j in range(d):
             s[j] = p[j] + verts[bi, j] + (-half[j] if v[j] > 0.0 else half[j])
             vw += v[j] * s[j]
-        if vw > 0.0 and vw * vw >= r2 * vv:
+        if vw > 0.0 and vw * vw >= out2 * vv:
             return False
         if vv - vw <= tol * math.sqrt(vv):
             return True  # converged within tol of radius
@@ -235,7 +236,9 @@ def within_mark(centres, half, rot, base_flat, base_world, cand_flat, cand_world
     w = np.empty((4, 3))
     lam = np.empty(4)
     scratch = np.empty((4, 5))
-    far2 = (radius + covering) ** 2
+    # Ties (distance within tol of radius) count as closer on every path, so the result
+    # does not depend on which bound decides a cell (aligned grids have many exact ties).
+    far2 = (radius + tol + covering) ** 2
     near2 = (radius + packing) ** 2
     r2 = radius * radius
     calls = 0
@@ -277,7 +280,7 @@ def within_mark(centres, half, rot, base_flat, base_world, cand_flat, cand_world
                     best = t
                     bi = m
             d0 = math.sqrt(d2)
-            if d0 + best / d0 >= radius:
+            if d0 + best / d0 >= radius + tol:
                 continue
             e0 = max(abs(p0 + verts[bi, 0]) - h0, 0.0)
             e1 = max(abs(p1 + verts[bi, 1]) - h1, 0.0)

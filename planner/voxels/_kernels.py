@@ -48,6 +48,18 @@ def cell_polytope(voronoi, rotation: np.ndarray | None = None) -> CellPolytope:
                         float(voronoi.covering_radius))
 
 
+@njit_cached(inline="always")
+def _in_cell(a, b, y, tol):  # pragma: no cover - compiled
+    """Is ``y`` in {x : a x <= b + tol}?"""
+    for i in range(a.shape[0]):
+        s = 0.0
+        for j in range(a.shape[1]):
+            s += a[i, j] * y[j]
+        if s > b[i] + tol:
+            return False
+    return True
+
+
 @njit_cached
 def cell_distance(y, cell, tol):  # pragma: no cover - compiled
     """Exact Euclidean distance from point ``y`` (d,) to the Voronoi cell V.
@@ -61,15 +73,7 @@ def cell_distance(y, cell, tol):  # pragma: no cover - compiled
     """
     a, b, e0, e1 = cell.normals, cell.offsets, cell.e0, cell.e1
     k, d = a.shape
-    inside = True
-    for i in range(k):
-        s = 0.0
-        for j in range(d):
-            s += a[i, j] * y[j]
-        if s > b[i] + tol:
-            inside = False
-            break
-    if inside:
+    if _in_cell(a, b, y, tol):
         return 0.0
     best = np.inf
     proj = np.empty(d)
@@ -81,15 +85,7 @@ def cell_distance(y, cell, tol):  # pragma: no cover - compiled
             continue
         for j in range(d):
             proj[j] = y[j] - s * a[i, j]
-        ok = True
-        for m in range(k):
-            t = 0.0
-            for j in range(d):
-                t += a[m, j] * proj[j]
-            if t > b[m] + tol:
-                ok = False
-                break
-        if ok:
+        if _in_cell(a, b, proj, tol):
             best = s
     for m in range(e0.shape[0]):
         uu = 0.0

@@ -355,11 +355,17 @@ def exact_box_inflation(lo: np.ndarray, hi: np.ndarray, lattice: Lattice, radius
     tol = REL_TOL * cell_diameter(lat)
     centres, half = _split_boxes(centres, half, rot, max(r, 2 * cell_diameter(lat)))
     base = lat.quantize(centres)
-    # A cell closer than r has its centre within r + covering of the box, whose centre is
-    # within covering of the base cell's centre.
-    reach = r + 2 * cell.covering_radius + float(np.linalg.norm(half, axis=1).max()) + tol
-    cand = offsets_within(lat, reach, memory_budget, r)
-    ext = np.abs(cand).max(axis=0)
+    # Boxes by size class (half diagonals within a factor 2, e.g. OctoMap leaf depths), each
+    # with candidates out to its own reach: a cell closer than r has its centre within
+    # r + covering of the box, whose centre is within covering of the base cell's centre.
+    diag = np.linalg.norm(half, axis=1)
+    size_class = np.floor(np.log2(np.maximum(diag, tol) / max(float(diag.min()), tol)))
+    groups = []
+    for c in np.unique(size_class):
+        sel = np.flatnonzero(size_class == c)
+        reach = r + 2 * cell.covering_radius + float(diag[sel].max()) + tol
+        groups.append((sel, offsets_within(lat, reach, memory_budget, r)))
+    ext = np.max([np.abs(cand).max(axis=0) for _, cand in groups], axis=0)
     glo, ghi = base.min(axis=0) - ext, base.max(axis=0) + ext
     check_range(glo, ghi, d)
     dims = ghi - glo + 1
@@ -368,20 +374,22 @@ def exact_box_inflation(lo: np.ndarray, hi: np.ndarray, lattice: Lattice, radius
         raise over_budget(r, cells, memory_budget)
     strides = grid_strides(dims)
     base_flat = (base - glo) @ strides
-    # Boxes in grid order and candidates by flat offset: neighbouring boxes then find
-    # their shared cells already marked, and the grid is walked mostly forwards.
-    order = np.argsort(base_flat, kind="stable")
-    cand_flat = cand @ strides
-    corder = np.argsort(cand_flat, kind="stable")
     grid = np.zeros(int(cells), dtype=np.uint8)
-    # Candidate centres are passed in the box frame (R^T G w): the kernel then adds the
-    # base cell's box-frame position only.
-    bk.within_mark(centres[order], half[order], rot, np.ascontiguousarray(base_flat[order]),
-                   np.ascontiguousarray(lat.to_world(base[order])),
-                   np.ascontiguousarray(cand_flat[corder]),
-                   np.ascontiguousarray(cand[corder] @ lat.generator.T @ rot, dtype=float),
-                   np.ascontiguousarray(cell.vertices @ rot), cell.packing_radius,
-                   cell.covering_radius, r, tol, grid)
+    verts = np.ascontiguousarray(cell.vertices @ rot)
+    for sel, cand in groups:
+        # Boxes in grid order and candidates by flat offset: neighbouring boxes then find
+        # their shared cells already marked, and the grid is walked mostly forwards.
+        # Candidate centres go in the box frame (R^T G w): the kernel adds the base
+        # cell's box-frame position only.
+        order = sel[np.argsort(base_flat[sel], kind="stable")]
+        cand_flat = cand @ strides
+        corder = np.argsort(cand_flat, kind="stable")
+        bk.within_mark(centres[order], half[order], rot,
+                       np.ascontiguousarray(base_flat[order]),
+                       np.ascontiguousarray(lat.to_world(base[order])),
+                       np.ascontiguousarray(cand_flat[corder]),
+                       np.ascontiguousarray(cand[corder] @ lat.generator.T @ rot, dtype=float),
+                       verts, cell.packing_radius, cell.covering_radius, r, tol, grid)
     out = np.empty(int(np.count_nonzero(grid)), dtype=np.int64)
     vk.grid_keys(grid, glo.astype(np.int64), dims.astype(np.int64), BITS[d], index_limit(d), out)
     return OccupiedVoxelList._from_keys(lat, out)
