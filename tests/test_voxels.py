@@ -278,6 +278,15 @@ def unpack_keys(keys, dim):
     return unpack(keys, dim).tolist()
 
 
+def test_from_obstacles_uses_each_box_size():
+    lat = Lattice.named("fcc", 0.2)
+    centres = np.array([[0.0, 0.0, 0.0], [5.0, 1.0, 2.0]])
+    ob = Obstacles(points=np.zeros((0, 3)), boxes=centres, box_size=3.0, bounds=None,
+                   resolution=None, source="mixed", box_sizes=np.array([1.0, 3.0]))
+    want = np.union1d(V.box_keys(centres[:1], 1.0, lat), V.box_keys(centres[1:], 3.0, lat))
+    np.testing.assert_array_equal(OccupiedVoxelList.from_obstacles(ob, lat).keys, want)
+
+
 def test_from_obstacles_points_and_boxes():
     lat = Lattice.named("fcc", 0.5)
     rng = np.random.default_rng(5)

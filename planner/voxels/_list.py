@@ -112,8 +112,8 @@ class OccupiedVoxelList:
     @classmethod
     def from_obstacles(cls, obst, lattice: Lattice) -> OccupiedVoxelList:
         """Cells of an :class:`planner.io.Obstacles`: points are quantized; each box (solid
-        axis-aligned cube of edge ``obst.box_size``) gives exactly the cells whose Voronoi
-        cell overlaps it with positive volume (:func:`box_keys`; compiled, in bulk).
+        axis-aligned cube of edge ``obst.box_sizes[i]``) gives exactly the cells whose
+        Voronoi cell overlaps it with positive volume (:func:`box_keys`; compiled, in bulk).
 
         Every point of a closed box then lies in the closed Voronoi cell of one of its cells,
         which is all :meth:`inflate`'s guarantee needs. Cells that merely touch a box face
@@ -133,9 +133,10 @@ class OccupiedVoxelList:
         boxes = as_points(obst.boxes, 3, f"{obst.source}: box centres")
         parts = [unique_keys(pack(lat.quantize(pts)))] if len(pts) else []
         if len(boxes):
-            from planner.voxels.inflate import box_keys
+            from planner.voxels.inflate import exact_box_inflation
 
-            parts.append(box_keys(boxes, obst.box_size, lat))
+            half = np.asarray(obst.box_sizes, dtype=float)[:, None] / 2  # per leaf size
+            parts.append(exact_box_inflation(boxes - half, boxes + half, lat, 0.0).keys)
         if not parts:
             return cls._from_keys(lat, np.zeros(0, dtype=np.int64))
         return cls._from_keys(lat, unique_keys(np.concatenate(parts)))
