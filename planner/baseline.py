@@ -5,7 +5,7 @@ same occupancy as the lattice planners:
 
 * **State validity**: the lattice cell containing the state is in bounds and free. A Python
   callable reads the three coordinates and calls one compiled (numba) kernel that quantizes
-  the point (the exact generic closest-point kernel of :mod:`planner._quantize_kernels`)
+  the point (the exact generic closest-point kernel of :mod:`planner.lattice._quantize`)
   and does one occupancy lookup (:func:`planner._search_kernels.cell_free`). One check.
 * **Motion validity**: the 2.0.1 bindings let Python subclass ``ob.MotionValidator``
   (``checkMotion(s1, s2)``), so motions are validated with the EXACT lattice segment walk
@@ -63,9 +63,9 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-from planner import _quantize_kernels as qk
 from planner import _search_kernels as sk
 from planner.errors import PlanError
+from planner.lattice import _quantize as qk
 from planner.world import World, _walk_data
 
 __all__ = ["PLANNERS", "ANYTIME", "plan_ompl", "run_seeds", "CompiledChecker", "lattice_tables"]

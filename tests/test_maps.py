@@ -279,11 +279,11 @@ def test_source_checkout_keeps_maps_folder_paths():
     ('{"cell_volume": 0}', "cell_volume"),
     ('{"bounds": "abc"}', "bounds"),
     ('{"bounds": [[0, 0, 0], [1, 1]]}', "bounds"),
-    ('{"bounds": [[0, 0, 0], [0, 1, 1]]}', "below"),
+    ('{"bounds": [[0, 0, 0], [-1, 1, 1]]}', "bounds"),
     ('[1, 2]', "JSON object"),
     ('{"queries": [{"start": [0, 0, 0]}]}', "goal"),
     ('{"queries": [{"start": [0, 0, "a"], "goal": [1, 1, 1]}]}', "start"),
-    ("{not json", "unreadable"),
+    ("{not json", "JSON"),
 ])
 def test_malformed_sidecars_are_one_line_map_errors(tmp_path, text, match):
     (tmp_path / "m.json").write_text(text)

@@ -37,7 +37,6 @@ Examples
 from __future__ import annotations
 
 import json
-import math
 import os
 import re
 from collections.abc import Callable
@@ -164,59 +163,15 @@ def resolve(name_or_path: str | os.PathLike[str]) -> Path:
     return p
 
 
-def _vector(v: Any, n: int, what: str, where: Path) -> list[float]:
-    ok = isinstance(v, list) and len(v) == n and all(
-        isinstance(c, int | float) and not isinstance(c, bool) and math.isfinite(c) for c in v)
-    if not ok:
-        raise MapError(f"{where}: {what} must be a list of {n} finite numbers, got {v!r:.80}")
-    return [float(c) for c in v]
-
-
 def read_sidecar(map_path: str | os.PathLike[str]) -> dict[str, Any]:
-    """The JSON sidecar beside a map file (``office.ply`` -> ``office.json``), checked.
+    """The checked JSON sidecar beside a map file (``{}`` when it has none).
 
-    Returns ``{}`` when the map has no sidecar.  The keys a planner uses are validated:
-    ``robot_radius`` (a number >= 0), ``cell_volume`` (> 0), ``bounds`` (2 x 3 numbers, min
-    below max) and ``queries`` (objects with 3-number ``start`` and ``goal``).
-
-    Raises
-    ------
-    MapError
-        Unreadable JSON, not an object, or a key of the wrong type (one line, naming the file).
+    The one sidecar reader is :func:`planner.io.load_sidecar`; this name is kept for the
+    maps' callers.
     """
-    side = Path(map_path).with_suffix(".json")
-    if not side.is_file():
-        return {}
-    try:
-        info = json.loads(side.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, ValueError) as exc:
-        raise MapError(f"{side}: unreadable map description: {exc}") from None
-    if not isinstance(info, dict):
-        raise MapError(f"{side}: map description must be a JSON object")
-    for key, low in (("robot_radius", 0.0), ("cell_volume", None)):
-        v = info.get(key)
-        if v is None:
-            continue
-        if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v) \
-                or v < 0 or (low is None and v <= 0):
-            raise MapError(f"{side}: {key} must be a {'non-negative' if low == 0 else 'positive'}"
-                           f" number, got {v!r:.80}")
-    if "bounds" in info:
-        b = info["bounds"]
-        if not isinstance(b, list) or len(b) != 2:
-            raise MapError(f"{side}: bounds must be [[xmin, ymin, zmin], [xmax, ymax, zmax]]")
-        lo, hi = (_vector(x, 3, "bounds", side) for x in b)
-        if not all(a < c for a, c in zip(lo, hi, strict=True)):
-            raise MapError(f"{side}: bounds minimum must be below the maximum")
-    queries = info.get("queries", [])
-    if not isinstance(queries, list):
-        raise MapError(f"{side}: queries must be a list of {{'start', 'goal'}} objects")
-    for i, q in enumerate(queries):
-        if not isinstance(q, dict) or "start" not in q or "goal" not in q:
-            raise MapError(f"{side}: query {i} needs 'start' and 'goal'")
-        _vector(q["start"], 3, f"query {i} start", side)
-        _vector(q["goal"], 3, f"query {i} goal", side)
-    return info
+    from planner.io import load_sidecar
+
+    return load_sidecar(map_path)
 
 
 def load_map_info(name_or_path: str | os.PathLike[str]) -> dict[str, Any]:
@@ -230,11 +185,9 @@ def load_map_info(name_or_path: str | os.PathLike[str]) -> dict[str, Any]:
     else:
         p = Path(name_or_path)
         js = p if p.suffix.lower() == ".json" else p.with_suffix(".json")
-    if not js.is_file():
-        raise MapError(f"map info {js} not found")
-    info = read_sidecar(js)
-    if "bounds" not in info or "queries" not in info:
-        raise MapError(f"map info {js} lacks 'bounds' or 'queries'")
+    from planner.io import load_sidecar
+
+    info = load_sidecar(js, required=("bounds", "queries"))
     info["ply_path"] = str((js.parent / info.get("file", js.with_suffix(".ply").name)).resolve())
     return info
 
