@@ -15,10 +15,15 @@ For each data set and named lattice it reports
   ``--baseline-seconds`` are measured on a prefix of the cells and extrapolated linearly
   (marked ``~``).
 
-A separate table times building from 10^6 uniform random points. Compilation is excluded
-(a warm-up call per lattice first; numba caches to disk).
+A separate table times building from 10^6 uniform random points, and one times
+:func:`exact_box_inflation` on the geb079 OctoMap leaves as solid boxes (``--box-radius``,
+default 0.2 m, at the leaves' own resolution cubed): wall and CPU seconds (CPU time is less
+disturbed by other processes on a shared machine), blocked cells, and for comparison the
+exact inflation of the leaf centres as points. Compilation is excluded (a warm-up call per
+lattice first; numba caches to disk).
 
-Run: ``python benchmarks/voxels_speed.py [--lattices fcc bcc] [--baseline-seconds 60]``.
+Run: ``python benchmarks/voxels_speed.py [--lattices fcc bcc] [--baseline-seconds 60]``
+(``--only-boxes`` for the box table alone).
 """
 
 from __future__ import annotations
@@ -29,9 +34,14 @@ from pathlib import Path
 
 import numpy as np
 
-from planner.io import load_points
+from planner.io import load_obstacles, load_points
 from planner.lattice import NAMED_LATTICES, Lattice
-from planner.voxels import OccupiedVoxelList, exact_inflation, inflation_stencil
+from planner.voxels import (
+    OccupiedVoxelList,
+    exact_box_inflation,
+    exact_inflation,
+    inflation_stencil,
+)
 
 DATA = (Path(__file__).resolve().parents[1] / ".." / "shared" / "data").resolve()
 
@@ -147,6 +157,34 @@ def _random_build(names: list[str], n: int) -> str:
     return "\n".join(lines)
 
 
+def _box_table(data: Path, names: list[str], radius: float) -> str:
+    """exact_box_inflation of the geb079 leaves (solid boxes) per lattice."""
+    geb = data / "octomap" / "geb079.bt"
+    if not geb.exists():
+        return f"geb079.bt: not found under {data}, box table skipped"
+    obst = load_obstacles(geb)
+    half = obst.box_sizes[:, None] / 2  # OctoMap leaves, pruned ones larger
+    lo, hi = obst.boxes - half, obst.boxes + half
+    vol = obst.resolution**3
+    sizes = ", ".join(f"{n:,} of {s:g} m" for s, n in zip(
+        *np.unique(obst.box_sizes, return_counts=True), strict=True))
+    lines = [f"exact box inflation, geb079.bt: {len(lo):,} occupied leaves ({sizes}) as "
+             f"boxes, radius {radius:g} m, cell volume {vol:.3g} m^3:",
+             f"  {'lattice':7s} {'wall s':>7s} {'cpu s':>7s} {'cells':>11s}   "
+             f"{'centres-as-points s':>19s} {'cells':>11s}"]
+    for name in names:
+        lat = Lattice.named(name, vol)
+        exact_box_inflation(lo[:50], hi[:50], lat, radius)  # compile / load kernels
+        exact_inflation(obst.boxes[:50], lat, radius)
+        t0, c0 = time.perf_counter(), time.process_time()
+        boxes = exact_box_inflation(lo, hi, lat, radius)
+        wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+        pts, t_pts = _timed(exact_inflation, obst.boxes, lat, radius)  # centres only
+        lines.append(f"  {name:7s} {wall:7.3f} {cpu:7.3f} {len(boxes):11,}   {t_pts:19.3f} "
+                     f"{len(pts):11,}")
+    return "\n".join(lines)
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--data", type=Path, default=DATA, help="shared data folder")
@@ -157,7 +195,13 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--random-points", type=int, default=10**6)
     p.add_argument("--baseline-seconds", type=float, default=60.0,
                    help="cap per Python-set inflation before extrapolating (0: no baseline)")
+    p.add_argument("--box-radius", type=float, default=0.2,
+                   help="radius (m) of the geb079 exact box inflation table")
+    p.add_argument("--only-boxes", action="store_true", help="only the box inflation table")
     args = p.parse_args(argv)
+    if args.only_boxes:
+        print(_box_table(args.data, args.lattices, args.box_radius))
+        return 0
     rows = []
     for label, pts, vol in _datasets(args.data):
         if pts is None:
@@ -174,6 +218,8 @@ def main(argv: list[str] | None = None) -> int:
               "x = baseline time / ours")
     print()
     print(_random_build(args.lattices, args.random_points))
+    print()
+    print(_box_table(args.data, args.lattices, args.box_radius))
     return 0
 
 

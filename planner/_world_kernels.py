@@ -23,10 +23,10 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
 
-from planner import _quantize_kernels as qk
+from planner._jit import njit_cached
 from planner.keys import pack3
+from planner.lattice import _quantize as qk
 
 
 class Occupancy(NamedTuple):
@@ -53,23 +53,12 @@ class Walk(NamedTuple):
     wv: np.ndarray  # (R, 3) float64 rel @ g: c_u . v = wv . u for the cell at offset u
 
 
-class Quantizer(NamedTuple):
-    """Tables of the exact generic closest-point kernel (``qk.quantize_generic3``)."""
-
-    b: np.ndarray  # (3, 3) float64 reduced basis
-    binv: np.ndarray  # (3, 3) float64 its inverse
-    cand: np.ndarray  # (8, K, 3) float64 candidate offsets per orthant (world)
-    cand_z: np.ndarray  # (8, K, 3) int64 the same in reduced coordinates
-    counts: np.ndarray  # (8,) int64 candidates per orthant
-    t: np.ndarray  # (3, 3) float64 reduced -> lattice index coordinates
-
-
 _EMPTY = -1
 _SEG_TOL = 1e-9  # relative slack on each Voronoi half-space: boundary contact counts
 
 
 # -- hashing -------------------------------------------------------------------------------
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def mix64(key):  # pragma: no cover - compiled
     """splitmix64 finaliser: packed keys of neighbouring cells differ in few low bits."""
     x = np.uint64(key)
@@ -79,7 +68,7 @@ def mix64(key):  # pragma: no cover - compiled
     return np.int64(x >> np.uint64(1))
 
 
-@njit(cache=True)
+@njit_cached
 def build_key_set(keys, size):  # pragma: no cover - compiled
     """Open-addressing set of non-negative int64 keys; ``size`` a power of two >= 2 len."""
     table = np.full(size, _EMPTY, dtype=np.int64)
@@ -93,7 +82,7 @@ def build_key_set(keys, size):  # pragma: no cover - compiled
     return table
 
 
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def _in_set(table, mask, k):  # pragma: no cover - compiled
     p = mix64(k) & mask
     while True:
@@ -106,7 +95,7 @@ def _in_set(table, mask, k):  # pragma: no cover - compiled
 
 
 # -- occupancy -----------------------------------------------------------------------------
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def _free(mode, grid, lo, dims, table, tmask, g, blo, bhi, i, j, k):  # pragma: no cover
     """True iff cell (i, j, k) is in bounds and not blocked (one occupancy lookup).
 
@@ -126,21 +115,21 @@ def _free(mode, grid, lo, dims, table, tmask, g, blo, bhi, i, j, k):  # pragma: 
     return not _in_set(table, tmask, pack3(i, j, k))
 
 
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def occ_free(occ, i, j, k):  # pragma: no cover - compiled
     """One lookup through the :class:`Occupancy` struct (inlined)."""
     return _free(occ.mode, occ.grid, occ.lo, occ.dims, occ.table, occ.tmask, occ.gmat,
                  occ.blo, occ.bhi, i, j, k)
 
 
-@njit(cache=True)
+@njit_cached
 def free_many(occ, w, out):  # pragma: no cover - compiled
     """out[n] = cell w[n] (N, 3) is in bounds and free."""
     for n in range(w.shape[0]):
         out[n] = occ_free(occ, w[n, 0], w[n, 1], w[n, 2])
 
 
-@njit(cache=True)
+@njit_cached
 def fill_in_bounds(grid, lo, dims, g, blo, bhi):  # pragma: no cover - compiled
     """grid[cell] = 1 iff the cell centre lies in [blo, bhi] (dense mode construction)."""
     for a in range(dims[0]):
@@ -159,7 +148,7 @@ def fill_in_bounds(grid, lo, dims, g, blo, bhi):  # pragma: no cover - compiled
                 grid[base + c] = 1 if ok else 0
 
 
-@njit(cache=True)
+@njit_cached
 def clear_cells(grid, lo, dims, w):  # pragma: no cover - compiled
     """Mark the listed cells (N, 3) not free in a dense grid (cells outside are ignored)."""
     for n in range(w.shape[0]):
@@ -171,7 +160,7 @@ def clear_cells(grid, lo, dims, w):  # pragma: no cover - compiled
 
 
 # -- exact segment walk --------------------------------------------------------------------
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def _touches(u0, u1, u2, lim0, idq, wv, rhs):  # pragma: no cover - compiled
     """Does the segment a + t (b - a), t in [0, 1], meet the closed Voronoi cell of the cell
     at index offset u (relative to the walk's start cell)? Clip t against each half-space
@@ -198,7 +187,7 @@ def _touches(u0, u1, u2, lim0, idq, wv, rhs):  # pragma: no cover - compiled
     return True
 
 
-@njit(cache=True)
+@njit_cached
 def walk_scratch(length, step, nfull):  # pragma: no cover - compiled
     """Scratch for :func:`walk_on` sized for segments up to ``length`` (m): visited-set keys,
     their generation stamps (an entry is live iff its stamp is the walk's generation, so a
@@ -211,7 +200,7 @@ def walk_scratch(length, step, nfull):  # pragma: no cover - compiled
             np.empty((max(64, est // 4), 3), dtype=np.int64))
 
 
-@njit(cache=True)
+@njit_cached
 def walk_on(occ, walk, a, b, s, check, vis, vgen, gen, queue):
     # pragma: no cover - compiled
     """Core of :func:`segment_walk` on caller-owned scratch (see :func:`walk_scratch`;
@@ -290,7 +279,7 @@ def walk_on(occ, walk, a, b, s, check, vis, vgen, gen, queue):
     return qt, free, lookups, True
 
 
-@njit(cache=True)
+@njit_cached
 def segment_walk(occ, walk, a, b, s, check):  # pragma: no cover - compiled
     """Cells whose closed Voronoi cell the segment [a, b] touches, by BFS from cell ``s``
     (the cell containing ``a``) over full adjacency, keeping only touched cells (the touched
@@ -317,19 +306,20 @@ def segment_walk(occ, walk, a, b, s, check):  # pragma: no cover - compiled
 
 
 
-@njit(cache=True)
+@njit_cached
 def point_free(occ, quant, x0, x1, x2, buf, out):  # pragma: no cover - compiled
     """Is the cell containing point (x0, x1, x2) (m) in bounds and free? One lookup.
-    ``buf`` (2, 3) float64 and ``out`` (1, 3) int64 are caller-owned scratch."""
+    ``quant``: ``Lattice.quantizer()``; ``buf`` (2, 3) float64 and ``out`` (1, 3) int64 are
+    caller-owned scratch."""
     buf[0, 0] = x0
     buf[0, 1] = x1
     buf[0, 2] = x2
-    qk.quantize_generic3(buf[:1], quant.b, quant.binv, quant.cand, quant.cand_z, quant.counts,
-                         quant.t, out)
+    qk.quantize_generic3(buf[:1], quant.basis, quant.basis_inv, quant.cand, quant.cand_z,
+                         quant.counts, quant.reduction, out)
     return occ_free(occ, out[0, 0], out[0, 1], out[0, 2])
 
 
-@njit(cache=True)
+@njit_cached
 def motion_free(occ, walk, quant, a0, a1, a2, b0, b1, b2, buf, out):  # pragma: no cover
     """Exact segment test a -> b (m): ``(all touched cells free, lookups made)``."""
     buf[0, 0] = a0
@@ -338,7 +328,7 @@ def motion_free(occ, walk, quant, a0, a1, a2, b0, b1, b2, buf, out):  # pragma: 
     buf[1, 0] = b0
     buf[1, 1] = b1
     buf[1, 2] = b2
-    qk.quantize_generic3(buf[:1], quant.b, quant.binv, quant.cand, quant.cand_z, quant.counts,
-                         quant.t, out)
+    qk.quantize_generic3(buf[:1], quant.basis, quant.basis_inv, quant.cand, quant.cand_z,
+                         quant.counts, quant.reduction, out)
     _, free, n = segment_walk(occ, walk, buf[0], buf[1], out[0], True)
     return free, n

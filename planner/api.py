@@ -284,6 +284,7 @@ def plan(
     PlanResult
     """
     from planner import search
+    from planner.paths import path_length
     from planner.world import World, as_point
 
     as_point(start, "start")  # malformed input fails before any map is built
@@ -331,7 +332,7 @@ def plan(
         checks += world.cell_checks - before
         seconds += time.perf_counter() - t0
     path = np.concatenate([s[None], lat.to_world(path_cells), g[None]])
-    length = float(np.linalg.norm(np.diff(path, axis=0), axis=1).sum())
+    length = path_length(path, 0.0)
     return PlanResult(
         found=True, path=path, cells=path_cells, length=length, cell_checks=checks,
         expansions=res.expansions, generated=res.generated, seconds=seconds,

@@ -1,48 +1,60 @@
 """Command line: argument parsing only; the work lives in the library modules.
 
-Exit status: 0 success, 1 no path found, 2 bad input (one-line message, no traceback).
+Exit status: 0 success, 1 no path found, 2 bad input (one-line message, no traceback),
+130 / 143 interrupted by SIGINT / SIGTERM.
 """
 
 from __future__ import annotations
 
 import argparse
-import importlib.util
+import contextlib
 import json
+import math
+import os
+import re
 import sys
+import tempfile
+import warnings
 from pathlib import Path
 
 import numpy as np
 
 from planner.errors import PlannerError
+from planner.lattice import NAMED_LATTICES
 
-LATTICES = ("cubic", "bcc", "fcc", "mcc", "hex")
 METHODS = "astar, dijkstra, theta, lazy-theta, ompl:<planner>"
+PLOT_SUFFIXES = (".png", ".pdf", ".svg")
+# options whose values may start with "-" (negative coordinates)
+_VECTOR_OPTIONS = ("--start", "--goal", "--bounds", "--generator")
+_NUMBERISH = re.compile(r"^-[0-9.]")
 
 
 class _Parser(argparse.ArgumentParser):
+    def __init__(self, *args, **kwargs):
+        kwargs.setdefault("formatter_class", argparse.ArgumentDefaultsHelpFormatter)
+        super().__init__(*args, **kwargs)
+
     def error(self, message: str) -> None:  # one line, exit 2, as for every bad input
         self.exit(2, f"{self.prog}: error: {message}\n")
 
 
-def _vec3(text: str) -> np.ndarray:
+# -- argument types ------------------------------------------------------------------------
+def _numbers(text: str, n: int, what: str) -> np.ndarray:
     try:
         v = np.array([float(t) for t in text.replace(" ", "").split(",")])
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected x,y,z, got {text!r}") from None
-    if v.shape != (3,) or not np.isfinite(v).all():
-        raise argparse.ArgumentTypeError(f"expected three finite numbers x,y,z, got {text!r}")
+        raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}") from None
+    if v.shape != (n,) or not np.isfinite(v).all():
+        raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}")
     return v
 
 
+def _vec3(text: str) -> np.ndarray:
+    return _numbers(text, 3, "three finite numbers x,y,z")
+
+
 def _bounds(text: str) -> np.ndarray:
-    msg = f"expected six numbers xmin,ymin,zmin,xmax,ymax,zmax, got {text!r}"
-    try:
-        v = np.array([float(t) for t in text.replace(" ", "").split(",")])
-    except ValueError:
-        raise argparse.ArgumentTypeError(msg) from None
-    if v.shape != (6,) or not np.isfinite(v).all():
-        raise argparse.ArgumentTypeError(msg)
-    return v.reshape(2, 3)
+    return _numbers(text, 6, "six numbers xmin,ymin,zmin,xmax,ymax,zmax").reshape(2, 3)
 
 
 def _positive(text: str) -> float:
@@ -50,7 +62,7 @@ def _positive(text: str) -> float:
         v = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not v > 0 or v == float("inf"):
+    if not v > 0 or v == math.inf:
         raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
     return v
 
@@ -60,18 +72,107 @@ def _nonneg(text: str) -> float:
         v = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not v >= 0 or v == float("inf"):
+    if not v >= 0 or v == math.inf:
         raise argparse.ArgumentTypeError(f"expected a non-negative number, got {text!r}")
     return v
 
 
+def _int_range(lo: int, hi: int | None = None):
+    def parse(text: str) -> int:
+        try:
+            v = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+        if v < lo or (hi is not None and v > hi):
+            span = f"at least {lo}" if hi is None else f"in {lo}..{hi}"
+            raise argparse.ArgumentTypeError(f"expected an integer {span}, got {text!r}")
+        return v
+    return parse
+
+
+def _map(text: str) -> str:
+    """A map file, or a bundled map by name (``office``) from any folder."""
+    from planner.maps import resolve
+
+    return str(resolve(text))
+
+
+def _lattice_list(text: str) -> list[str]:
+    names = [s.strip().lower() for s in text.split(",") if s.strip()]
+    if not names:
+        raise argparse.ArgumentTypeError(f"expected lattice names from {', '.join(NAMED_LATTICES)}")
+    bad = [n for n in names if n not in NAMED_LATTICES]
+    if bad:
+        raise argparse.ArgumentTypeError(
+            f"unknown lattice {bad[0]!r}; expected names from {', '.join(NAMED_LATTICES)}")
+    return names
+
+
+def _generator(text: str):
+    """A custom lattice: ``"a,b,c;d,e,f;g,h,i"`` (rows of G) or a ``.npy`` file."""
+    from planner.lattice import Lattice
+
+    if text.endswith(".npy"):
+        try:
+            g = np.load(text, allow_pickle=False)
+        except (OSError, ValueError) as exc:
+            raise argparse.ArgumentTypeError(f"{text}: cannot read a matrix: {exc}") from None
+    else:
+        rows = [r for r in text.split(";") if r.strip()]
+        try:
+            g = np.array([[float(t) for t in r.split(",")] for r in rows])
+        except ValueError:
+            raise argparse.ArgumentTypeError(
+                f"expected rows 'a,b,c;d,e,f;g,h,i', got {text!r}") from None
+    try:
+        return Lattice(g, name="custom")
+    except PlannerError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+_OUTPUTS = {("plan", "out"): (".csv", ".json"), ("voxels", "out"): (".npz",),
+            ("plan", "plot"): PLOT_SUFFIXES, ("compare", "plot"): PLOT_SUFFIXES}
+
+
+def _check_output(option: str, text: str, suffixes: tuple[str, ...]) -> None:
+    """Refuse an output file that cannot be written, before any work is done."""
+    p = Path(text)
+    where = f"argument --{option}: {text}"
+    if p.suffix.lower() not in suffixes:
+        raise PlannerError(f"{where}: unsupported output type {p.suffix or '(none)'!r}; use "
+                           f"{', '.join(suffixes)}")
+    if p.is_dir():
+        raise PlannerError(f"{where}: is a directory")
+    parent = p.absolute().parent
+    while not parent.exists():  # missing folders are created when writing
+        parent = parent.parent
+    if not parent.is_dir():
+        raise PlannerError(f"{where}: {parent} is not a directory")
+    try:  # a real probe: permissions, read-only and virtual file systems (/proc)
+        fd, probe = tempfile.mkstemp(prefix=".planner-probe.", dir=parent)
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as exc:
+        raise PlannerError(f"{where}: cannot write into {parent}: {exc.strerror}") from None
+
+
+# -- parser --------------------------------------------------------------------------------
 def _add_world_args(p: argparse.ArgumentParser, *, lattice: bool = True) -> None:
-    p.add_argument("map", help="map file: .ply .pcd .xyz/.txt/.dat[.gz|.bz2] .npy .bt .3dmap")
+    p.add_argument("map", type=_map,
+                   help="map file (.ply .pcd .xyz/.txt/.dat[.gz|.bz2] .npy .bt .3dmap) or a "
+                        "bundled map name (office, two_storey, warehouse, forest, "
+                        "narrow_passage)")
     if lattice:
-        p.add_argument("--lattice", default="fcc", choices=LATTICES)
+        g = p.add_mutually_exclusive_group()
+        g.add_argument("--lattice", default="fcc", choices=NAMED_LATTICES, help="named lattice")
+        g.add_argument("--generator", type=_generator, default=None,
+                       help="custom lattice: generator rows 'a,b,c;d,e,f;g,h,i' (columns are "
+                            "the basis vectors, metres) or a .npy file")
     p.add_argument("--cell-volume", type=_positive, default=None,
-                   help="cell volume in m^3 (default: the map's native resolution)")
-    p.add_argument("--radius", type=_nonneg, default=None, help="robot radius in metres")
+                   help="cell volume in m^3 (None: the map's suggestion or native resolution)")
+    p.add_argument("--radius", type=_nonneg, default=None,
+                   help="robot radius in metres (None: the map's suggestion; required for "
+                        "maps without one)")
     p.add_argument("--bounds", type=_bounds, default=None,
                    help="world box xmin,ymin,zmin,xmax,ymax,zmax (m)")
     p.add_argument("--format", default=None,
@@ -84,139 +185,194 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
     p = sub.add_parser("lattices", help="table of lattice properties (the paper's measurements)")
-    p.add_argument("--cell-volume", type=_positive, default=1.0)
-    p.add_argument("--points", type=int, default=10**6, help="points for Monte-Carlo and speed")
+    p.add_argument("--cell-volume", type=_positive, default=1.0, help="m^3")
+    p.add_argument("--points", type=_int_range(1000), default=10**6,
+                   help="uniform points for the Monte-Carlo columns and the speed")
+    p.add_argument("--seed", type=_int_range(0, 2**32 - 1), default=0, help="random seed")
+    p.add_argument("--all-columns", action="store_true", help="print every column")
 
-    p = sub.add_parser("stats", help="reproduce the paper's figures (benchmarks/paper.py)",
-                       add_help=False)
-    p.add_argument("args", nargs=argparse.REMAINDER)
+    p = sub.add_parser("stats", help="reproduce the paper's Table I and Figs. 3-5")
+    p.add_argument("--out", type=Path, default=Path("results/paper"), help="output folder")
+    p.add_argument("--rotations", type=_int_range(1), default=100,
+                   help="uniform random rotations for Fig. 5")
+    p.add_argument("--volumes", type=_positive, nargs="+", default=[0.125, 0.001],
+                   help="cell volumes for Fig. 5, m^3")
+    p.add_argument("--table1-volume", type=_positive, default=0.125,
+                   help="cell volume of Table I, m^3 (the paper's 0.125)")
+    p.add_argument("--samples", type=_int_range(100), default=10**6,
+                   help="uniform samples per distribution for Fig. 4")
+    p.add_argument("--seed", type=_int_range(0, 2**32 - 1), default=0, help="random seed")
+    p.add_argument("--data", type=Path, default=None,
+                   help="real data folder (None: ../shared/data)")
+    p.add_argument("--quick", action="store_true",
+                   help="CI-sized run: 4 rotations, 5e4 samples, scans subsampled to 2e4 points")
 
     p = sub.add_parser("plan", help="plan a path on a lattice")
     _add_world_args(p)
-    p.add_argument("--start", type=_vec3, required=True, help="x,y,z (m)")
-    p.add_argument("--goal", type=_vec3, required=True, help="x,y,z (m)")
+    p.add_argument("--start", type=_vec3, required=True, help="x,y,z (m); negatives allowed")
+    p.add_argument("--goal", type=_vec3, required=True, help="x,y,z (m); negatives allowed")
     p.add_argument("--method", default="astar", help=METHODS)
     p.add_argument("--neighbors", default="full", help="full, face, face+k or full+k")
     p.add_argument("--corner-cutting", action="store_true", help="check the target cell only")
     p.add_argument("--shortcut", action="store_true", help="shortcut the A* path")
     p.add_argument("--time", type=_positive, default=1.0, help="OMPL time budget (s)")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--out", help="write the path to .csv or .json")
-    p.add_argument("--plot", help="write a figure of the path (.png)")
+    p.add_argument("--seed", type=_int_range(0, 2**32 - 1), default=0, help="OMPL seed")
+    p.add_argument("--out", help="write the path (.csv/.json)")
+    p.add_argument("--plot", help="write a figure of the path")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
 
     p = sub.add_parser("compare", help="plan the same queries on every lattice (main job)")
     _add_world_args(p, lattice=False)
-    p.add_argument("--lattices", default=",".join(LATTICES))
-    p.add_argument("--start", type=_vec3, default=None)
-    p.add_argument("--goal", type=_vec3, default=None)
+    p.add_argument("--lattices", type=_lattice_list, default=",".join(NAMED_LATTICES),
+                   help="comma-separated lattice names")
+    p.add_argument("--generator", type=_generator, default=None,
+                   help="also compare a custom lattice: rows 'a,b,c;d,e,f;g,h,i' or a .npy")
+    p.add_argument("--start", type=_vec3, default=None, help="x,y,z (m); None: map's queries")
+    p.add_argument("--goal", type=_vec3, default=None, help="x,y,z (m); None: map's queries")
     p.add_argument("--method", default="astar", help=METHODS)
     p.add_argument("--neighbors", default="full", help="full, face, face+k or full+k")
-    p.add_argument("--plot", help="write a figure of the paths (.png)")
+    p.add_argument("--plot", help="write a figure of the paths")
     p.add_argument("--json", action="store_true", help="print the rows as JSON")
 
     p = sub.add_parser("voxels", help="build an (inflated) occupied voxel list and save it")
     _add_world_args(p)
     p.add_argument("--out", required=True, help="output .npz")
 
-    p = sub.add_parser("bench", help="run a benchmark suite", add_help=False)
-    p.add_argument("args", nargs=argparse.REMAINDER)
+    p = sub.add_parser("bench", help="run a benchmark suite (which lattice for my map?)")
+    p.add_argument("suite", help="bundled suite name (quick, paper, full) or a TOML file")
+    p.add_argument("--out", default=None, help="output folder (None: results/<suite>)")
+    p.add_argument("--jobs", type=_int_range(1), default=1, help="local worker processes")
+    p.add_argument("--scheduler", default=None, help="Dask scheduler address tcp://host:port")
+    p.add_argument("--resume", action="store_true",
+                   help="keep finished rows and the sampled queries, run the rest")
+    p.add_argument("--no-progress", action="store_true", help="no progress on stderr")
+    p.add_argument("--report-only", action="store_true",
+                   help="no new runs: summarise the rows already in OUT/results.jsonl")
     return parser
 
 
-def _run_script(name: str, argv: list[str]) -> int:
-    """Run benchmarks/<name>.py's main(argv) from the source checkout."""
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / f"{name}.py"
-    if not path.is_file():
-        raise PlannerError(f"{path} not found: run from a source checkout of lattice planner")
-    spec = importlib.util.spec_from_file_location(f"_bench_{name}", path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return int(mod.main(argv) or 0)
+def _join_negative_values(argv: list[str]) -> list[str]:
+    """``--start -2.96,-0.05,1`` -> ``--start=-2.96,-0.05,1`` (argparse would read the value
+    as an option)."""
+    out, i = [], 0
+    while i < len(argv):
+        a = argv[i]
+        if a in _VECTOR_OPTIONS and i + 1 < len(argv) and _NUMBERISH.match(argv[i + 1]):
+            out.append(f"{a}={argv[i + 1]}")
+            i += 2
+            continue
+        out.append(a)
+        i += 1
+    return out
 
 
+# -- commands ------------------------------------------------------------------------------
 def _cmd_lattices(a) -> int:
-    from planner import measure
+    from planner.analysis import measure
 
-    rows = measure.lattice_table(cell_volume=a.cell_volume, n_points=a.points)
-    print(measure.format_table(rows))
+    rows = measure.lattice_table(cell_volume=a.cell_volume, n_points=a.points, seed=a.seed)
+    print(f"cell volume {a.cell_volume:g} m^3; distances and radii in metres; "
+          f"nsm = normalised second moment; mean_error = eq. (13) on {a.points} "
+          "uniform points; points_per_s = quantize() throughput")
+    print(measure.format_table(rows, None if a.all_columns else measure.TABLE_COLUMNS))
     return 0
 
 
-def _cmd_plan(a) -> int:
-    from planner import api, report
+def _cmd_stats(a) -> int:
+    from planner.analysis.paper import reproduce
 
-    world = api.build_world(a.map, a.lattice, cell_volume=a.cell_volume,
-                            radius=a.radius or 0.0, bounds=a.bounds, format=a.format)
+    return reproduce(a.out, rotations=a.rotations, volumes=a.volumes, samples=a.samples,
+                     seed=a.seed, data=a.data, quick=a.quick, table1_volume=a.table1_volume)
+
+
+def _build(a):
+    from planner import api
+    from planner.analysis.compare import map_defaults
+
+    radius, cell_volume = map_defaults(a.map, a.radius, a.cell_volume)
+    lattice = a.generator if a.generator is not None else a.lattice
+    if a.generator is not None:
+        cell_volume = a.cell_volume  # a custom generator keeps its own scale unless given
+    world = api.build_world(a.map, lattice, cell_volume=cell_volume, radius=radius,
+                            bounds=a.bounds, format=a.format)
+    return world, (a.generator.name if a.generator is not None else a.lattice)
+
+
+def _cmd_plan(a) -> int:
+    from planner import api
+    from planner.analysis import compare
+
+    world, label = _build(a)
     res = api.plan(
         world, a.start, a.goal, method=a.method, neighbors=a.neighbors,
         corner_cutting=a.corner_cutting, shortcut=a.shortcut, time_limit=a.time, seed=a.seed,
     )
     if a.out:
-        report.write_path(a.out, res)
+        compare.write_path(a.out, res)
     if a.plot and res.found:
-        report.plot_paths(a.plot, world, {a.lattice: res})
-    if a.json:
-        print(json.dumps(res.to_dict()))
-    else:
-        print(report.describe(res))
+        compare.plot_paths(a.plot, world, {label: res})
+    print(json.dumps(res.to_dict()) if a.json else compare.describe(res))
     return 0 if res.found else 1
 
 
 def _cmd_compare(a) -> int:
-    from planner import report
+    from planner.analysis import compare
 
-    rows = report.compare(
-        a.map, lattices=[s.strip() for s in a.lattices.split(",") if s.strip()],
-        cell_volume=a.cell_volume, radius=a.radius, bounds=a.bounds, start=a.start,
-        goal=a.goal, method=a.method, neighbors=a.neighbors, plot=a.plot,
-        progress=not a.json, format=a.format,
+    lattices = list(a.lattices) + ([a.generator] if a.generator is not None else [])
+    rows = compare.compare(
+        a.map, lattices=lattices, cell_volume=a.cell_volume, radius=a.radius, bounds=a.bounds,
+        start=a.start, goal=a.goal, method=a.method, neighbors=a.neighbors, plot=a.plot,
+        progress=not a.json and sys.stderr.isatty(), format=a.format,
     )
-    if a.json:
-        print(json.dumps(rows))
-    else:
-        print(report.format_rows(rows))
+    print(json.dumps(rows) if a.json else compare.format_rows(rows))
     return 0 if all(r["found"] for r in rows) else 1
 
 
 def _cmd_voxels(a) -> int:
-    from planner import api
-
-    world = api.build_world(a.map, a.lattice, cell_volume=a.cell_volume,
-                            radius=a.radius or 0.0, bounds=a.bounds, format=a.format)
+    world, label = _build(a)
+    Path(a.out).parent.mkdir(parents=True, exist_ok=True)  # as plan --out does
     world.blocked_voxels().save(a.out)
-    print(f"{a.out}: {world.n_blocked} blocked {a.lattice} cells, "
+    print(f"{a.out}: {world.n_blocked} blocked {label} cells, "
           f"cell volume {world.lattice.cell_volume:.6g} m^3")
     return 0
 
 
+def _cmd_bench(a) -> int:
+    from planner.bench.session import run_suite
+
+    return run_suite(a.suite, out=a.out, jobs=a.jobs, scheduler=a.scheduler, resume=a.resume,
+                     progress=not a.no_progress, report_only=a.report_only)
+
+
+_COMMANDS = {"lattices": _cmd_lattices, "stats": _cmd_stats, "plan": _cmd_plan,
+             "compare": _cmd_compare, "voxels": _cmd_voxels, "bench": _cmd_bench}
+
+
 def main(argv: list[str] | None = None) -> int:
-    argv = sys.argv[1:] if argv is None else argv
-    parser = build_parser()
-    scripts = {"stats": "paper", "bench": "suite"}
-    if argv and argv[0] in scripts:  # forwarded whole (also --help) to the script's parser
+    argv = sys.argv[1:] if argv is None else list(argv)
+    a = build_parser().parse_args(_join_negative_values(argv))
+    # numpy warnings are shown only when the command succeeds: an error is one line
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", RuntimeWarning)
         try:
-            return _run_script(scripts[argv[0]], list(argv[1:]))
+            for (cmd, option), suffixes in _OUTPUTS.items():
+                if a.command == cmd and getattr(a, option, None):
+                    _check_output(option, getattr(a, option), suffixes)
+            with np.errstate(all="warn"):
+                status = _COMMANDS[a.command](a)
         except PlannerError as exc:
-            print(f"planner: error: {exc}", file=sys.stderr)
+            print(f"planner: error: {' '.join(str(exc).split())}", file=sys.stderr)
             return 2
-    a = parser.parse_args(argv)
-    try:
-        if a.command == "lattices":
-            return _cmd_lattices(a)
-        if a.command == "plan":
-            return _cmd_plan(a)
-        if a.command == "compare":
-            return _cmd_compare(a)
-        if a.command == "voxels":
-            return _cmd_voxels(a)
-    except PlannerError as exc:
-        print(f"planner: error: {exc}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print("planner: interrupted", file=sys.stderr)
-        return 130
-    return 2
+        except KeyboardInterrupt:
+            print("planner: interrupted", file=sys.stderr)
+            return 130
+        except BrokenPipeError:  # output piped into `head`: stop quietly, as Unix tools do
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+            return 141
+    for w in caught:
+        with contextlib.suppress(Exception):
+            print(f"planner: warning: {w.message}", file=sys.stderr)
+    return status
 
 
 if __name__ == "__main__":

@@ -8,8 +8,8 @@ also a sorted index list. Works inside numba kernels (``pack3``/``unpack3`` are 
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
+from planner._jit import njit_cached
 from planner.errors import MapError
 
 BITS = {2: 31, 3: 21}
@@ -55,12 +55,12 @@ _L3 = 1 << 20
 _M3 = (1 << 21) - 1
 
 
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def pack3(i, j, k):  # pragma: no cover - compiled
     """Key of one 3D index (no range check: callers stay inside the map's bounds)."""
     return (((i + _L3) << 42) | ((j + _L3) << 21)) | (k + _L3)
 
 
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def unpack3(key):  # pragma: no cover - compiled
     return ((key >> 42) & _M3) - _L3, ((key >> 21) & _M3) - _L3, (key & _M3) - _L3

@@ -6,7 +6,7 @@ same occupancy as the lattice planners. Both checks go through the world's one
 
 * **State validity** (``checker.is_valid``): the lattice cell containing the state is in
   bounds and free. One compiled kernel quantizes the point (the exact generic closest-point
-  kernel of :mod:`planner._quantize_kernels`) and does one occupancy lookup. One check.
+  kernel of :mod:`planner.lattice._quantize`) and does one occupancy lookup. One check.
 * **Motion validity** (``checker.check_motion``): the 2.0.1 bindings let Python subclass
   ``ob.MotionValidator`` (``checkMotion(s1, s2)``), so motions are validated with the EXACT
   lattice segment walk (the lattice planners' line-of-sight test):
@@ -59,6 +59,7 @@ import numpy as np
 
 from planner._guard import run_guarded
 from planner.errors import PlanError
+from planner.paths import path_length
 from planner.world import ValidityChecker, World
 
 __all__ = ["PLANNERS", "ANYTIME", "OmplResult", "plan_ompl", "run_seeds", "check_seed",
@@ -182,11 +183,6 @@ def canonical_planner(name: str) -> str:
         raise PlanError(f"unknown OMPL planner {name!r}; expected one of "
                         f"{', '.join(PLANNERS)}")
     return key
-
-
-def _length(path) -> float:
-    p = np.asarray(path, dtype=float).reshape(-1, 3)
-    return float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum()) if len(p) > 1 else 0.0
 
 
 def _path_valid(world: World, path: np.ndarray) -> bool:
@@ -403,9 +399,9 @@ def _solve(box, chk: ValidityChecker, s, g, name, time_limit, seed, max_checks, 
         simp = _pin_ends(_states(sp), s, g)
     secs = time.perf_counter() - t0
     res.update(
-        found=True, path_raw=raw, path=raw, path_simplified=simp, length_raw=_length(raw),
-        length_simplified=_length(simp) if simp is not None else None,
-        final_cost=_length(raw), cell_checks=chk.checks, seconds=secs,
+        found=True, path_raw=raw, path=raw, path_simplified=simp, length_raw=path_length(raw, 0.0),
+        length_simplified=path_length(simp, 0.0) if simp is not None else None,
+        final_cost=path_length(raw, 0.0), cell_checks=chk.checks, seconds=secs,
         state_checks=chk.states, motion_checks=chk.motions,
         checks_per_second=chk.checks / max(secs, 1e-9), reason="",
     )

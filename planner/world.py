@@ -25,10 +25,11 @@ from functools import lru_cache
 import numpy as np
 
 from planner import _world_kernels as wk
-from planner._world_kernels import Occupancy, Quantizer, Walk
+from planner._world_kernels import Occupancy, Walk
 from planner.errors import MapError, PlanError
 from planner.keys import pack
 from planner.lattice import Lattice
+from planner.lattice._quantize import Quantizer
 
 __all__ = ["World", "DENSE_BUDGET", "Occupancy", "ValidityChecker", "Walk", "as_point"]
 
@@ -75,7 +76,7 @@ class ValidityChecker:
     def quantizer(self) -> Quantizer:
         """The compiled point quantizer's tables (derived once; shipped when pickled)."""
         if self._quant is None:
-            self._quant = _quantizer(self._lattice)
+            self._quant = self._lattice.quantizer()
         return self._quant
 
     def __getstate__(self) -> dict:
@@ -138,6 +139,7 @@ class World:
     Examples
     --------
     >>> from planner.lattice import Lattice
+from planner.lattice._quantize import Quantizer
     >>> w = World(Lattice.named("cubic", 1.0), [[2, 2, 2]], [[0, 0, 0], [4, 4, 4]])
     >>> w.checker.is_valid((2.1, 1.9, 2.2)), w.checker.is_valid((0.5, 3.0, 1.0))
     (False, True)
@@ -440,15 +442,3 @@ def _walk_cached(gen: bytes, lattice: Lattice) -> Walk:
 def _walk(lattice: Lattice) -> Walk:
     """The segment-walk struct of a lattice (cached; shared, do not write)."""
     return _walk_cached(lattice.generator.tobytes(), lattice)
-
-
-def _quantizer(lattice: Lattice) -> Quantizer:
-    """Tables of the exact generic quantizer, as in ``Lattice.quantize_generic``.
-
-    Reads the lattice's private geometry: belongs in the lattice module as a public helper.
-    """
-    geo = lattice._geo
-    b = _c(geo["reduced"], float)
-    cand_z = _c(geo["orthant_offsets"], np.int64)
-    return Quantizer(b, _c(np.linalg.inv(b), float), _c(cand_z.astype(float) @ b.T, float),
-                     cand_z, _c(geo["orthant_counts"], np.int64), _c(geo["reduction"], float))

@@ -9,7 +9,8 @@ import pytest
 
 from planner.bench import runner, summary
 from planner.bench.metrics import Clearance
-from planner.bench.suite import REPO, SuiteError, load_suite
+from planner.bench.suite import SuiteError, load_suite
+from planner.maps import map_path
 
 SUITE = """
 name = "tiny"
@@ -31,7 +32,7 @@ radii = [0.2]
 def tiny_suite(tmp_path_factory):
     d = tmp_path_factory.mktemp("suite")
     p = d / "tiny.toml"
-    p.write_text(SUITE.format(map=(REPO / "maps" / "office.ply").as_posix()))
+    p.write_text(SUITE.format(map=map_path("office").as_posix()))
     return load_suite(str(p))
 
 
@@ -122,16 +123,22 @@ def test_clearance_is_exact_against_brute_force():
     assert c.of_path(path, 0.3) == pytest.approx(min(d_pts, d_box), abs=1e-6)
 
 
-def test_bad_suites_are_clear_errors(tmp_path):
-    with pytest.raises(SuiteError, match="no such suite"):
-        load_suite("nonexistent")
+@pytest.mark.parametrize("text, match", [
+    ("lattices = ['diamond']\n", "diamond"),
+    ("this is = = not toml", "TOML"),
+    ('methods = ["astra"]\n[[maps]]\npath = "office"\ncell_volumes = [0.01]\n', "astra"),
+    ('[ompl]\nplanners = ["rrtfast"]\n', "rrtfast"),
+])
+def test_bad_suites_are_refused_when_read(tmp_path, text, match):
     bad = tmp_path / "bad.toml"
-    bad.write_text("lattices = ['diamond']\n")
-    with pytest.raises(SuiteError, match="diamond"):
+    bad.write_text(text)
+    with pytest.raises(SuiteError, match=match):
         load_suite(str(bad))
-    bad.write_text("this is = = not toml")
-    with pytest.raises(SuiteError, match="TOML"):
-        load_suite(str(bad))
+
+
+def test_unknown_suite_names_list_the_bundled_ones():
+    with pytest.raises(SuiteError, match="no such suite.*quick"):
+        load_suite("nonexistent")
 
 
 def test_bundled_suites_load():
@@ -139,3 +146,51 @@ def test_bundled_suites_load():
         s = load_suite(name)
         assert s.name == name
     assert math.isfinite(load_suite("quick").ompl_time)
+
+
+def test_progress_redraws_only_on_a_terminal():
+    import io
+
+    class Tty(io.StringIO):
+        def isatty(self):
+            return True
+
+    log = io.StringIO()
+    bar = runner._Progress(200, True, stream=log)
+    for _ in range(200):
+        bar.step(1)
+    bar.close()
+    lines = log.getvalue().splitlines()
+    assert "\r" not in log.getvalue() and 9 <= len(lines) <= 11  # a line per ~10%
+    assert lines[-1].startswith("progress 100%")
+    tty = Tty()
+    bar = runner._Progress(5, True, stream=tty)
+    bar.step(5)
+    assert tty.getvalue().startswith("\r[")
+
+
+def test_duplicate_rows_are_counted_once(tiny_tasks, tmp_path):
+    tasks, _ = tiny_tasks
+    rows = runner.run(tasks[:2], tmp_path / "r.jsonl", progress=False)
+    once = summary.summarize([dict(r) for r in rows])
+    twice = summary.summarize([dict(r) for r in rows + rows])
+    assert [s["runs"] for s in once] == [s["runs"] for s in twice]
+
+
+def test_a_report_of_a_partial_run_says_so(tiny_tasks, tiny_suite, tmp_path):
+    tasks, record = tiny_tasks
+    rows = runner.run(tasks[:1], tmp_path / "r.jsonl", progress=False)
+    rep = summary.write_report(tmp_path, tiny_suite, rows, summary.summarize(rows), record, [],
+                               "planner bench x", partial="interrupted by SIGINT: 3 of 36 runs")
+    text = rep.read_text()
+    assert "(PARTIAL)" in text.splitlines()[0] and "interrupted by SIGINT" in text
+    assert "commit" in text and "CPU" in text and "jobs: 1" in text
+    assert "| lattice |" in text and "```" not in text  # Markdown tables, not code blocks
+
+
+def test_saved_queries_are_reused(tiny_suite):
+    _, record = runner.plan_tasks(tiny_suite, log=lambda m: None)
+    sampled = []
+    tasks, again = runner.plan_tasks(tiny_suite, log=sampled.append, saved=record)
+    assert again == record and not sampled
+    assert {q["id"] for t in tasks for q in t["queries"]} == {0, 1, 2}

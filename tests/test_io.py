@@ -372,11 +372,16 @@ def test_octomap_voxel_centres_follow_the_key_convention(tmp_path):
                        (16, (32769, 32768, 32770))],
              free=[(16, (32768, 32769, 32768))])
     obst = load_obstacles(tmp_path / "m.bt")
-    got = sorted(map(tuple, obst.points))
+    # An occupied leaf is a box, not also a point; free leaves are kept as free boxes.
+    assert obst.points.shape == (0, 3)
+    got = sorted(map(tuple, obst.boxes))
     assert got == sorted([(0.125, 0.125, 0.125), (-0.125, -0.125, -0.125),
                           (0.375, 0.125, 0.625)])
-    np.testing.assert_array_equal(obst.boxes, obst.points)
+    np.testing.assert_array_equal(obst.box_sizes, [res] * 3)
+    np.testing.assert_array_equal(obst.free_boxes, [(0.125, 0.375, 0.125)])
+    np.testing.assert_array_equal(obst.free_box_sizes, [res])
     assert obst.box_size == res and obst.resolution == res and obst.bounds is None
+    assert obst.unknown_default == "blocked" and obst.has_free_space
 
 
 def test_octomap_pruned_leaves_expand_to_finest_voxels(tmp_path):
@@ -384,6 +389,14 @@ def test_octomap_pruned_leaves_expand_to_finest_voxels(tmp_path):
     write_bt(tmp_path / "m.bt", res=1.0,
              occupied=[(14, (32768, 32768, 32768)), (16, (32760, 32760, 32760))],
              free=[(15, (32764, 32764, 32764))])
+    obst = load_obstacles(tmp_path / "m.bt")
+    # Leaves keep their own size: the depth-14 leaf is one 4 m box centred at (2, 2, 2).
+    order = np.argsort(obst.box_sizes)
+    np.testing.assert_array_equal(obst.box_sizes[order], [1.0, 4.0])
+    np.testing.assert_array_equal(obst.boxes[order], [[-7.5] * 3, [2.0] * 3])
+    np.testing.assert_array_equal(obst.free_boxes, [[-3.0] * 3])
+    np.testing.assert_array_equal(obst.free_box_sizes, [2.0])
+    assert obst.box_size == 4.0  # the largest: conservative for single-size consumers
     pts = load_points(tmp_path / "m.bt")
     assert len(pts) == 65
     cube = pts[(pts >= 0).all(axis=1)]
@@ -492,7 +505,7 @@ def test_pcd_corrupt_lzf(tmp_path, cloud):
 @pytest.mark.parametrize(("edit", "match"), [
     ((b"FIELDS intensity x _ y rgb z", b"FIELDS intensity x _ y rgb w"), "no 'z' field"),
     ((b"DATA binary", b"DATA packed"), "unknown PCD DATA"),
-    ((b"DATA binary\n", b"DADA binary\n"), "no DATA line"),
+    ((b"DATA binary\n", b"DADA binary\n"), "no 'DATA' line"),
     ((b"SIZE 4 4 1 8 4 4", b"SIZE 4 4 1 8 4"), "lengths differ"),
     ((b"TYPE F F U F U F", b"TYPE F F U F U Q"), "unsupported TYPE"),
 ])
@@ -528,7 +541,10 @@ def test_octomap_bad_header(tmp_path, header, match):
 
 def test_octomap_with_absurdly_coarse_leaf(tmp_path):
     write_bt(tmp_path / "c.bt", occupied=[(1, (32768, 32768, 32768))])
-    _raises(tmp_path / "c.bt", "too coarse")
+    obst = load_obstacles(tmp_path / "c.bt")  # one box is cheap ...
+    np.testing.assert_allclose(obst.box_sizes, [2**15 * 0.1])
+    with pytest.raises(MapError, match="c.bt.*limit"):  # ... its 2**45 finest voxels are not
+        load_points(tmp_path / "c.bt")
 
 
 @settings(max_examples=60, deadline=None)
@@ -558,8 +574,8 @@ def test_corrupted_binary_files_raise_map_error_or_load(tmp_path_factory, data):
 @pytest.mark.parametrize(("text", "match"), [
     ("1 2 3\n4 5\n", "line 2"),
     ("# header\n1 2 3\n4 x 6\n", "line 3"),
-    ("1 2 3\n4 5 nan\n", "NaN or infinite"),
     ("1 2 inf\n", "NaN or infinite"),
+    ("nan 1 2\n-inf 0 0\n", "every point"),
     ("", "empty"),
     ("# only a comment\n", "empty"),
     ("0 0 0\n0 0 0\n", "no-return"),
@@ -594,11 +610,15 @@ def test_npy_that_is_not_npy(tmp_path):
     _raises(tmp_path / "n.npy", "not a valid .npy")
 
 
-def test_pcd_with_nan_points(tmp_path, cloud):
+def test_pcd_with_nan_points_drops_and_counts_them(tmp_path, cloud):
     pts = cloud.copy()
     pts[3, 1] = np.nan
-    write_pcd(tmp_path / "n.pcd", pts, "binary")
-    _raises(tmp_path / "n.pcd", "1 points have NaN")
+    want = write_pcd(tmp_path / "n.pcd", pts, "binary")
+    obst = load_obstacles(tmp_path / "n.pcd")
+    assert obst.dropped_nonfinite == 1
+    np.testing.assert_array_equal(obst.points, np.delete(want, 3, axis=0))
+    write_pcd(tmp_path / "all.pcd", np.full((4, 3), np.nan), "binary")
+    _raises(tmp_path / "all.pcd", "every point")
 
 
 @pytest.mark.parametrize(("header", "voxels", "match"), [
@@ -678,13 +698,18 @@ def test_bad_save(tmp_path, name, points, match):
 
 def test_real_octomap_geb079(data):
     obst = load_obstacles(data / "octomap" / "geb079.bt")
-    assert len(obst.points) == 185_673
-    assert obst.resolution == 0.08 and obst.box_size == 0.08 and obst.bounds is None
-    assert len(np.unique(obst.points, axis=0)) == 185_673
+    # 143,729 occupied leaves: 137,745 of 0.08 m, 5,983 of 0.16 m and one of 0.32 m.
+    sizes, counts = np.unique(np.round(obst.box_sizes / 0.08).astype(int), return_counts=True)
+    assert sizes.tolist() == [1, 2, 4] and counts.tolist() == [137_745, 5_983, 1]
+    assert len(obst.points) == 0 and len(obst.free_boxes) > 0
+    assert obst.resolution == 0.08 and obst.bounds is None and obst.unknown_default == "blocked"
+    pts = load_points(data / "octomap" / "geb079.bt")  # leaves filled with 0.08 m centres
+    assert len(pts) == 185_673
+    assert len(np.unique(pts, axis=0)) == 185_673
     # Centres sit on the 0.08 m grid offset by half a cell.
-    k = obst.points / 0.08 - 0.5
+    k = pts / 0.08 - 0.5
     np.testing.assert_allclose(k, np.round(k), atol=1e-6)
-    extent = obst.points.max(axis=0) - obst.points.min(axis=0)  # "about 39 x 15 x 3 m"
+    extent = pts.max(axis=0) - pts.min(axis=0)  # "about 39 x 15 x 3 m"
     np.testing.assert_allclose(extent, [39, 15, 3], atol=1.0)
 
 
@@ -757,3 +782,25 @@ def test_real_text_written_back_compressed(data, tmp_path):
     save_points(tmp_path / "scan.xyz.bz2", pts)
     np.testing.assert_array_equal(load_points(tmp_path / "scan.xyz.bz2"), pts)
     assert bz2.decompress((tmp_path / "scan.xyz.bz2").read_bytes()).count(b"\n") == len(pts)
+
+
+def test_the_ply_writer_writes_what_plyfile_writes(tmp_path, cloud):
+    from planner.io.ply import write_ply as io_write_ply
+
+    vert = np.empty(len(cloud), dtype=[("x", "<f4"), ("y", "<f4"), ("z", "<f4")])
+    for i, c in enumerate("xyz"):
+        vert[c] = cloud[:, i]
+    PlyData([PlyElement.describe(vert, "vertex")], text=False, byte_order="<",
+            comments=["made by a test"]).write(str(tmp_path / "a.ply"))
+    io_write_ply(tmp_path / "b.ply", cloud, np.float32, ("made by a test",))
+    assert (tmp_path / "a.ply").read_bytes() == (tmp_path / "b.ply").read_bytes()
+
+
+def test_obstacles_from_points_keeps_the_origin_and_drops_nan():
+    from planner.io import obstacles_from_points
+
+    ob = obstacles_from_points([[0.0, 0, 0], [1, np.nan, 2], [3, 4, 5]])
+    np.testing.assert_array_equal(ob.points, [[0, 0, 0], [3, 4, 5]])
+    assert ob.dropped_nonfinite == 1 and ob.source == "<array>" and ob.unknown_default == "free"
+    with pytest.raises(MapError, match="every point"):
+        obstacles_from_points([[np.nan, 0, 0]])

@@ -246,3 +246,135 @@ def test_extended_neighbour_shells_add_the_next_ring():
     assert len(cubic.neighbors("full+1")) == 26 + 6  # the (2,0,0) ring
     fcc = Lattice.named("fcc")
     assert len(fcc.neighbors("face+1")) == 12 + 6
+
+
+# -- guards: ill-conditioned generators, far points, huge shells -----------------------------
+@pytest.mark.parametrize("generator", [np.diag([1, 1, 1e-12]), np.diag([1, 1, 1e-6])])
+def test_ill_conditioned_generators_are_refused_before_enumerating(generator):
+    with pytest.raises(LatticeError, match=r"ill-conditioned.*enumerate ~[0-9.e+]+ lattice "
+                                           r"vectors \(limit"):
+        Lattice(generator).neighbors("full")
+
+
+def test_unimodular_skewed_generator_is_reduced_not_called_singular():
+    skew = Lattice([[1, 1e9, 0], [0, 1, 0], [0, 0, 1]])
+    # The same lattice as Z^3: 6 face and 26 full neighbours, unit cells.
+    assert len(skew.neighbors("face")) == 6
+    assert len(skew.neighbors("full")) == 26
+    assert skew.covering_radius == pytest.approx(np.sqrt(3) / 2)
+    x = np.random.default_rng(4).uniform(-50, 50, (2000, 3))
+    np.testing.assert_allclose(skew.to_world(skew.quantize(x)), np.rint(x), atol=1e-6)
+    with pytest.raises(LatticeError, match="singular"):
+        Lattice([[1, 1, 0], [1, 1 + 1e-15, 0], [0, 0, 1]])
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_points_too_far_for_exact_indices_raise(name):
+    lat = Lattice.named(name)
+    with pytest.raises(LatticeError, match=r"point 1 has a coordinate of 1e\+20 m"):
+        lat.quantize([[0, 0, 0], [1e20, 3.3, 0]])
+    with pytest.raises(LatticeError, match="indices stay exact"):
+        lat.quantize_generic([[-1e20, 3.3, 0]])
+    far = lat.quantize([[1e12, -1e12, 5e11]])  # far but representable: exact, not INT64_MIN
+    assert np.abs(lat.to_world(far) - [1e12, -1e12, 5e11]).max() < 1e-3 * 1e12
+
+
+def test_huge_neighbour_shell_requests_are_refused():
+    with pytest.raises(LatticeError, match="shells would enumerate"):
+        Lattice.named("fcc").neighbors("face+1000")
+
+
+# -- the Voronoi cell as one object ------------------------------------------------------------
+@pytest.mark.parametrize("name", NAMES)
+def test_voronoi_cell_describes_the_cell(name):
+    lat = Lattice.named(name, 0.3)
+    cell = lat.voronoi
+    assert cell.packing_radius == lat.packing_radius
+    assert cell.covering_radius == lat.covering_radius
+    np.testing.assert_allclose(np.linalg.norm(cell.normals, axis=1), 1)
+    # Every vertex lies on >= 3 facets; each edge's end points share 2 facets.
+    on = np.abs(cell.vertices @ cell.normals.T - cell.offsets) < 1e-9
+    assert (on.sum(axis=1) >= 3).all()
+    e0, e1 = cell.edges
+    assert len(e0) == len(cell.vertices) + len(cell.normals) - 2  # Euler: V - E + F = 2
+    shared = (np.abs(e0 @ cell.normals.T - cell.offsets) < 1e-9) & (
+        np.abs(e1 @ cell.normals.T - cell.offsets) < 1e-9)
+    assert (shared.sum(axis=1) == 2).all()
+    with pytest.raises(ValueError):
+        cell.vertices[0, 0] = 1.0  # read-only
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_offsets_within_is_every_centre_in_the_ball(name):
+    lat = Lattice.named(name, 1.0)
+    r = 2.7
+    got = {tuple(w) for w in lat.voronoi.offsets_within(r).tolist()}
+    box = np.array(list(itertools.product(range(-8, 9), repeat=3)))
+    want = {tuple(w) for w in box[np.linalg.norm(lat.to_world(box), axis=1) <= r].tolist()}
+    assert got == want
+    with pytest.raises(LatticeError, match="budget"):
+        lat.voronoi.offsets_within(1e4)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_separating_axes_include_box_and_facet_normals(name):
+    cell = Lattice.named(name).voronoi
+    rot = np.linalg.qr(np.random.default_rng(1).normal(size=(3, 3)))[0]
+    for r in (np.eye(3), rot):
+        axes = cell.separating_axes(r)
+        np.testing.assert_allclose(np.linalg.norm(axes, axis=1), 1)
+        for n in np.concatenate([r.T, cell.normals]):
+            assert np.abs(np.abs(axes @ n) - 1).min() < 1e-9
+
+
+def test_quantizer_tables_reproduce_quantize():
+    lat = Lattice.named("mcc", 0.2)
+    q = lat.quantizer()
+    assert q.cand.shape[0] == 8 and q.counts.shape == (8,)
+    from planner.lattice._quantize import run_generic
+
+    x = np.random.default_rng(2).uniform(-5, 5, (5000, 3))
+    out = np.empty(x.shape, dtype=np.int64)
+    run_generic(q, x, out)
+    np.testing.assert_array_equal(out, lat.quantize(x))
+
+
+# -- read-only install --------------------------------------------------------------------------
+def test_import_and_quantize_from_a_read_only_install(tmp_path):
+    """No writable package folder, HOME unset, no numba cache dir: kernels compile in memory.
+
+    Tests often run as root, for whom file modes do not bind: a regular file named
+    ``__pycache__`` in every package folder and an impossible XDG cache path leave numba
+    no writable cache location either way."""
+    import os
+    import shutil
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    import planner
+
+    site = tmp_path / "site"
+    shutil.copytree(Path(planner.__file__).parent, site / "planner",
+                    ignore=shutil.ignore_patterns("__pycache__"))
+    for d in [p for p in (site / "planner").rglob("*") if p.is_dir()] + [site / "planner"]:
+        (d / "__pycache__").write_text("")
+    for p in sorted((site / "planner").rglob("*"), reverse=True):
+        p.chmod(p.stat().st_mode & 0o555)
+    env = {k: v for k, v in os.environ.items() if k not in ("HOME", "NUMBA_CACHE_DIR")}
+    env.update(PYTHONPATH=str(site), XDG_CACHE_HOME="/proc/no-such-cache")
+    code = ("import numpy as np, planner\n"
+            "print(planner.Lattice.named('fcc').quantize([[1.0, 2.0, 3.3]]).tolist())\n"
+            "print(planner.Lattice.named('mcc').quantize([[1.0, 2.0, 3.3]]).tolist())\n"
+            "from planner.voxels import exact_box_inflation\n"
+            "z = np.zeros((1, 3))\n"
+            "print(len(exact_box_inflation(z, z + 1, planner.Lattice.named('bcc'), 0.3)))\n")
+    try:
+        res = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, env=env,
+                             capture_output=True, text=True, timeout=600)
+    finally:
+        for p in (site / "planner").rglob("*"):
+            p.chmod(p.stat().st_mode | 0o200)
+    assert res.returncode == 0, res.stderr[-2000:]
+    fcc, mcc = (Lattice.named(n).quantize([[1.0, 2.0, 3.3]]).tolist() for n in ("fcc", "mcc"))
+    assert res.stdout.split("\n")[:2] == [str(fcc), str(mcc)]

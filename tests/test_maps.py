@@ -2,6 +2,7 @@
 
 import hashlib
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -244,13 +245,52 @@ def test_unknown_or_missing_maps_raise_map_error(tmp_path):
 
 
 def test_a_query_inside_an_obstacle_fails_loudly(monkeypatch):
-    original = maps._BUILDERS["office"]
+    from planner.maps import _scenes
+
+    original = _scenes._BUILDERS["office"]
 
     def broken(seed):
         m = original(seed)
         m.info["queries"][0]["start"] = [2.5, 5.0, 1.2]  # inside the corridor wall
         return m
 
-    monkeypatch.setitem(maps._BUILDERS, "office", broken)
+    monkeypatch.setitem(_scenes._BUILDERS, "office", broken)
     with pytest.raises(MapError, match="from the cloud"):
         maps.office()
+
+
+def test_bundled_maps_resolve_by_name_from_any_folder(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert maps.resolve("office") == maps.map_path("office")
+    assert maps.resolve("office.ply") == maps.map_path("office")
+    (tmp_path / "office.ply").write_bytes(b"mine")  # a local file of that name wins
+    assert maps.resolve("office.ply") == Path("office.ply")
+    assert maps.resolve("elsewhere/office.ply") == Path("elsewhere/office.ply")
+
+
+def test_source_checkout_keeps_maps_folder_paths():
+    top = Path(__file__).resolve().parents[1] / "maps" / "office.ply"
+    assert top.is_file()
+    assert top.read_bytes() == maps.map_path("office").read_bytes()
+
+
+@pytest.mark.parametrize("text, match", [
+    ('{"robot_radius": "x"}', "robot_radius"),
+    ('{"cell_volume": 0}', "cell_volume"),
+    ('{"bounds": "abc"}', "bounds"),
+    ('{"bounds": [[0, 0, 0], [1, 1]]}', "bounds"),
+    ('{"bounds": [[0, 0, 0], [-1, 1, 1]]}', "bounds"),
+    ('[1, 2]', "JSON object"),
+    ('{"queries": [{"start": [0, 0, 0]}]}', "goal"),
+    ('{"queries": [{"start": [0, 0, "a"], "goal": [1, 1, 1]}]}', "start"),
+    ("{not json", "JSON"),
+])
+def test_malformed_sidecars_are_one_line_map_errors(tmp_path, text, match):
+    (tmp_path / "m.json").write_text(text)
+    with pytest.raises(MapError, match=match) as err:
+        maps.read_sidecar(tmp_path / "m.ply")
+    assert "\n" not in str(err.value)
+
+
+def test_a_map_without_sidecar_has_empty_info(tmp_path):
+    assert maps.read_sidecar(tmp_path / "plain.ply") == {}

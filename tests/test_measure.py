@@ -1,33 +1,33 @@
 """Measurements: lattice table, second moments, rotations, eq. (2), paper benchmark run."""
 
 import csv
-import importlib.util
-import sys
-from pathlib import Path
+import math
 
 import numpy as np
 import pytest
+from conftest import DATA
 
-from planner.lattice import PAPER_DELTAS, Lattice
-from planner.measure import (
+from planner.analysis import paper
+from planner.analysis.measure import (
     NAMED,
     distance_distributions,
     distribution_stats,
     exact_extent,
     format_table,
+    hex_prism,
     lattice_table,
-    main,
+    optimal_hex_height,
     paper_delta_errors,
     quantization_metrics,
     quantize_eq2_numpy,
     random_rotations,
+    rotation_summary,
     sample_in_cell,
     sample_in_cells,
-    table1_summary,
+    table1,
 )
+from planner.lattice import PAPER_DELTAS, Lattice
 
-ROOT = Path(__file__).resolve().parents[1]
-DATA = ROOT / ".." / "shared" / "data"
 CUBE27 = np.array(np.meshgrid(*[(-1, 0, 1)] * 3, indexing="ij")).reshape(3, -1).T
 
 
@@ -80,14 +80,6 @@ def test_format_table_aligns_columns(table):
     assert len(lines) == 2 + len(NAMED)
     assert len({len(line) for line in lines[:2]}) == 1
     assert "cubic" in text and "M" in lines[2]
-
-
-def test_cli_prints_table(capsys):
-    assert main(["--cell-volume", "0.125", "--points", "20000"]) == 0
-    out = capsys.readouterr().out
-    assert "0.125" in out and all(name in out for name in NAMED)
-    with pytest.raises(SystemExit):
-        main(["--cell-volume", "-1"])
 
 
 def test_shoemake_rotations_are_proper_and_uniform():
@@ -175,31 +167,22 @@ def test_paper_deltas_miss_nearest_points_for_fcc_and_hex_only():
             assert r["wrong"] == 0 and r["max_extra"] == 0.0
 
 
-def test_table1_summary_medians_and_relative_change():
+def test_rotation_summary_medians_and_relative_change():
     rows = []
     for rot, (c, f) in enumerate([(100, 90), (110, 99), (120, 96)]):
         for lat, v in (("cubic", c), ("fcc", f)):
             rows.append({"dataset": "d", "cell_volume": 0.125, "lattice": lat, "rotation": rot,
                          "voxel_count": v, "mse_per_dim": v / 1000, "distortion": v / 100})
-    out = {r["lattice"]: r for r in table1_summary(rows)}
+    out = {r["lattice"]: r for r in rotation_summary(rows)}
     assert out["cubic"]["voxel_count"] == 110 and out["fcc"]["voxel_count"] == 96
     assert out["cubic"]["rel_voxel_count"] == 0
     assert out["fcc"]["rel_distortion"] == pytest.approx(100 * (96 / 110 - 1))
     assert out["fcc"]["rotations"] == 3
 
 
-def _load_paper_benchmark():
-    spec = importlib.util.spec_from_file_location("paper_bench", ROOT / "benchmarks" / "paper.py")
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules["paper_bench"] = mod
-    spec.loader.exec_module(mod)
-    return mod
-
-
 def test_paper_benchmark_quick_run(tmp_path, capsys):
-    bench = _load_paper_benchmark()
     out = tmp_path / "paper"
-    assert bench.main(["--quick", "--out", str(out), "--rotations", "2"]) == 0
+    assert paper.reproduce(out, quick=True, rotations=2, data=DATA) == 0
     text = capsys.readouterr().out
     for name in ("fig3_neighbour_distances.png", "fig4_distance_distributions.png",
                  "lattice_table.csv", "fig3_neighbour_distances.csv",
@@ -215,16 +198,43 @@ def test_paper_benchmark_quick_run(tmp_path, capsys):
     if not (DATA / "octomap" / "scan.dat.bz2").exists():
         assert "skipping Fig. 5" in text
         pytest.skip("../shared/data absent: real-scan part not exercised")
-    for name in ("rotations.csv", "table1.csv", "fig5_distortion_cdf.png",
-                 "fig5_voxel_count_cdf.png"):
+    for name in ("rotations.csv", "table1.csv", "table1.md", "fig5_summary.csv",
+                 "fig5_distortion_cdf.png", "fig5_voxel_count_cdf.png", "metadata.json"):
         assert (out / name).stat().st_size > 0, name
     with (out / "rotations.csv").open() as f:
         rows = list(csv.DictReader(f))
     n_before = len(rows)
     assert n_before % len(NAMED) == 0 and n_before > 0
     # Resumable: a second run with one more rotation only adds that rotation.
-    assert bench.main(["--quick", "--out", str(out), "--rotations", "3"]) == 0
+    assert paper.reproduce(out, quick=True, rotations=3, data=DATA) == 0
     assert "resumed" in capsys.readouterr().out + ""
     with (out / "rotations.csv").open() as f:
         rows = list(csv.DictReader(f))
     assert len(rows) == n_before * 3 // 2
+
+
+def test_table1_follows_the_papers_protocol_and_labels_its_columns():
+    rng = np.random.default_rng(4)
+    pts = rng.uniform(-5, 5, (20_000, 3))
+    rows = {r["lattice"]: r for r in table1(pts, 0.125)}
+    assert set(rows) == {*NAMED, f"hex h={optimal_hex_height(0.125):.4g}"}
+    for r in rows.values():
+        assert r["cell_volume"] == 0.125
+        # the paper's "distance error" is the RMS error: sqrt(3 x MSE/dimension)
+        assert r["rms_distance_error"] == pytest.approx(math.sqrt(3 * r["mse_per_dim"]))
+        assert r["mean_distance_eq13"] < r["rms_distance_error"]  # mean <= RMS
+    assert rows["cubic"]["rel_voxel_count"] == 0
+    text = paper.table1_markdown([{"dataset": "d", **r} for r in rows.values()], 0.125)
+    assert "RMS distance error sqrt(3 MSE/dim) (m)" in text and "eq. 13" in text
+    assert "no rotation" in text
+
+
+def test_hex_prism_at_its_optimal_height_beats_the_papers_height():
+    rng = np.random.default_rng(5)
+    pts = rng.uniform(-30, 30, (200_000, 3))
+    paper_hex = quantization_metrics(Lattice.named("hex"), pts)["nsm"]
+    best = quantization_metrics(hex_prism(1.0, optimal_hex_height(1.0)), pts)["nsm"]
+    h, g2 = optimal_hex_height(), 5 / (36 * math.sqrt(3))
+    exact = (2 * g2 / h + h**2 / 12) / 3  # per dimension, hexagon area 1/h
+    assert best == pytest.approx(exact, rel=0.01)
+    assert best < paper_hex * 0.98

@@ -208,7 +208,7 @@ def test_save_failure_leaves_nothing(tmp_path, monkeypatch):
     def boom(*a, **k):
         raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr(V.np, "savez", boom)
+    monkeypatch.setattr(np, "savez", boom)
     with pytest.raises(MapError, match="No space left"):
         OccupiedVoxelList(Lattice.named("hex", 1.0), [[0, 0, 0]]).save(target)
     assert os.listdir(tmp_path) == ["m.npz"]
@@ -276,6 +276,15 @@ def unpack_keys(keys, dim):
     from planner.keys import unpack
 
     return unpack(keys, dim).tolist()
+
+
+def test_from_obstacles_uses_each_box_size():
+    lat = Lattice.named("fcc", 0.2)
+    centres = np.array([[0.0, 0.0, 0.0], [5.0, 1.0, 2.0]])
+    ob = Obstacles(points=np.zeros((0, 3)), boxes=centres, box_size=3.0, bounds=None,
+                   resolution=None, source="mixed", box_sizes=np.array([1.0, 3.0]))
+    want = np.union1d(V.box_keys(centres[:1], 1.0, lat), V.box_keys(centres[1:], 3.0, lat))
+    np.testing.assert_array_equal(OccupiedVoxelList.from_obstacles(ob, lat).keys, want)
 
 
 def test_from_obstacles_points_and_boxes():
@@ -480,19 +489,19 @@ def test_over_budget_radius_raises():
 # -- real data -----------------------------------------------------------------------------------
 @pytest.mark.skipif(not GEB079.exists(), reason="shared OctoMap data not present")
 def test_geb079_cubic_cells():
-    from planner.io import load_obstacles
+    from planner.io import load_points
 
-    ob = load_obstacles(GEB079)
-    res = ob.resolution
+    centres = load_points(GEB079)  # occupied leaves filled with their 0.08 m voxel centres
+    res = 0.08
     lat = Lattice.named("cubic", 0.08**3)
     # OctoMap voxel centres sit at (k + 1/2) res: exactly on cubic cell faces. Shifted by half
     # a voxel they are the lattice points themselves, one cell per voxel.
-    occ = OccupiedVoxelList.from_points(ob.points - res / 2, lat)
+    occ = OccupiedVoxelList.from_points(centres - res / 2, lat)
     assert len(occ) == 185_673
     # As boxes, each 0.08 m voxel meets exactly the 2x2x2 cells around its centre.
     boxes = OccupiedVoxelList.from_obstacles(
-        Obstacles(points=np.zeros((0, 3)), boxes=ob.boxes, box_size=res, bounds=None,
-                  resolution=res, source=ob.source), lat)
+        Obstacles(points=np.zeros((0, 3)), boxes=centres, box_size=res, bounds=None,
+                  resolution=res, source="geb079.bt"), lat)
     shifted = occ.indices
     corners = np.array(list(itertools.product((0, 1), repeat=3)))
     assert boxes == OccupiedVoxelList(lat, (shifted[:, None, :] + corners[None]).reshape(-1, 3))

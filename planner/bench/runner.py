@@ -1,12 +1,17 @@
 """Running a suite: tasks fan out to local processes or a Dask cluster; every finished row
 is appended to ``results.jsonl`` at once, so a killed run loses nothing finished and
-``resume`` skips what is done."""
+``resume`` skips what is done.
+
+Ctrl-C (SIGINT) and SIGTERM cancel the pending work and stop the workers: :func:`run`
+raises :class:`Interrupted` after the finished rows are on disk.
+"""
 
 from __future__ import annotations
 
+import contextlib
 import json
-import math
 import os
+import signal
 import sys
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -18,6 +23,7 @@ import numpy as np
 from planner.bench.queries import sample_queries, scenario_queries
 from planner.bench.suite import Suite
 from planner.errors import PlannerError
+from planner.paths import path_length
 
 _WORLDS: dict = {}
 _CLEARANCE: dict = {}
@@ -48,10 +54,6 @@ def _clearance(map_path: str, obstacles):
 def row_key(r: dict) -> str:
     return "|".join(str(r[k]) for k in ("map", "cell_volume", "radius", "lattice",
                                         "neighbors", "method", "seed", "query"))
-
-
-def _path_length(p: np.ndarray) -> float:
-    return float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum()) if len(p) > 1 else math.nan
 
 
 def run_task(task: dict) -> list[dict]:
@@ -99,7 +101,7 @@ def run_task(task: dict) -> list[dict]:
             c_raw = clear.of_path(raw, step)
             c_smooth = clear.of_path(smooth, step)
             tol = 1e-9 * max(1.0, world.lattice.covering_radius)
-            row.update(length=_path_length(raw), length_smoothed=_path_length(smooth),
+            row.update(length=path_length(raw), length_smoothed=path_length(smooth),
                        clearance=min(c_raw, c_smooth),
                        collision_free=bool(min(c_raw, c_smooth) >= task["radius"] - tol),
                        waypoints=len(raw))
@@ -107,10 +109,13 @@ def run_task(task: dict) -> list[dict]:
     return rows
 
 
-def plan_tasks(suite: Suite, log=print) -> tuple[list[dict], dict]:
+def plan_tasks(suite: Suite, log=print, saved: dict | None = None) -> tuple[list[dict], dict]:
     """Expand a suite into tasks; sample the queries once per map x volume x radius group.
 
-    Returns the tasks and, per group, the query-sampling record (kept, dropped by reason).
+    ``saved`` is a record returned earlier (kept in ``queries.json`` beside the results):
+    its groups' queries are reused as they are, so ``--resume`` does not sample again.
+
+    Returns the tasks and, per group, the query record (kept, dropped by reason, queries).
     """
     from planner.api import build_world
 
@@ -120,6 +125,13 @@ def plan_tasks(suite: Suite, log=print) -> tuple[list[dict], dict]:
             for radius in m.radii:
                 group = f"{Path(m.path).name} cell {cv:g} m^3 radius {radius:g} m"
                 n = m.queries or suite.queries
+                old = (saved or {}).get(group)
+                if old and old.get("wanted") == n and "queries" in old:
+                    record[group] = old
+                    tasks += _group_tasks(suite, {"suite": suite.name, "map": m.path,
+                                                  "cell_volume": cv, "radius": radius},
+                                          old["queries"])
+                    continue
                 if m.scenarios:
                     s, g, costs = scenario_queries(m.scenarios, n, suite.seed)
                     dropped = {}
@@ -131,24 +143,30 @@ def plan_tasks(suite: Suite, log=print) -> tuple[list[dict], dict]:
                     s, g, dropped = sample_queries(worlds, bounds, n, suite.seed,
                                                    suite.min_distance)
                     costs = [None] * len(s)
-                record[group] = {"kept": len(s), "wanted": n, "dropped": dropped}
                 queries = [{"id": i, "start": s[i].tolist(), "goal": g[i].tolist(),
                             "optimal_cost": None if costs[i] is None else float(costs[i])}
                            for i in range(len(s))]
-                common = {"suite": suite.name, "map": m.path, "cell_volume": cv,
-                          "radius": radius}
-                for lat in suite.lattices:
-                    for nb in suite.neighbors:
-                        for meth in suite.methods:
-                            tasks += _split({**common, "lattice": lat, "neighbors": nb,
-                                             "method": meth, "seed": 0}, queries)
-                for planner_name in suite.ompl_planners:
-                    for seed in suite.ompl_seeds:
-                        tasks += _split({**common, "lattice": suite.ompl_lattice,
-                                         "neighbors": "-", "method": f"ompl:{planner_name}",
-                                         "seed": seed, "ompl_time": suite.ompl_time},
-                                        queries, size=2)
+                record[group] = {"kept": len(s), "wanted": n, "dropped": dropped,
+                                 "queries": queries}
+                tasks += _group_tasks(suite, {"suite": suite.name, "map": m.path,
+                                              "cell_volume": cv, "radius": radius}, queries)
     return tasks, record
+
+
+def _group_tasks(suite: Suite, common: dict, queries: list[dict]) -> list[dict]:
+    tasks = []
+    for lat in suite.lattices:
+        for nb in suite.neighbors:
+            for meth in suite.methods:
+                tasks += _split({**common, "lattice": lat, "neighbors": nb,
+                                 "method": meth, "seed": 0}, queries)
+    for planner_name in suite.ompl_planners:
+        for seed in suite.ompl_seeds:
+            tasks += _split({**common, "lattice": suite.ompl_lattice,
+                             "neighbors": "-", "method": f"ompl:{planner_name}",
+                             "seed": seed, "ompl_time": suite.ompl_time},
+                            queries, size=2)
+    return tasks
 
 
 def _split(head: dict, queries: list[dict], size: int = 8) -> list[dict]:
@@ -167,9 +185,28 @@ def read_rows(path: Path) -> list[dict]:
     return rows
 
 
+def unique_rows(rows: list[dict]) -> list[dict]:
+    """One row per run key (the last one written), in first-seen order.
+
+    >>> r = {"map": "m", "cell_volume": 1, "radius": 0, "lattice": "fcc", "neighbors": "full",
+    ...      "method": "astar", "seed": 0, "query": 3}
+    >>> len(unique_rows([r, dict(r), {**r, "query": 4}]))
+    2
+    """
+    by: dict[str, dict] = {}
+    for r in rows:
+        by[row_key(r)] = r
+    return list(by.values())
+
+
 class _Progress:
-    def __init__(self, total: int, enabled: bool):
+    """Progress on stderr: a redrawn bar on a terminal, a line per ~10% otherwise (logs)."""
+
+    def __init__(self, total: int, enabled: bool, stream=None):
+        self.stream = stream or sys.stderr
         self.total, self.done, self.enabled, self.t0 = total, 0, enabled, time.perf_counter()
+        self.tty = enabled and self.stream.isatty()
+        self.next_tenth = 1
 
     def step(self, k: int) -> None:
         self.done += k
@@ -178,13 +215,17 @@ class _Progress:
         frac = self.done / max(self.total, 1)
         el = time.perf_counter() - self.t0
         eta = el / frac - el if frac > 0 else 0.0
-        bar = "#" * int(30 * frac)
-        print(f"\r[{bar:<30}] {self.done}/{self.total} runs  {el:5.0f}s  eta {eta:4.0f}s",
-              end="", file=sys.stderr, flush=True)
+        text = f"{self.done}/{self.total} runs  {el:5.0f}s  eta {eta:4.0f}s"
+        if self.tty:
+            bar = "#" * int(30 * frac)
+            print(f"\r[{bar:<30}] {text}", end="", file=self.stream, flush=True)
+        elif frac * 10 >= self.next_tenth:
+            self.next_tenth = int(frac * 10) + 1
+            print(f"progress {frac:4.0%}: {text}", file=self.stream, flush=True)
 
     def close(self) -> None:
-        if self.enabled:
-            print(file=sys.stderr)
+        if self.tty:
+            print(file=self.stream)
 
 
 def _drop_partial_line(path: Path) -> None:
@@ -198,12 +239,96 @@ def _drop_partial_line(path: Path) -> None:
         f.truncate(data.rfind(b"\n") + 1)
 
 
+class Interrupted(Exception):
+    """The run was stopped by SIGINT or SIGTERM; finished rows are saved."""
+
+    def __init__(self, signum: int, processes: list | None = None):
+        super().__init__(f"interrupted by {signal.Signals(signum).name}")
+        self.signum = signum
+        self.processes = processes or []  # every descendant when the signal came
+
+    @property
+    def exit_code(self) -> int:
+        """128 + the signal number: 130 for SIGINT, 143 for SIGTERM."""
+        return 128 + self.signum
+
+
+@contextlib.contextmanager
+def _signals_raise():
+    """Turn SIGINT and SIGTERM into :class:`Interrupted` while the block runs."""
+    def handler(signum, frame):
+        for s in (signal.SIGINT, signal.SIGTERM):  # a second signal must not interrupt cleanup
+            signal.signal(s, signal.SIG_IGN)
+        # the whole tree now: once the pool's workers die, their own children (an OMPL
+        # worker) are re-parented and could no longer be found
+        raise Interrupted(signum, _descendants())
+
+    old = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for s, h in old.items():
+            signal.signal(s, h)
+
+
+def _descendants() -> list:
+    try:
+        import psutil
+    except ImportError:  # pragma: no cover - psutil comes with dask[distributed]
+        return []
+    out = []
+    for p in psutil.Process().children(recursive=True):
+        with contextlib.suppress(psutil.Error):
+            # multiprocessing's resource tracker ends by itself with this process; killing it
+            # makes it print a traceback
+            if not any("resource_tracker" in part for part in p.cmdline()):
+                out.append(p)
+    return out
+
+
+def _stop(processes: list, wait: float = 2.0) -> None:
+    """Kill ``processes`` (psutil) and wait up to ``wait`` s until they are gone.
+
+    SIGKILL, not SIGTERM: workers hold no output (every finished row is already on disk), and
+    an OMPL worker forked by a forkserver prints a traceback when terminated.  Never reaps
+    them (no ``wait()``): multiprocessing reaps its own workers, and a worker reaped behind
+    its back looks alive to it forever.
+    """
+    import psutil
+
+    def alive(p) -> bool:
+        try:
+            return p.is_running() and p.status() != psutil.STATUS_ZOMBIE
+        except psutil.Error:
+            return False
+
+    for p in processes:
+        with contextlib.suppress(psutil.Error):
+            p.kill()
+    deadline = time.monotonic() + wait
+    while time.monotonic() < deadline and any(alive(p) for p in processes):
+        time.sleep(0.05)
+
+
+def _worker_init() -> None:
+    """Workers leave signals to the parent, which stops them (a terminal's Ctrl-C reaches the
+    whole process group)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
 def run(tasks: list[dict], out: Path, *, jobs: int = 1, scheduler: str | None = None,
         resume: bool = True, progress: bool = True) -> list[dict]:
     """Execute tasks, appending each finished row to ``out`` (JSON lines).
 
     With ``resume`` rows already in ``out`` are skipped; without it ``out`` is restarted.
     Returns all rows of the file afterwards.
+
+    Raises
+    ------
+    Interrupted
+        On SIGINT / SIGTERM: pending work is cancelled, local workers are terminated (Dask
+        futures cancelled) and every row finished so far is on disk.
     """
     out.parent.mkdir(parents=True, exist_ok=True)
     if not resume and out.exists():
@@ -218,7 +343,7 @@ def run(tasks: list[dict], out: Path, *, jobs: int = 1, scheduler: str | None = 
             todo.append({**t, "queries": left})
     total = sum(len(t["queries"]) for t in todo)
     bar = _Progress(total, progress)
-    with open(out, "a") as f:
+    with open(out, "a") as f, _signals_raise():
         def write(rows: list[dict]) -> None:
             for r in rows:
                 f.write(json.dumps(r) + "\n")
@@ -226,21 +351,45 @@ def run(tasks: list[dict], out: Path, *, jobs: int = 1, scheduler: str | None = 
             os.fsync(f.fileno())
             bar.step(len(rows))
 
-        if scheduler:
-            from distributed import Client
-            from distributed import as_completed as dask_completed
-
-            with Client(scheduler) as client:
-                futs = client.map(run_task, todo, pure=False)
-                for _, rows in dask_completed(futs, with_results=True):
-                    write(rows)
-        elif jobs <= 1:
-            for t in todo:
-                write(run_task(t))
-        else:
-            with ProcessPoolExecutor(max_workers=jobs, mp_context=get_context("spawn")) as ex:
-                futs = [ex.submit(run_task, t) for t in todo]
-                for fut in as_completed(futs):
-                    write(fut.result())
-    bar.close()
+        try:
+            if scheduler:
+                _run_dask(todo, scheduler, write)
+            elif jobs <= 1:
+                for t in todo:
+                    write(run_task(t))
+            else:
+                _run_pool(todo, jobs, write)
+        except Interrupted as exc:
+            _stop(exc.processes)  # local workers and their own workers (OMPL)
+            raise
+        finally:
+            bar.close()
     return read_rows(out)
+
+
+def _run_pool(todo: list[dict], jobs: int, write) -> None:
+    # not multiprocessing.Pool: its daemonic workers may not start OMPL's worker processes
+    ex = ProcessPoolExecutor(max_workers=jobs, mp_context=get_context("spawn"),
+                             initializer=_worker_init)
+    try:
+        futs = [ex.submit(run_task, t) for t in todo]
+        for fut in as_completed(futs):
+            write(fut.result())
+    except BaseException:
+        ex.shutdown(wait=False, cancel_futures=True)  # running ones are stopped by the caller
+        raise
+    ex.shutdown()
+
+
+def _run_dask(todo: list[dict], scheduler: str, write) -> None:
+    from distributed import Client
+    from distributed import as_completed as dask_completed
+
+    with Client(scheduler) as client:
+        futs = client.map(run_task, todo, pure=False)
+        try:
+            for _, rows in dask_completed(futs, with_results=True):
+                write(rows)
+        except BaseException:
+            client.cancel(futs)
+            raise

@@ -17,7 +17,8 @@ Example::
     lattice = "cubic"                # whose voxel world OMPL checks validity against
 
     [[maps]]
-    path = "maps/office.ply"         # relative to the suite file's folder, then the repo
+    path = "office"                  # a bundled map name, or a file relative to the suite
+                                     # file's folder, then to the current folder
     cell_volumes = [0.008]
     radii = [0.2]
     # scenarios = "../shared/data/warframe/Simple.3dmap.3dscen"   # instead of sampling
@@ -32,8 +33,8 @@ from pathlib import Path
 from planner.errors import PlannerError
 from planner.lattice import NAMED_LATTICES
 
-REPO = Path(__file__).resolve().parents[2]
-SUITES = REPO / "benchmarks" / "suites"
+SUITES = Path(__file__).resolve().parent / "suites"
+"""Bundled suites (package data): ``planner bench quick`` reads ``SUITES / "quick.toml"``."""
 
 
 class SuiteError(PlannerError):
@@ -64,17 +65,36 @@ class Suite:
     ompl_seeds: tuple[int, ...] = (0,)
     ompl_lattice: str = "cubic"
     kind: str = "planning"
-    paper_args: tuple[str, ...] = ()
+    paper: dict = field(default_factory=dict)
     source: str = ""
     skipped: tuple[str, ...] = field(default=())
 
 
 def _resolve(p: str, base: Path) -> Path | None:
-    for root in (base, REPO):
+    """A map path relative to the suite's folder, then the current folder, else a bundled
+    map name (``office``); None when absent."""
+    from planner.maps import MAPS, map_path
+
+    for root in (base, Path.cwd()):
         q = (root / p).resolve()
         if q.exists():
             return q
-    return None
+    stem = p[:-4] if p.endswith(".ply") else p
+    return map_path(stem) if stem in MAPS else None
+
+
+def _check_methods(path: Path, methods: tuple[str, ...], planners: tuple[str, ...]) -> None:
+    from planner.baseline import PLANNERS
+    from planner.search import METHODS
+
+    for m in methods:
+        if m not in METHODS:
+            raise SuiteError(f"{path}: unknown method {m!r} (lattice methods: "
+                             f"{', '.join(METHODS)}; OMPL planners go in [ompl] planners)")
+    for p in planners:
+        if p not in PLANNERS:
+            raise SuiteError(f"{path}: unknown OMPL planner {p!r} (known: "
+                             f"{', '.join(sorted(PLANNERS))})")
 
 
 def load_suite(name_or_path: str) -> Suite:
@@ -84,7 +104,7 @@ def load_suite(name_or_path: str) -> Suite:
     and listed in ``Suite.skipped`` rather than failing the whole suite.
     """
     path = Path(name_or_path)
-    if not path.suffix:
+    if not path.suffix and not path.is_file():
         path = SUITES / f"{name_or_path}.toml"
     if not path.is_file():
         known = ", ".join(sorted(p.stem for p in SUITES.glob("*.toml")))
@@ -130,15 +150,19 @@ def load_suite(name_or_path: str) -> Suite:
             ompl_seeds=tuple(int(s) for s in ompl.get("seeds", (0,))),
             ompl_lattice=str(ompl.get("lattice", "cubic")),
             kind=str(raw.get("kind", "planning")),
-            paper_args=tuple(str(a) for a in raw.get("paper_args", ())),
+            paper=dict(raw.get("paper", {})),
             source=str(path),
             skipped=tuple(skipped),
         )
     except (KeyError, TypeError, ValueError) as exc:
         raise SuiteError(f"{path}: bad suite entry: {exc}") from None
-    for lat in suite.lattices:
+    for lat in (*suite.lattices, suite.ompl_lattice):
         if lat not in NAMED_LATTICES:
             raise SuiteError(f"{path}: unknown lattice {lat!r}")
+    _check_methods(path, suite.methods, suite.ompl_planners)
+    unknown = set(suite.paper) - {"rotations", "volumes", "samples", "seed", "quick"}
+    if unknown:
+        raise SuiteError(f"{path}: unknown [paper] keys {sorted(unknown)}")
     for m in suite.maps:
         if any(v is None or v <= 0 for v in m.cell_volumes):
             raise SuiteError(f"{path}: map {m.path} needs positive cell_volumes")

@@ -11,9 +11,13 @@ from pathlib import Path
 
 import numpy as np
 
+from planner.analysis.style import LATTICE_COLORS, OTHER_COLOR
+from planner.analysis.tables import format_table
+from planner.bench.runner import unique_rows
 from planner.fsutil import atomic_path, write_text_atomic
+from planner.lattice import NAMED_LATTICES
 
-LATTICE_ORDER = ("cubic", "bcc", "fcc", "mcc", "hex")
+LATTICE_ORDER = NAMED_LATTICES
 
 
 def _group_key(r: dict) -> tuple:
@@ -59,6 +63,7 @@ def summarize(rows: list[dict]) -> list[dict]:
     """One row per (lattice, neighbours, method): success rate and median/IQR of the
     length ratio, cell checks, expansions and time, plus medians relative to cubic with
     the same neighbours and method."""
+    rows = unique_rows(rows)  # two runs into one folder must not count a query twice
     add_ratios(rows)
     groups: dict = defaultdict(list)
     for r in rows:
@@ -88,23 +93,21 @@ def summarize(rows: list[dict]) -> list[dict]:
     return sorted(out, key=order)
 
 
-def format_summary(summary: list[dict]) -> str:
+def format_summary(summary: list[dict], markdown: bool = False) -> str:
+    """Table of :func:`summarize` rows (plain text, or Markdown for the report)."""
     head = ["lattice", "nbrs", "method", "runs", "success", "len ratio (IQR)", "vs cubic",
             "cell checks (IQR)", "checks/cubic", "time ms", "clear-ok"]
     lines = []
     for s in summary:
-        lines.append([
+        lines.append(dict(zip(head, [
             s["lattice"], s["neighbors"], s["method"], str(s["runs"]), f"{s['success']:.0%}",
             f"{s['length_ratio_median']:.3f} ({s['length_ratio_iqr']:.3f})",
             _f(s["length_ratio_vs_cubic"]),
             f"{s['cell_checks_median']:,.0f} ({s['cell_checks_iqr']:,.0f})",
             _f(s["checks_vs_cubic_median"]), f"{1e3 * s['seconds_median']:.1f}",
             "yes" if s["collision_free"] else "NO",
-        ])
-    widths = [max(len(h), *(len(x[i]) for x in lines)) for i, h in enumerate(head)]
-    txt = ["  ".join(h.rjust(w) for h, w in zip(head, widths, strict=True))]
-    txt += ["  ".join(c.rjust(w) for c, w in zip(x, widths, strict=True)) for x in lines]
-    return "\n".join(txt)
+        ], strict=True)))
+    return format_table(lines, head, markdown=markdown)
 
 
 def _f(v: float) -> str:
@@ -131,8 +134,7 @@ def plot(rows: list[dict], out_dir: Path) -> list[Path]:
     labels = sorted({_label(r) for r in rows}, key=lambda s: (
         s.startswith("ompl"), s.split()[-1], s.split()[1] if len(s.split()) > 2 else "",
         LATTICE_ORDER.index(s.split()[0]) if s.split()[0] in LATTICE_ORDER else 9))
-    colours = {"cubic": "tab:grey", "bcc": "tab:blue", "fcc": "tab:green", "mcc": "tab:purple",
-               "hex": "tab:orange"}
+    colours = LATTICE_COLORS
     files = []
     metrics = [("length_ratio", "path length / best length on the query", False, "length_ratio"),
                ("checks_vs_cubic", "cell checks / cubic's on the same query", True,
@@ -144,7 +146,8 @@ def plot(rows: list[dict], out_dir: Path) -> list[Path]:
                  and r.get(key) is not None] for lab in labels]
         fig, ax = plt.subplots(figsize=(max(7, 0.55 * len(labels) + 2), 5))
         keep = [i for i, d in enumerate(data) if d]
-        bp = ax.boxplot([data[i] for i in keep], whis=1.5, patch_artist=True)
+        bp = ax.boxplot([data[i] for i in keep], whis=1.5, patch_artist=True,
+                        medianprops={"color": "black", "linewidth": 1.5})  # visible on every box
         for patch, i in zip(bp["boxes"], keep, strict=True):
             patch.set_facecolor(colours.get(labels[i].split()[0], "white"))
             patch.set_alpha(0.6)
@@ -164,7 +167,7 @@ def plot(rows: list[dict], out_dir: Path) -> list[Path]:
     fig, ax = plt.subplots(figsize=(max(7, 0.55 * len(labels) + 2), 4))
     rates = [np.mean([bool(r.get("found")) for r in rows if _label(r) == lab]) for lab in labels]
     ax.bar(range(len(labels)), rates,
-           color=[colours.get(lab.split()[0], "tab:red") for lab in labels])
+           color=[colours.get(lab.split()[0], OTHER_COLOR) for lab in labels])
     ax.set_xticks(range(len(labels)), labels, rotation=60, ha="right", fontsize=8)
     ax.set_ylim(0, 1.05)
     ax.set_ylabel("success rate")
@@ -179,11 +182,20 @@ def plot(rows: list[dict], out_dir: Path) -> list[Path]:
 
 
 def write_report(out_dir: Path, suite, rows: list[dict], summary: list[dict], record: dict,
-                 figures: list[Path], command: str) -> Path:
-    """Markdown report embedding the figures; returns its path."""
+                 figures: list[Path], command: str, *, partial: str | None = None,
+                 jobs: int = 1) -> Path:
+    """Markdown report embedding the figures; returns its path.
+
+    ``partial`` (why the suite is incomplete) puts a PARTIAL flag at the top.
+    """
+    from planner.analysis.metadata import metadata_markdown, run_metadata
+
     unsafe = [r for r in rows if r.get("found") and r.get("collision_free") is False]
-    lines = [f"# Benchmark suite `{suite.name}`", "",
-             f"Regenerate with `{command}`.", "",
+    title = f"# Benchmark suite `{suite.name}`" + (" (PARTIAL)" if partial else "")
+    lines = [title, ""]
+    if partial:
+        lines += [f"**PARTIAL RESULTS**: {partial}.", ""]
+    lines += [f"Regenerate with `{command}`.", "", metadata_markdown(run_metadata(jobs)), "",
              f"{len(rows)} runs; {sum(bool(r.get('found')) for r in rows)} found a path; "
              f"{len(unsafe)} paths violated the robot clearance against the raw obstacles.", ""]
     if suite.skipped:
@@ -194,12 +206,13 @@ def write_report(out_dir: Path, suite, rows: list[dict], summary: list[dict], re
         lines.append(f"- {group}: {rec['kept']}/{rec['wanted']} queries kept; "
                      f"candidates dropped: {drop}")
     lines += ["", "## Summary (medians; ratios relative to cubic with the same neighbours "
-              "and method)", "", "```", format_summary(summary), "```", ""]
+              "and method)", "", format_summary(summary, markdown=True), ""]
     maps = sorted({r["map"] for r in rows})
     if len(maps) > 1:  # the pooled medians above mix maps of very different sizes
         for m in maps:
-            lines += [f"### {Path(m).name}", "", "```",
-                      format_summary(summarize([r for r in rows if r["map"] == m])), "```", ""]
+            lines += [f"### {Path(m).name}", "",
+                      format_summary(summarize([r for r in rows if r["map"] == m]),
+                                     markdown=True), ""]
     lines += ["Length ratio: smoothed path length over the shortest path any run found on "
               "that query. Cell checks: occupancy lookups. Clearance is measured against "
               "the raw obstacle points, not the voxels.", ""]

@@ -8,8 +8,8 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
 
+from planner._jit import njit_cached
 from planner._world_kernels import _free, mix64
 from planner.keys import pack3, unpack3
 from planner.search import _heap
@@ -40,7 +40,7 @@ class SearchParams(NamedTuple):
     max_expansions: int  # stop (RUN_BUDGET) after this many expansions; <= 0 no limit
 
 
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def heuristic(ms, g, e0, e1, e2):  # pragma: no cover - compiled
     """h of the index difference e = goal - w (module docstring of ``stencils``)."""
     hv = 0.0
@@ -55,7 +55,7 @@ def heuristic(ms, g, e0, e1, e2):  # pragma: no cover - compiled
     return hv
 
 
-@njit(cache=True)
+@njit_cached
 def search_init(start, goal, ms, g, nodes, heap, slots, st):  # pragma: no cover - compiled
     """Put the start node in empty node arrays (slot 0), the slot map and the heap."""
     bmask = slots.btab.shape[0] - 1
@@ -72,7 +72,7 @@ def search_init(start, goal, ms, g, nodes, heap, slots, st):  # pragma: no cover
     st[ST_N] = 1
 
 
-@njit(cache=True)
+@njit_cached
 def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st):
     # pragma: no cover - compiled
     """A* / Dijkstra / Theta* / Lazy Theta* over lattice cells, resumable.

@@ -19,7 +19,8 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
+
+from planner._jit import njit_cached
 
 __all__ = ["Heap", "new_heap", "push", "pop", "decrease_key", "sift_up", "sift_down"]
 
@@ -37,7 +38,7 @@ def new_heap(cap: int) -> Heap:
     return Heap(np.empty(cap, np.int64), np.empty(cap, np.float64), np.empty(cap, np.float64))
 
 
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def _put(h, pos, i, x, xf, xg):  # pragma: no cover - compiled
     h.slot[i] = x
     h.f[i] = xf
@@ -45,12 +46,12 @@ def _put(h, pos, i, x, xf, xg):  # pragma: no cover - compiled
     pos[x] = i
 
 
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def _before(af, ag, bf, bg):  # pragma: no cover - compiled
     return af < bf or (af == bf and ag > bg)
 
 
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def sift_up(h, pos, i):  # pragma: no cover - compiled
     """Move entry ``i`` up to its place (after a push or a key decrease)."""
     slot, hf, hg = h.slot, h.f, h.g
@@ -64,7 +65,7 @@ def sift_up(h, pos, i):  # pragma: no cover - compiled
     _put(h, pos, i, x, xf, xg)
 
 
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def sift_down(h, pos, i, n):  # pragma: no cover - compiled
     """Move entry ``i`` of a heap of ``n`` entries down to its place."""
     slot, hf, hg = h.slot, h.f, h.g
@@ -82,7 +83,7 @@ def sift_down(h, pos, i, n):  # pragma: no cover - compiled
     _put(h, pos, i, x, xf, xg)
 
 
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def push(h, pos, n, x, xf, xg):  # pragma: no cover - compiled
     """Add slot ``x`` with key ``xf`` / tie-breaker ``xg`` to a heap of ``n``; returns n + 1."""
     _put(h, pos, n, x, xf, xg)
@@ -90,7 +91,7 @@ def push(h, pos, n, x, xf, xg):  # pragma: no cover - compiled
     return n + 1
 
 
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def pop(h, pos, n):  # pragma: no cover - compiled
     """Remove the first entry of a heap of ``n`` > 0; returns ``(slot, n - 1)``. The popped
     slot's ``pos`` is left for the caller to mark (closed)."""
@@ -102,7 +103,7 @@ def pop(h, pos, n):  # pragma: no cover - compiled
     return s, n
 
 
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def decrease_key(h, pos, x, xf, xg):  # pragma: no cover - compiled
     """Lower the key of slot ``x`` (in the heap) to ``xf`` with tie-breaker ``xg``."""
     i = pos[x]

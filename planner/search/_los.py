@@ -12,8 +12,8 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
 
+from planner._jit import njit_cached
 from planner._world_kernels import segment_walk, walk_on, walk_scratch
 
 
@@ -34,7 +34,7 @@ def new_scratch(span: float, walk) -> SightScratch:
     return SightScratch(vis, vgen, queue, np.empty(3, np.int64), np.empty(3, np.int64))
 
 
-@njit(cache=True)
+@njit_cached
 def los(occ, walk, p, q, sc, gen):  # pragma: no cover - compiled
     """Line of sight between the centres of cells p and q ((3,) int64 each) on scratch ``sc``
     with a fresh generation ``gen``. Returns ``(free, lookups)``."""
@@ -47,7 +47,7 @@ def los(occ, walk, p, q, sc, gen):  # pragma: no cover - compiled
     return free, n
 
 
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def sight(occ, walk, sc, st, wslot, p0, p1, p2, q0, q1, q2):  # pragma: no cover - compiled
     """:func:`los` between cells p and q given by components, inside a search: the
     generation counter lives in ``st[wslot]``."""
@@ -61,7 +61,7 @@ def sight(occ, walk, sc, st, wslot, p0, p1, p2, q0, q1, q2):  # pragma: no cover
     return los(occ, walk, sc.p, sc.q, sc, st[wslot])
 
 
-@njit(cache=True)
+@njit_cached
 def shortcut_kernel(occ, walk, cells, sc):  # pragma: no cover - compiled
     """Greedy shortcutting: from each kept cell go to the farthest later cell still in
     sight (scanning forward, stopping at the first cell out of sight). Consecutive input

@@ -16,8 +16,8 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
 
+from planner._jit import njit_cached
 from planner._world_kernels import mix64
 from planner.keys import pack3
 
@@ -66,18 +66,18 @@ def new_slots(pcap: int) -> SlotMap:
                    np.empty(pcap, np.int64))
 
 
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def local(v0, v1, v2):  # pragma: no cover - compiled
     """Index of a cell inside its page."""
     return ((v0 & PB_MASK) << (2 * PB_SHIFT)) | ((v1 & PB_MASK) << PB_SHIFT) | (v2 & PB_MASK)
 
 
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def block_key(v0, v1, v2):  # pragma: no cover - compiled
     return pack3(v0 >> PB_SHIFT, v1 >> PB_SHIFT, v2 >> PB_SHIFT)
 
 
-@njit(cache=True)
+@njit_cached
 def find_slot(sm, v0, v1, v2):  # pragma: no cover - compiled
     """Node slot of cell (v0, v1, v2), or -1 when the search has not generated it."""
     btab, bkeys = sm.btab, sm.bkeys
@@ -93,7 +93,7 @@ def find_slot(sm, v0, v1, v2):  # pragma: no cover - compiled
         p = (p + 1) & bmask
 
 
-@njit(cache=True)
+@njit_cached
 def new_page(sm, st, bk, p):  # pragma: no cover - compiled
     """Open a page for block ``bk`` at free table position ``p``; returns its number."""
     q = st[ST_NP]
@@ -105,7 +105,7 @@ def new_page(sm, st, bk, p):  # pragma: no cover - compiled
     return q
 
 
-@njit(cache=True)
+@njit_cached
 def rehash(sm, npages):  # pragma: no cover - compiled
     """Insert pages 0..npages-1 (by their block keys) into an empty block table."""
     btab, bkeys = sm.btab, sm.bkeys
@@ -117,7 +117,7 @@ def rehash(sm, npages):  # pragma: no cover - compiled
         btab[q] = x
 
 
-@njit(cache=True)
+@njit_cached
 def trace_path(nodes, goal_slot):  # pragma: no cover - compiled
     """Packed keys from the start (its own parent) to ``goal_slot``."""
     key, par = nodes.key, nodes.par

@@ -10,8 +10,8 @@ Both use the Euclidean heuristic and the exact walk of :mod:`planner.search._los
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
+from planner._jit import njit_cached
 from planner.keys import unpack3
 from planner.search._los import sight
 from planner.search._nodes import ST_WGEN, find_slot
@@ -20,7 +20,7 @@ from planner.search.stencils import move_allowed
 THETA, LAZY_THETA = 1, 2
 
 
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def euclid(g, p0, p1, p2, q0, q1, q2):  # pragma: no cover - compiled
     """|G (q - p)| (m) for cells p and q."""
     d0, d1, d2 = q0 - p0, q1 - p1, q2 - p2
@@ -30,7 +30,7 @@ def euclid(g, p0, p1, p2, q0, q1, q2):  # pragma: no cover - compiled
     return np.sqrt(x * x + y * y + z * z)
 
 
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def lazy_set_vertex(occ, walk, ms, nodes, slots, sc, st, ufree, s, u0, u1, u2):
     # pragma: no cover - compiled
     """Lazy Theta* SetVertex for slot ``s`` at cell u: verify the assumed line of sight to
@@ -62,7 +62,7 @@ def lazy_set_vertex(occ, walk, ms, nodes, slots, sc, st, ufree, s, u0, u1, u2):
     return c
 
 
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def theta_parent(occ, walk, sc, st, nodes, anyangle, s, ps, p0, p1, p2, v0, v1, v2, mc):
     # pragma: no cover - compiled
     """Any-angle (g, parent, lookups) of neighbour v generated from slot s whose parent is

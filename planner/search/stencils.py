@@ -29,8 +29,8 @@ from functools import lru_cache
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
 
+from planner._jit import njit_cached
 from planner._world_kernels import Occupancy, segment_walk
 from planner.lattice import Lattice
 from planner.world import _walk
@@ -54,7 +54,7 @@ class MoveSet(NamedTuple):
     hkind: int  # H_ZERO (Dijkstra), H_GAUGE (A*) or H_EUCLID (any-angle)
 
 
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def move_allowed(ufree, ptr, idx, m):  # pragma: no cover - compiled
     """Move ``m`` is allowed: every cell it needs is free (``ufree``: the union stencil's
     lookups around the expanded cell)."""

@@ -1,38 +1,36 @@
-"""Reproduce the paper's Figs. 3-5 and a Table I-style summary on public real scans.
+"""Reproduce the paper's measurements (``planner stats``): Figs. 3-5 and Table I.
 
-    python benchmarks/paper.py [--out results/paper] [--rotations 100] [--quick]
+Writes (atomically) into the output folder:
 
-Writes (atomically: temporary file + os.replace) into ``--out``:
-
-* ``lattice_table.csv``: per-lattice properties (``planner.measure.lattice_table``).
+* ``lattice_table.csv``: per-lattice properties (:func:`planner.analysis.measure.lattice_table`).
 * ``fig3_neighbour_distances.{png,csv}``: ordered distances to adjacent lattice points.
-* ``fig4_distance_distributions.png``, ``fig4_distance_stats.csv``, ``fig4_ratios.csv``:
-  distances from a cell centre to points uniform in the cell and in its adjacent cells.
-* ``rotations.csv`` (resumable: one row per rotation, lattice, dataset and cell volume;
-  finished rotations are skipped on re-run), ``table1.csv``, ``fig5_distortion_cdf.png``,
-  ``fig5_voxel_count_cdf.png``.
+* ``fig4_distance_distributions.png``, ``fig4_distance_stats.csv``, ``fig4_ratios.csv``.
+* ``table1.csv`` / ``table1.md``: **the paper's Table I protocol**: each real scan as one
+  gravity-aligned map, no rotation, cell volume 0.125 m^3; voxel count, MSE per dimension,
+  RMS distance error sqrt(3 x MSE/dim) and eq. 13's mean distance; the hex prism at the
+  paper's height and at its optimal height.
+* ``rotations.csv`` (resumable), ``fig5_summary.csv``, ``fig5_distortion_cdf.png``,
+  ``fig5_voxel_count_cdf.png``: **the Fig. 5 protocol**: the same K uniform random rotations
+  for every lattice, with uniform random points as the reference data set.
+* ``metadata.json``: commit, package versions, CPU, date.
 
-Real data is read from ``../shared/data`` relative to the repository root; scans that are
-absent (or unreadable without ``planner.io``) are skipped with a message.
+Real data is read from ``../shared/data`` (relative to the current folder or the source
+checkout); absent scans are skipped with a message.
 """
 
 from __future__ import annotations
 
-import argparse
-import bz2
 import csv
 import io
-import os
+import json
 import sys
-import tempfile
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 
-from planner.lattice import Lattice
-from planner.measure import (
+from planner.analysis.measure import (
     NAMED,
     adjacency_offsets,
     distance_distributions,
@@ -41,19 +39,25 @@ from planner.measure import (
     format_table,
     lattice_table,
     neighbour_distances,
+    optimal_hex_height,
     quantization_metrics,
     random_rotations,
-    table1_summary,
+    rotation_summary,
+    table1,
 )
+from planner.analysis.metadata import run_metadata
+from planner.analysis.style import LATTICE_COLORS
+from planner.errors import PlannerError
+from planner.fsutil import atomic_path, write_text_atomic
+from planner.lattice import Lattice
 
-DATA_DIR = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
 DATASETS = {
     "octomap_scan": "octomap/scan.dat.bz2",
     "pcl_room": "pcl_room/room_scan1.pcd",
     "velodyne": "velodyne/251370668.pcd",
 }
-COLORS = {"cubic": "tab:blue", "bcc": "tab:orange", "fcc": "tab:green",
-          "mcc": "tab:red", "hex": "tab:purple"}
+UNIFORM = "uniform_random"
+COLORS = LATTICE_COLORS
 ADJ_LABEL = {
     "face": "face-adjacent cells (share a face)",
     "full": "all touching cells (face, edge or vertex)",
@@ -61,22 +65,22 @@ ADJ_LABEL = {
 }
 ROT_FIELDS = ["dataset", "cell_volume", "rotation", "seed", "n_points", "lattice",
               "distortion", "mse_per_dim", "voxel_count"]
+TABLE1_HEADERS = {
+    "dataset": "map", "lattice": "lattice", "height": "prism height (m)",
+    "cell_volume": "cell volume (m^3)", "voxel_count": "voxel count",
+    "rel_voxel_count": "voxels vs cubic (%)", "mse_per_dim": "MSE / dimension (m^2)",
+    "rms_distance_error": "RMS distance error sqrt(3 MSE/dim) (m)",
+    "mean_distance_eq13": "mean distance, eq. 13 (m)",
+}
 
 
-# -- atomic output -----------------------------------------------------------------------
-def _atomic(path: Path, write: Callable[[Path], None]) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
-    try:
-        write(Path(tmp))
-        mask = os.umask(0)
-        os.umask(mask)
-        os.chmod(tmp, 0o666 & ~mask)  # mkstemp creates 0600; give the usual permissions
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+def default_data_dir() -> Path:
+    """``../shared/data`` from the current folder, else from the source checkout."""
+    here = Path.cwd() / ".." / "shared" / "data"
+    checkout = Path(__file__).resolve().parents[2]
+    if here.is_dir() or not (checkout / "pyproject.toml").is_file():
+        return here
+    return checkout / ".." / "shared" / "data"
 
 
 def write_csv(path: Path, rows: Sequence[dict], fields: Sequence[str] | None = None) -> None:
@@ -87,32 +91,28 @@ def write_csv(path: Path, rows: Sequence[dict], fields: Sequence[str] | None = N
     w.writeheader()
     for r in rows:
         w.writerow({k: (f"{v:.10g}" if isinstance(v, float) else v) for k, v in r.items()})
-    _atomic(path, lambda p: p.write_text(buf.getvalue()))
+    write_text_atomic(path, buf.getvalue())
 
 
 def save_fig(fig, path: Path) -> None:
     """Save a matplotlib figure as PNG atomically."""
-    _atomic(path, lambda p: fig.savefig(p, format="png", dpi=110, bbox_inches="tight"))
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=110, bbox_inches="tight")
 
 
 # -- data --------------------------------------------------------------------------------
 def load_scan(path: Path) -> np.ndarray | None:
     """(N, 3) float64 points of one scan (metres) with non-finite and exact-origin
     (no-return) points dropped; ``None`` (with a message) when it cannot be read."""
+    from planner.io import load_points
+
     if not path.exists():
         print(f"  skip {path.name}: {path} not found", file=sys.stderr)
         return None
     try:
-        from planner.io import load_points
-    except ImportError:
-        load_points = None
-    if load_points is not None:
         pts = np.asarray(load_points(path), dtype=float)
-    elif path.name.endswith(".dat.bz2"):
-        with bz2.open(path, "rt") as f:
-            pts = np.loadtxt(f, dtype=float, ndmin=2)[:, :3]
-    else:
-        print(f"  skip {path.name}: planner.io not available yet", file=sys.stderr)
+    except PlannerError as exc:
+        print(f"  skip {path.name}: {exc}", file=sys.stderr)
         return None
     pts = pts[np.isfinite(pts).all(axis=1)]
     return np.ascontiguousarray(pts[np.any(pts != 0.0, axis=1)])
@@ -294,48 +294,67 @@ def fig5(out: Path, plt, rows: list[dict], scans: dict[str, np.ndarray],
                 ax.grid(alpha=0.3)
                 ax.legend(fontsize=7)
         k = len({r["rotation"] for r in rows})
-        fig.suptitle(f"Fig. 5: CDF over {k} uniform random rotations of {metric.replace('_', ' ')}")
+        fig.suptitle(f"Fig. 5 (rotated protocol): CDF over {k} uniform random rotations of "
+                     f"{metric.replace('_', ' ')}, same rotations for every lattice")
         fig.tight_layout()
         save_fig(fig, out / fname)
         plt.close(fig)
 
 
+# -- Table I -----------------------------------------------------------------------------
+def table1_protocol(out: Path, scans: dict[str, np.ndarray], cell_volume: float) -> list[dict]:
+    """The paper's Table I protocol on every scan: no rotation, one cell volume."""
+    rows = []
+    for ds, pts in scans.items():
+        if ds == UNIFORM:
+            continue
+        rows += [{"dataset": ds, **r} for r in table1(pts, cell_volume)]
+    write_csv(out / "table1.csv", rows)
+    write_text_atomic(out / "table1.md", table1_markdown(rows, cell_volume) + "\n")
+    return rows
+
+
+def table1_markdown(rows: list[dict], cell_volume: float) -> str:
+    """Table I as a labelled Markdown table."""
+    return (f"Table I protocol: each map as recorded (gravity-aligned, no rotation), cell "
+            f"volume {cell_volume:g} m^3. The hex prism is listed at the paper's height "
+            f"3^(-1/6) V^(1/3) and at its optimal height {optimal_hex_height(1):.4f} "
+            "V^(1/3).\n\n"
+            + format_table(rows, list(TABLE1_HEADERS), headers=list(TABLE1_HEADERS.values()),
+                           markdown=True))
+
+
 # -- main --------------------------------------------------------------------------------
-def main(argv: Sequence[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--out", type=Path, default=Path("results/paper"), help="output directory")
-    ap.add_argument("--rotations", type=int, default=100, help="random rotations (default 100)")
-    ap.add_argument("--volumes", type=float, nargs="+", default=[0.125, 0.001],
-                    help="cell volumes for the scan experiment, m^3 (default 0.125 0.001)")
-    ap.add_argument("--samples", type=int, default=10**6,
-                    help="uniform samples per distribution for Fig. 4 (default 1e6)")
-    ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--data", type=Path, default=DATA_DIR, help="real data directory")
-    ap.add_argument("--quick", action="store_true",
-                    help="CI-sized run: 4 rotations, 5e4 samples, scans subsampled to 2e4 points")
-    args = ap.parse_args(argv)
-    if args.rotations < 1 or args.samples < 100 or any(v <= 0 for v in args.volumes):
-        ap.error("--rotations >= 1, --samples >= 100 and positive --volumes required")
-    k, n, n_table = args.rotations, args.samples, 10**6
-    if args.quick:
+def reproduce(out: Path, *, rotations: int = 100, volumes: Sequence[float] = (0.125, 0.001),
+              samples: int = 10**6, seed: int = 0, data: Path | None = None,
+              quick: bool = False, table1_volume: float = 0.125, jobs: int = 1) -> int:
+    """Run every experiment and write the outputs into ``out``; returns an exit status.
+
+    ``quick`` is a CI-sized run: at most 4 rotations, 5e4 samples, scans subsampled to
+    2e4 points.
+    """
+    k, n, n_table = rotations, samples, 10**6
+    if quick:
         k, n, n_table = min(k, 4), min(n, 50_000), 100_000
+    data = default_data_dir() if data is None else Path(data)
 
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    out = args.out
     out.mkdir(parents=True, exist_ok=True)
+    meta = run_metadata(jobs=jobs)
+    write_text_atomic(out / "metadata.json", json.dumps(meta, indent=1) + "\n")
+    print("run: " + ", ".join(f"{k_}={v}" for k_, v in meta.items() if k_ != "packages"))
     np.set_printoptions(precision=4)
 
     print("== Lattice properties (cell volume 1 m^3)")
-    table = lattice_table(1.0, n_points=n_table, seed=args.seed)
+    table = lattice_table(1.0, n_points=n_table, seed=seed)
     write_csv(out / "lattice_table.csv", table)
     print(format_table(table, ["lattice", "n_face", "n_full", "face_max", "full_max",
                                "packing_radius", "covering_radius", "nsm_exact", "nsm_mc",
                                "mean_error", "points_per_s"]))
-
     print("\n== Fig. 3: neighbour distances (cell volume 1 m^3)")
     f3 = fig3(out, plt)
     for name in NAMED:
@@ -344,36 +363,44 @@ def main(argv: Sequence[str] | None = None) -> int:
               f"{np.unique(np.round(d, 4))}")
 
     print(f"\n== Fig. 4: distance distributions ({n} uniform samples each, cell volume 1 m^3)")
-    stats, ratios = fig4(out, plt, n, args.seed)
+    stats, ratios = fig4(out, plt, n, seed)
     print(format_table(stats, ["lattice", "set", "n_cells", "mean", "std", "p5", "p95",
                                "range90", "exact_min", "exact_max", "exact_range"]))
     print("\n  FCC / cubic (range90 = p95 - p5 of the sample; range = exact max - min):")
     print(format_table(ratios))
 
-    print(f"\n== Fig. 5 / Table I: {k} uniform random rotations (Shoemake), same for all lattices")
+    print("\n== Real scans")
     scans = {}
     for ds, rel in DATASETS.items():
-        pts = load_scan(args.data / rel)
+        pts = load_scan(data / rel)
         if pts is None:
             continue
-        if args.quick and len(pts) > 20_000:
-            pts = pts[np.random.default_rng(args.seed).choice(len(pts), 20_000, replace=False)]
+        if quick and len(pts) > 20_000:
+            pts = pts[np.random.default_rng(seed).choice(len(pts), 20_000, replace=False)]
         scans[ds] = pts
         print(f"  {ds}: {len(pts)} points from {rel}")
     if not scans:
         print("  no real scans available: skipping Fig. 5 and Table I")
         return 0
-    rows = rotation_experiment(out, scans, args.volumes, k, args.seed)
-    fig5(out, plt, rows, scans, args.volumes)
-    t1 = table1_summary(rows)
-    write_csv(out / "table1.csv", t1)
+    print(f"\n== Table I (paper's protocol): each scan as recorded, no rotation, "
+          f"cell volume {table1_volume:g} m^3")
+    t1 = table1_protocol(out, scans, table1_volume)
+    print(format_table(t1, list(TABLE1_HEADERS)))
+    print("  rms_distance_error = sqrt(3 x mse_per_dim) (the paper's 'distance error' column);"
+          " mean_distance_eq13 = mean |Q(x) - x|")
+
+    print(f"\n== Fig. 5 (rotated protocol): {k} uniform random rotations (Shoemake), "
+          "the same for every lattice; uniform random points as the reference")
+    first = next(iter(scans.values()))
+    lo, hi = first.min(axis=0), first.max(axis=0)
+    scans[UNIFORM] = np.random.default_rng(seed).uniform(lo, hi, (len(first), 3))
+    rows = rotation_experiment(out, scans, volumes, k, seed)
+    fig5(out, plt, rows, scans, volumes)
+    summ = rotation_summary(rows)
+    write_csv(out / "fig5_summary.csv", summ)
     print("  medians over rotations; rel_* = % change vs cubic (negative = better)")
-    print(format_table(t1, ["dataset", "cell_volume", "lattice", "rotations", "voxel_count",
+    print(format_table(summ, ["dataset", "cell_volume", "lattice", "rotations", "voxel_count",
                             "rel_voxel_count", "mse_per_dim", "rel_mse_per_dim",
                             "distortion", "rel_distortion"]))
     print(f"\nwrote {out}")
     return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

@@ -1,4 +1,5 @@
-"""Compiled closest-lattice-point kernels (numba), one pass over the points, no temporaries.
+"""Closest-lattice-point kernels (numba), one pass over the points, no temporaries, and the
+tables of the generic kernel as one typed struct (:class:`Quantizer`).
 
 Specialised kernels follow Conway and Sloane, "Fast quantizing and decoding algorithms
 for lattice quantizers and codes" (1982): Z^n by rounding, D3 (FCC) by rounding with a
@@ -10,11 +11,74 @@ precomputed, provably sufficient candidate set.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
-from numba import njit
+
+from planner._jit import njit_cached
 
 
-@njit(cache=True, nogil=True)
+class Quantizer(NamedTuple):
+    """Tables of the exact generic quantizer (:func:`quantize_generic3`), plain arrays that
+    can be pickled and shipped to another process.
+
+    Attributes
+    ----------
+    basis : ndarray, shape (d, d)
+        LLL-reduced basis ``B`` (metres).
+    basis_inv : ndarray, shape (d, d)
+        ``B^-1``.
+    cand : ndarray, shape (2**d, k, d)
+        Candidate offsets in metres, per sign pattern of the rounding residual.
+    cand_z : ndarray, shape (2**d, k, d), int64
+        The same offsets in reduced coefficients.
+    counts : ndarray, shape (2**d,), int64
+        How many rows of ``cand`` are used per sign pattern.
+    reduction : ndarray, shape (d, d), float64
+        ``T`` with ``G T = B``: indices in the user's generator are ``T z``.
+    """
+
+    basis: np.ndarray
+    basis_inv: np.ndarray
+    cand: np.ndarray
+    cand_z: np.ndarray
+    counts: np.ndarray
+    reduction: np.ndarray
+
+
+def make_quantizer(geo: dict) -> Quantizer:
+    """The generic quantizer's tables from a lattice geometry (writable contiguous copies:
+    numba types read-only and writable arrays differently)."""
+    b = np.array(geo["reduced"], dtype=float)
+    cand_z = np.array(geo["orthant_offsets"], dtype=np.int64)
+    return Quantizer(b, np.linalg.inv(b), np.ascontiguousarray(cand_z.astype(float) @ b.T),
+                     cand_z, np.array(geo["orthant_counts"], dtype=np.int64),
+                     np.array(geo["reduction"], dtype=float))
+
+
+def run_generic(q: Quantizer, x: np.ndarray, out: np.ndarray) -> None:
+    """Quantize ``x`` (N, d) into ``out`` (N, d) int64 with the generic kernel."""
+    kernel = quantize_generic3 if x.shape[1] == 3 else quantize_generic
+    kernel(x, q.basis, q.basis_inv, q.cand, q.cand_z, q.counts, q.reduction, out)
+
+
+def run_named(kind: str, g: np.ndarray, ginv: np.ndarray, x: np.ndarray, out: np.ndarray
+              ) -> bool:
+    """Quantize with the specialised kernel of a named lattice; False if there is none."""
+    if kind == "cubic":
+        quantize_cubic(x, 1.0 / g[0, 0], out)
+    elif kind == "fcc":
+        quantize_fcc(x, -g[2, 2], ginv, out)  # FCC = b * D3, b = -G[2,2]
+    elif kind == "bcc":
+        quantize_bcc(x, g[0, 0], ginv, out)  # BCC = a * (Z3 u Z3 + 1/2)
+    elif kind == "hex":
+        quantize_hex(x, g[0, 0], g[2, 2], ginv, out)  # A2 (side a) x Z (height h)
+    else:
+        return False
+    return True
+
+
+@njit_cached(nogil=True)
 def quantize_cubic(x, inv_s, out):  # pragma: no cover - compiled
     n, d = x.shape
     for i in range(n):
@@ -22,23 +86,25 @@ def quantize_cubic(x, inv_s, out):  # pragma: no cover - compiled
             out[i, j] = np.int64(np.rint(x[i, j] * inv_s))
 
 
-@njit(cache=True, nogil=True)
+@njit_cached(nogil=True)
 def _indices3(p0, p1, p2, ginv, out, i):  # pragma: no cover - compiled
     for j in range(3):
         out[i, j] = np.int64(np.rint(ginv[j, 0] * p0 + ginv[j, 1] * p1 + ginv[j, 2] * p2))
 
 
-@njit(cache=True, nogil=True)
+@njit_cached(inline="always")
+def _scaled3(x, i, inv):  # pragma: no cover - compiled
+    """Row i of x times inv, and its rounding."""
+    u0, u1, u2 = x[i, 0] * inv, x[i, 1] * inv, x[i, 2] * inv
+    return u0, u1, u2, np.rint(u0), np.rint(u1), np.rint(u2)
+
+
+@njit_cached(nogil=True)
 def quantize_fcc(x, b, ginv, out):  # pragma: no cover - compiled
     """FCC = b * D3 (integer vectors with even coordinate sum)."""
     inv_b = 1.0 / b
     for i in range(x.shape[0]):
-        u0 = x[i, 0] * inv_b
-        u1 = x[i, 1] * inv_b
-        u2 = x[i, 2] * inv_b
-        f0 = np.rint(u0)
-        f1 = np.rint(u1)
-        f2 = np.rint(u2)
+        u0, u1, u2, f0, f1, f2 = _scaled3(x, i, inv_b)
         s = int(f0 + f1 + f2)
         if s & 1:
             # Odd sum: re-round the coordinate with the largest rounding error the other way.
@@ -55,17 +121,12 @@ def quantize_fcc(x, b, ginv, out):  # pragma: no cover - compiled
         _indices3(f0 * b, f1 * b, f2 * b, ginv, out, i)
 
 
-@njit(cache=True, nogil=True)
+@njit_cached(nogil=True)
 def quantize_bcc(x, a, ginv, out):  # pragma: no cover - compiled
     """BCC = a * (Z3 u (Z3 + 1/2)): the nearer of the two roundings."""
     inv_a = 1.0 / a
     for i in range(x.shape[0]):
-        u0 = x[i, 0] * inv_a
-        u1 = x[i, 1] * inv_a
-        u2 = x[i, 2] * inv_a
-        p0 = np.rint(u0)
-        p1 = np.rint(u1)
-        p2 = np.rint(u2)
+        u0, u1, u2, p0, p1, p2 = _scaled3(x, i, inv_a)
         q0 = np.rint(u0 - 0.5) + 0.5
         q1 = np.rint(u1 - 0.5) + 0.5
         q2 = np.rint(u2 - 0.5) + 0.5
@@ -76,7 +137,7 @@ def quantize_bcc(x, a, ginv, out):  # pragma: no cover - compiled
         _indices3(p0 * a, p1 * a, p2 * a, ginv, out, i)
 
 
-@njit(cache=True, nogil=True)
+@njit_cached(nogil=True)
 def quantize_hex(x, a, h, ginv, out):  # pragma: no cover - compiled
     """Hexagonal prism: A2 with side a in x-y (union of two rectangular lattices
     a x a*sqrt(3), one shifted by (a/2, a*sqrt(3)/2)), times h*Z along z."""
@@ -96,7 +157,7 @@ def quantize_hex(x, a, h, ginv, out):  # pragma: no cover - compiled
         _indices3(p0 * a, p1 * ry, z * h, ginv, out, i)
 
 
-@njit(cache=True, nogil=True)
+@njit_cached(nogil=True)
 def quantize_generic(x, b, binv, cand, cand_z, counts, t, out):  # pragma: no cover - compiled
     """Round in reduced basis b, then pick the nearest of the candidate offsets.
 
@@ -147,7 +208,7 @@ def quantize_generic(x, b, binv, cand, cand_z, counts, t, out):  # pragma: no co
             out[i, m] = np.int64(np.rint(acc))
 
 
-@njit(cache=True, nogil=True)
+@njit_cached(nogil=True)
 def quantize_generic3(x, b, binv, cand, cand_z, counts, t, out):  # pragma: no cover - compiled
     """:func:`quantize_generic` unrolled for d = 3 (the hot case: MCC, user lattices)."""
     k = cand.shape[1]

@@ -4,20 +4,64 @@ Cells are addressed either by packed keys (:mod:`planner.keys`) or, inside a den
 grid over an index box, by flat C-order positions ``sum((w - lo) * strides)``. A lattice
 offset ``delta`` is then a constant flat offset, so dilation is a 1D loop.
 
-The Voronoi cell V of the origin is described by unit facet normals ``A`` (k, d), offsets
-``b`` (k,) (V = {y : A y <= b}) and its edges as segments ``e0``-``e1`` (m, d).
+The Voronoi cell V of the origin travels as one :class:`CellPolytope` struct. Box kernels
+(overlap and exact distance) are in :mod:`planner.voxels._box_kernels`.
 """
 
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
-from numba import njit
+
+from planner._jit import njit_cached
 
 
-@njit(cache=True)
-def cell_distance(y, a, b, e0, e1, tol):  # pragma: no cover - compiled
+class CellPolytope(NamedTuple):
+    """The Voronoi cell V of the origin for the kernels (metres).
+
+    ``normals`` (k, d) unit facet normals and ``offsets`` (k,): V = {y : normals y <= offsets};
+    ``e0``, ``e1`` (m, d) edge end points (in 2D the edges are the facets); ``vertices``
+    (n, d); ``packing`` / ``covering``: radii of balls about 0 inside / around V.
+    """
+
+    normals: np.ndarray
+    offsets: np.ndarray
+    e0: np.ndarray
+    e1: np.ndarray
+    vertices: np.ndarray
+    packing: float
+    covering: float
+
+
+def cell_polytope(voronoi, rotation: np.ndarray | None = None) -> CellPolytope:
+    """:class:`CellPolytope` of a :class:`planner.lattice.VoronoiCell`, optionally expressed
+    in a rotated frame (coordinates ``R^T y``: the frame whose axes are R's columns)."""
+    def c(a: np.ndarray) -> np.ndarray:
+        a = np.asarray(a, dtype=float)
+        return np.ascontiguousarray(a if rotation is None else a @ rotation)
+
+    e0, e1 = voronoi.edges
+    return CellPolytope(c(voronoi.normals), np.array(voronoi.offsets, dtype=float), c(e0), c(e1),
+                        c(voronoi.vertices), float(voronoi.packing_radius),
+                        float(voronoi.covering_radius))
+
+
+@njit_cached(inline="always")
+def _in_cell(a, b, y, tol):  # pragma: no cover - compiled
+    """Is ``y`` in {x : a x <= b + tol}?"""
+    for i in range(a.shape[0]):
+        s = 0.0
+        for j in range(a.shape[1]):
+            s += a[i, j] * y[j]
+        if s > b[i] + tol:
+            return False
+    return True
+
+
+@njit_cached
+def cell_distance(y, cell, tol):  # pragma: no cover - compiled
     """Exact Euclidean distance from point ``y`` (d,) to the Voronoi cell V.
 
     The nearest point of V lies in the relative interior of a facet, on an edge or at a
@@ -27,16 +71,9 @@ def cell_distance(y, a, b, e0, e1, tol):  # pragma: no cover - compiled
     vertices included). The minimum over the candidates is the distance; ``tol`` can only
     make it smaller (conservative for "closer than r" tests).
     """
+    a, b, e0, e1 = cell.normals, cell.offsets, cell.e0, cell.e1
     k, d = a.shape
-    inside = True
-    for i in range(k):
-        s = 0.0
-        for j in range(d):
-            s += a[i, j] * y[j]
-        if s > b[i] + tol:
-            inside = False
-            break
-    if inside:
+    if _in_cell(a, b, y, tol):
         return 0.0
     best = np.inf
     proj = np.empty(d)
@@ -48,15 +85,7 @@ def cell_distance(y, a, b, e0, e1, tol):  # pragma: no cover - compiled
             continue
         for j in range(d):
             proj[j] = y[j] - s * a[i, j]
-        ok = True
-        for m in range(k):
-            t = 0.0
-            for j in range(d):
-                t += a[m, j] * proj[j]
-            if t > b[m] + tol:
-                ok = False
-                break
-        if ok:
+        if _in_cell(a, b, proj, tol):
             best = s
     for m in range(e0.shape[0]):
         uu = 0.0
@@ -76,14 +105,14 @@ def cell_distance(y, a, b, e0, e1, tol):  # pragma: no cover - compiled
     return best
 
 
-@njit(cache=True)
-def cell_distances(ys, a, b, e0, e1, tol, out):  # pragma: no cover - compiled
+@njit_cached
+def cell_distances(ys, cell, tol, out):  # pragma: no cover - compiled
     """:func:`cell_distance` for every row of ``ys`` (n, d) into ``out`` (n,)."""
     for i in range(ys.shape[0]):
-        out[i] = cell_distance(ys[i], a, b, e0, e1, tol)
+        out[i] = cell_distance(ys[i], cell, tol)
 
 
-@njit(cache=True)
+@njit_cached
 def dilate(grid, occ_flat, stencil_flat, full_flat):  # pragma: no cover - compiled
     """Mark ``occ_flat`` with bit 1, then OR bit 2 into ``occ + stencil`` for every occupied
     cell that has a free full neighbour.
@@ -109,7 +138,7 @@ def dilate(grid, occ_flat, stencil_flat, full_flat):  # pragma: no cover - compi
             grid[p + stencil_flat[j]] |= 2
 
 
-@njit(cache=True)
+@njit_cached
 def flat_positions(keys, lo, strides, bits, limit, out):  # pragma: no cover - compiled
     """Flat grid positions ``sum((w - lo) * strides)`` of packed ``keys`` into ``out``."""
     d = lo.shape[0]
@@ -124,7 +153,7 @@ def flat_positions(keys, lo, strides, bits, limit, out):  # pragma: no cover - c
         out[i] = f
 
 
-@njit(cache=True)
+@njit_cached
 def grid_keys(grid, lo, dims, bits, limit, out):  # pragma: no cover - compiled
     """Packed keys of the nonzero cells of ``grid`` in C order (ascending keys) into ``out``.
     Returns the number written."""
@@ -145,52 +174,16 @@ def grid_keys(grid, lo, dims, bits, limit, out):  # pragma: no cover - compiled
     return n
 
 
-@njit(cache=True)
-def box_cells(base_keys, resid, offs_world, offs_key, axes, thr, r_in, r_out, out):
-    """Keys of the cells whose Voronoi cell overlaps a box, for many boxes of one size.
-
-    For box ``i`` (quantized centre key ``base_keys[i]``, ``resid[i]`` = that cell centre
-    minus the box centre) and candidate offset ``o`` the cell centre relative to the box
-    centre is ``x = resid[i] + offs_world[o]``; the cell overlaps the box iff ``x`` lies in
-    the interior of the Minkowski sum ``box + V``, i.e. iff ``|axes @ x| < thr`` on every
-    separating axis (thresholds already carry the tolerance). ``r_in`` / ``r_out``: radii
-    of a ball inside / outside that sum, for early accept / reject. Returns the number of
-    keys written.
-    """  # pragma: no cover - compiled
-    n = 0
-    d = resid.shape[1]
-    for i in range(base_keys.shape[0]):
-        for o in range(offs_world.shape[0]):
-            r2 = 0.0
-            for j in range(d):
-                x = resid[i, j] + offs_world[o, j]
-                r2 += x * x
-            if r2 > r_out * r_out:
-                continue
-            hit = True
-            if r2 >= r_in * r_in:
-                for m in range(axes.shape[0]):
-                    s = 0.0
-                    for j in range(d):
-                        s += axes[m, j] * (resid[i, j] + offs_world[o, j])
-                    if abs(s) >= thr[m]:
-                        hit = False
-                        break
-            if hit:
-                out[n] = base_keys[i] + offs_key[o]
-                n += 1
-    return n
-
-
-@njit(cache=True)
-def exact_mark(points, centres, base_flat, grid, cand_flat, cand_world, a, b, e0, e1, tol,
-               radius, rho, big_r):  # pragma: no cover - compiled
+@njit_cached
+def exact_mark(points, centres, base_flat, grid, cand_flat, cand_world, cell, tol, radius
+               ):  # pragma: no cover - compiled
     """Mark (set to 1) every grid cell whose Voronoi cell is at distance < ``radius`` from a
     point. ``centres[i]`` is the centre of the cell containing ``points[i]`` (flat position
-    ``base_flat[i]``); candidate cells are ``base + cand``. ``rho`` / ``big_r``: packing and
-    covering radii, bounding the distance as ``|y| - big_r <= dist <= |y| - rho``.
+    ``base_flat[i]``); candidate cells are ``base + cand``. The cell's packing and covering
+    radii bound the distance as ``|y| - covering <= dist <= |y| - packing``.
     Returns the number of exact point-to-cell distance evaluations."""
     d = points.shape[1]
+    rho, big_r = cell.packing, cell.covering
     y = np.empty(d)
     evals = 0
     for i in range(points.shape[0]):
@@ -209,6 +202,6 @@ def exact_mark(points, centres, base_flat, grid, cand_flat, cand_world, a, b, e0
                 grid[f] = 1
                 continue
             evals += 1
-            if cell_distance(y, a, b, e0, e1, tol) < radius:
+            if cell_distance(y, cell, tol) < radius:
                 grid[f] = 1
     return evals

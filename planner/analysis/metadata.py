@@ -1,0 +1,71 @@
+"""What a report records about the run that made it: commit, package versions, CPU, date."""
+
+from __future__ import annotations
+
+import datetime
+import os
+import platform
+import subprocess
+from importlib import metadata
+from pathlib import Path
+
+_PACKAGES = ("lattice-planner", "numpy", "scipy", "numba", "matplotlib", "ompl", "dask",
+             "distributed", "plyfile")
+
+
+def _commit() -> str:
+    """The source checkout's commit (``+dirty`` with local changes), or ``unknown``."""
+    root = Path(__file__).resolve().parents[2]
+    if not (root / "pyproject.toml").is_file() or not (root / "planner").is_dir():
+        return "unknown (installed package)"  # site-packages may sit inside another repo
+    try:
+        sha = subprocess.run(["git", "-C", str(root), "rev-parse", "--short=12", "HEAD"],
+                             capture_output=True, text=True, timeout=5, check=True).stdout.strip()
+        dirty = subprocess.run(["git", "-C", str(root), "status", "--porcelain", "-uno"],
+                               capture_output=True, text=True, timeout=5).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        return "unknown (not a git checkout)"
+    return sha + ("+dirty" if dirty else "") if sha else "unknown"
+
+
+def _cpu() -> str:
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
+
+
+def run_metadata(jobs: int = 1) -> dict:
+    """Commit, package versions, CPU, worker count and UTC date of this run.
+
+    >>> sorted(run_metadata(jobs=2))
+    ['commit', 'cpu', 'cpu_count', 'date', 'jobs', 'packages', 'python']
+    """
+    versions = {}
+    for name in _PACKAGES:
+        try:
+            versions[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            continue
+    return {
+        "commit": _commit(),
+        "packages": versions,
+        "python": platform.python_version(),
+        "cpu": _cpu(),
+        "cpu_count": os.cpu_count(),
+        "jobs": int(jobs),
+        "date": datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC"),
+    }
+
+
+def metadata_markdown(meta: dict) -> str:
+    """The metadata as Markdown bullet lines for a report."""
+    pk = ", ".join(f"{k} {v}" for k, v in meta["packages"].items())
+    return "\n".join([
+        f"- commit: `{meta['commit']}`; date: {meta['date']}",
+        f"- CPU: {meta['cpu']} ({meta['cpu_count']} cores), jobs: {meta['jobs']}",
+        f"- Python {meta['python']}; {pk}",
+    ])

@@ -1,0 +1,127 @@
+"""One ``planner bench`` run: read the suite, lock the results folder, sample (or reuse) the
+queries, run, and write the summary, figures and report.
+
+Rows are appended to ``OUT/results.jsonl`` as they finish; ``resume`` skips finished runs
+and reuses the queries saved in ``OUT/queries.json``.  Ctrl-C or SIGTERM stops the run
+cleanly: a report flagged *partial* is written and the exit status is 130 / 143.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import fcntl
+import json
+import os
+import sys
+from collections.abc import Iterator
+from pathlib import Path
+
+from planner.bench import runner, summary
+from planner.bench.suite import Suite, SuiteError, load_suite
+from planner.errors import PlannerError
+from planner.fsutil import write_text_atomic
+
+__all__ = ["run_suite"]
+
+
+@contextlib.contextmanager
+def results_lock(out: Path) -> Iterator[None]:
+    """Hold an exclusive lock on the results folder ``out`` (``out/.lock``).
+
+    Raises
+    ------
+    PlannerError
+        Another run holds it (one line, with that run's process id).
+    """
+    out.mkdir(parents=True, exist_ok=True)
+    fd = os.open(out / ".lock", os.O_RDWR | os.O_CREAT, 0o644)
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            other = os.pread(fd, 32, 0).decode(errors="replace").strip() or "?"
+            raise PlannerError(f"{out}: results folder in use by another planner bench run "
+                               f"(pid {other}); wait for it or use another --out") from None
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, str(os.getpid()).encode(), 0)
+        yield
+    finally:
+        os.close(fd)  # closing releases the lock
+
+
+def _paper(suite: Suite, out: Path, jobs: int) -> int:
+    from planner.analysis.paper import reproduce
+
+    args = dict(suite.paper)
+    if "volumes" in args:
+        args["volumes"] = tuple(float(v) for v in args["volumes"])
+    return reproduce(out, jobs=jobs, **args)
+
+
+def run_suite(name: str, *, out: str | None = None, jobs: int = 1,
+              scheduler: str | None = None, resume: bool = False, progress: bool = True,
+              report_only: bool = False) -> int:
+    """Run the suite ``name`` (bundled name or TOML path); returns the exit status.
+
+    0 when the suite completed, 130 / 143 after SIGINT / SIGTERM (partial report written).
+
+    Raises
+    ------
+    PlannerError
+        Unreadable suite, no map files, a results folder in use, nothing to report.
+    """
+    suite = load_suite(name)
+    folder = Path(out) if out else Path("results") / suite.name
+    if jobs < 1:
+        raise SuiteError(f"--jobs must be at least 1, got {jobs}")
+    if suite.kind == "paper":
+        with results_lock(folder):
+            return _paper(suite, folder, jobs)
+    if not suite.maps:
+        raise SuiteError(f"suite {suite.name}: no map files found "
+                         f"(skipped: {', '.join(suite.skipped) or 'none'})")
+    log = (lambda m: print(m, file=sys.stderr)) if progress else (lambda m: None)
+    with results_lock(folder):
+        saved_path = folder / "queries.json"
+        saved = None
+        if (resume or report_only) and saved_path.is_file():
+            try:
+                saved = json.loads(saved_path.read_text())
+            except ValueError:
+                saved = None  # a damaged record: sample again
+        tasks, record = runner.plan_tasks(suite, log=log, saved=saved)
+        write_text_atomic(saved_path, json.dumps(record, indent=1))
+        results = folder / "results.jsonl"
+        interrupted = None
+        if report_only:
+            rows = runner.read_rows(results)
+            if not rows:
+                raise PlannerError(f"{results}: no finished runs to report")
+        else:
+            try:
+                rows = runner.run(tasks, results, jobs=jobs, scheduler=scheduler,
+                                  resume=resume, progress=progress)
+            except runner.Interrupted as exc:
+                interrupted = exc
+                rows = runner.read_rows(results)
+        rows = runner.unique_rows(rows)
+        wanted = {runner.row_key({**t, "query": q["id"]}) for t in tasks for q in t["queries"]}
+        missing = len(wanted - {runner.row_key(r) for r in rows})
+        summ = summary.summarize(rows) if rows else []
+        summary.write_csv(folder / "summary.csv", summ)
+        # figures take seconds: an interrupted run leaves them to --report-only
+        figs = summary.plot(rows, folder) if rows and interrupted is None else []
+        cmd = f"planner bench {name}" + (f" --out {out}" if out else "")
+        partial = None
+        if missing:
+            why = str(interrupted) if interrupted else "runs missing from results.jsonl"
+            partial = (f"{why}: {len(wanted) - missing} of {len(wanted)} runs finished; "
+                       f"`{cmd} --resume` completes it")
+        rep = summary.write_report(folder, suite, rows, summ, record, figs, cmd,
+                                   partial=partial, jobs=jobs)
+    if interrupted is not None:
+        print(f"\nplanner bench: {partial}; partial report: {rep}", file=sys.stderr)
+        return interrupted.exit_code
+    print(summary.format_summary(summ))
+    print(f"\nreport: {rep}" + (f" (PARTIAL: {partial})" if partial else ""))
+    return 0

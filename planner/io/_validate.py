@@ -1,0 +1,180 @@
+"""The one point validator every reader uses, and geometry helpers over validated points."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from planner.errors import MapError
+from planner.io._obstacles import Obstacles
+
+# Coordinates beyond this (m) are corrupt values, not places: they would overflow every
+# lattice index downstream.  Geodetic coordinates (UTM, ECEF) stay far below it.
+MAX_ABS_COORDINATE = 1e9
+# A filled box set larger than this is refused (a corrupt coarse OctoMap leaf would otherwise
+# expand to billions of points); no real map comes near it.
+MAX_FILLED_POINTS = 100_000_000
+
+
+def finite_points(values, name: str, dim: int = 3) -> tuple[np.ndarray, np.ndarray]:
+    """Validate a raw (N, dim) coordinate array and split off its non-finite rows.
+
+    Parameters
+    ----------
+    values : array_like, shape (N, dim)
+        Numeric coordinates, metres (any real dtype).
+    name : str
+        File or argument name for messages.
+    dim : int
+        Expected number of columns.
+
+    Returns
+    -------
+    points : ndarray, shape (N', dim), float64, C-contiguous
+        The rows whose coordinates are all finite.
+    keep : ndarray, shape (N,), bool
+        Which input rows were kept (to filter per-point side arrays alike).
+
+    Raises
+    ------
+    MapError
+        Wrong shape, a non-numeric dtype, or a finite coordinate beyond
+        :data:`MAX_ABS_COORDINATE`.
+    """
+    arr = np.asarray(values)
+    if arr.dtype.kind not in "fiub":
+        raise MapError(f"{name}: coordinates must be numeric, got dtype {arr.dtype}")
+    if arr.size == 0:
+        arr = arr.reshape(0, dim)
+    if arr.ndim != 2 or arr.shape[1] != dim:
+        raise MapError(f"{name}: points must have shape (N, {dim}), got {arr.shape}")
+    with np.errstate(over="ignore", invalid="ignore"):  # float128/int64 -> float64 may overflow
+        pts = np.ascontiguousarray(arr, dtype=np.float64)
+    keep = np.isfinite(pts).all(axis=1)
+    pts = pts if keep.all() else pts[keep]
+    far = int((np.abs(pts) > MAX_ABS_COORDINATE).any(axis=1).sum())
+    if far:
+        raise MapError(f"{name}: {far} points have coordinates beyond {MAX_ABS_COORDINATE:g} m "
+                       f"(corrupt values?)")
+    return pts, keep
+
+
+def no_return_mask(pts: np.ndarray) -> np.ndarray:
+    """Rows exactly (0, 0, 0) in the sensor frame: scanners' encoding of 'no return'.
+
+    A real return at exactly the sensor origin is physically impossible, so dropping these
+    loses nothing."""
+    return (pts == 0.0).all(axis=1)
+
+
+def cloud(values, name: str, *, dim: int = 3, sensor_frame: bool = True,
+          **extra) -> Obstacles:
+    """Validate a cloud and wrap it as :class:`Obstacles`.
+
+    Non-finite rows are dropped and counted (``dropped_nonfinite``), then, in a sensor-frame
+    cloud, no-return ``(0, 0, 0)`` rows are dropped.  Nothing left is an error.
+
+    Parameters
+    ----------
+    values : array_like, shape (N, dim)
+        Coordinates, metres.
+    name : str
+        Source name for messages and ``Obstacles.source``.
+    sensor_frame : bool
+        True for a file's cloud (origin rows are no-returns); False for world-frame points
+        (the origin is a place like any other).
+    **extra
+        Further :class:`Obstacles` fields (``resolution``, ``bounds``).
+
+    Raises
+    ------
+    MapError
+        Bad shape or dtype; no finite point that is not a no-return.
+    """
+    pts, keep = finite_points(values, name, dim)
+    dropped = int(len(keep) - len(pts))
+    if not len(keep):
+        raise MapError(f"{name}: point cloud is empty (no points)")
+    if not len(pts):
+        raise MapError(f"{name}: every point ({dropped}) has NaN or infinite coordinates")
+    zero = no_return_mask(pts) if sensor_frame else np.zeros(len(pts), dtype=bool)
+    if zero.all():
+        raise MapError(f"{name}: point cloud is empty (only no-return (0,0,0) points, "
+                       f"{len(pts)})")
+    if zero.any():
+        pts = pts[~zero]
+    extra.setdefault("resolution", None)
+    extra.setdefault("bounds", None)
+    return Obstacles(points=pts, boxes=np.zeros((0, dim)), box_size=0.0, source=name,
+                     dropped_nonfinite=dropped, dim=dim, **extra)
+
+
+def fill_boxes(centres: np.ndarray, sizes: np.ndarray, step: float | None = None) -> np.ndarray:
+    """Fill each box with a grid of cubes of edge ``step``; return their centres.
+
+    Parameters
+    ----------
+    centres : ndarray, shape (M, d)
+        Box centres, metres.
+    sizes : ndarray, shape (M,)
+        Box edges, metres; each a whole multiple of ``step`` (as in an OctoMap).
+    step : float, optional
+        Edge of the filling cubes, metres; default the smallest box edge.
+
+    Returns
+    -------
+    ndarray, shape (P, d), float64
+    """
+    if not len(centres):
+        return centres.copy()
+    step = float(sizes.min()) if step is None else float(step)
+    if step <= 0 or np.all(sizes == step):
+        return centres.copy()
+    per = np.rint(sizes / step).astype(np.int64)
+    d = centres.shape[1]
+    total = int((per.astype(np.float64) ** d).sum())
+    if total > MAX_FILLED_POINTS:
+        raise MapError(f"boxes fill {total} cubes of {step:g} m (limit {MAX_FILLED_POINTS})")
+    out = []
+    for n in np.unique(per):
+        sel = centres[per == n]
+        ticks = (np.arange(n) - (n - 1) / 2) * step
+        grid = np.stack(np.meshgrid(*([ticks] * d), indexing="ij"), axis=-1).reshape(-1, d)
+        out.append((sel[:, None, :] + grid[None]).reshape(-1, d))
+    return np.concatenate(out)
+
+
+def robust_extent(points: np.ndarray, tail: float = 1e-3) -> tuple[np.ndarray, int]:
+    """Bounding box of ``points`` that one far outlier cannot blow up.
+
+    The core box spans the ``tail`` and ``1 - tail`` quantiles per axis.  A point is an outlier
+    when it lies more than one core width (at least 1 m) beyond the core on some axis; the
+    result is the exact bounding box of the other points.
+
+    Parameters
+    ----------
+    points : ndarray, shape (N, d)
+        Finite coordinates, metres, N >= 1.
+    tail : float
+        Quantile left out on each side when sizing the core.
+
+    Returns
+    -------
+    bounds : ndarray, shape (2, d)
+        ``[min, max]`` of the non-outliers, metres.
+    n_outliers : int
+        Points outside it.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> pts = np.vstack([np.random.default_rng(0).uniform(0, 10, (1000, 3)), [[1e6, 0, 0]]])
+    >>> box, n = robust_extent(pts)
+    >>> n, bool(box[1, 0] < 11)
+    (1, True)
+    """
+    pts = np.asarray(points, dtype=np.float64)
+    lo, hi = np.quantile(pts, [tail, 1 - tail], axis=0)
+    margin = np.maximum(hi - lo, 1.0)
+    inside = ((pts >= lo - margin) & (pts <= hi + margin)).all(axis=1)
+    core = pts[inside]
+    return np.stack([core.min(axis=0), core.max(axis=0)]), int(len(pts) - len(core))

@@ -1,0 +1,100 @@
+"""Survey point formats (the ``robot`` extra): LAS / LAZ (laspy + lazrs), E57 (pye57)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from planner.errors import MapError
+from planner.io._obstacles import Obstacles
+from planner.io._validate import cloud, finite_points
+from planner.io.bag import first_line, require
+
+
+def read_las(p: Path) -> Obstacles:
+    """LAS / LAZ points with each file's scale and offset applied (metres, world frame)."""
+    laspy = require("laspy", ".las/.laz", p.name)
+    if p.suffix.lower() == ".laz":
+        require("lazrs", ".laz", p.name)
+    check_las_header(p)
+    try:
+        las = laspy.read(str(p))
+        # laspy's x/y/z are the stored integers times scale plus offset.
+        xyz = np.column_stack([np.asarray(las.x, dtype=np.float64),
+                               np.asarray(las.y, dtype=np.float64),
+                               np.asarray(las.z, dtype=np.float64)])
+    except MapError:
+        raise
+    except Exception as exc:  # laspy / lazrs raise their own error types on corrupt files
+        raise MapError(f"{p.name}: unreadable LAS/LAZ ({first_line(exc)})") from None
+    return cloud(xyz, p.name)
+
+
+# A LAZ point takes at least this many bytes of compressed data on average (bounding the point
+# count a file of a given size can honestly declare).
+_MIN_LAZ_BYTES_PER_POINT = 0.05
+
+
+def check_las_header(p: Path) -> None:
+    """Refuse a LAS/LAZ header whose counts its file cannot hold, before laspy reads it
+    (laspy trusts them: a flipped VLR count makes it read millions of empty records)."""
+    size = p.stat().st_size
+    with open(p, "rb") as f:
+        head = f.read(375)
+    if len(head) < 227 or head[:4] != b"LASF":
+        raise MapError(f"{p.name}: not a LAS/LAZ file (no 'LASF' signature)")
+    header_size, = np.frombuffer(head, "<u2", 1, 94)
+    offset, n_vlrs = np.frombuffer(head, "<u4", 2, 96)
+    record, = np.frombuffer(head, "<u2", 1, 105)
+    count = int(np.frombuffer(head, "<u4", 1, 107)[0])
+    if head[25] >= 4 and len(head) >= 255:  # LAS 1.4: the 64-bit count
+        count = max(count, int(np.frombuffer(head, "<u8", 1, 247)[0]))
+    if not (header_size <= offset <= size) or int(n_vlrs) * 54 > offset - header_size:
+        raise MapError(f"{p.name}: corrupt LAS header ({int(n_vlrs)} VLRs and point data at "
+                       f"byte {int(offset)} do not fit the {size}-byte file)")
+    body = size - int(offset)
+    compressed = (head[104] & 0x80) or p.suffix.lower() == ".laz"
+    fits = count * _MIN_LAZ_BYTES_PER_POINT <= body if compressed else count * int(record) <= body
+    if not fits:
+        raise MapError(f"{p.name}: LAS header declares {count} points, the file holds "
+                       f"{body} bytes of point data")
+
+
+def read_e57(p: Path) -> Obstacles:
+    """Every scan of an E57 file, each moved into the file's frame by its pose.
+
+    Points flagged invalid (``cartesianInvalidState``) are dropped by ``pye57``; spherical
+    scans are converted to Cartesian by it; each scan's position is kept as its sensor origin.
+    """
+    pye57 = require("pye57", ".e57", p.name)
+    pts_all, owner, origins, dropped = [], [], [], 0
+    try:
+        e57 = pye57.E57(str(p))
+        try:
+            for i in range(e57.scan_count):
+                scan = e57.read_scan(i, transform=True, ignore_missing_fields=True)
+                xyz = np.column_stack([np.asarray(scan[f"cartesian{c}"], dtype=np.float64)
+                                       for c in "XYZ"])
+                header = e57.get_header(i)
+                origin = (np.asarray(header.translation, dtype=np.float64).reshape(3)
+                          if header.has_pose() else np.zeros(3))
+                pts, keep = finite_points(xyz, p.name)
+                dropped += len(keep) - len(pts)
+                pts_all.append(pts)
+                owner.append(np.full(len(pts), i, dtype=np.int64))
+                origins.append(origin)
+        finally:
+            e57.close()
+    except MapError:
+        raise
+    except Exception as exc:  # libE57Format raises its own error types on corrupt files
+        raise MapError(f"{p.name}: unreadable E57 ({first_line(exc)})") from None
+    points = np.concatenate(pts_all) if pts_all else np.zeros((0, 3))
+    if not len(points):
+        raise MapError(f"{p.name}: E57 file holds no finite points")
+    if not np.isfinite(np.array(origins)).all():
+        raise MapError(f"{p.name}: E57 scan pose is not finite")
+    return Obstacles(points=points, boxes=np.zeros((0, 3)), box_size=0.0, bounds=None,
+                     resolution=None, source=p.name, origins=np.array(origins),
+                     point_origin=np.concatenate(owner), dropped_nonfinite=dropped)

@@ -1,0 +1,36 @@
+"""Text XYZ clouds (optionally ``.gz`` / ``.bz2`` / ``.xz``) and ``.npy`` arrays."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from planner.errors import MapError
+from planner.io._files import check_file, loadtxt, read_text
+from planner.io._obstacles import Obstacles
+from planner.io._validate import cloud
+
+
+def read_xyz(p: Path, compression: str | None = None, budget: int | None = None) -> Obstacles:
+    """One ``x y z [extra ...]`` per line; ``#`` comments; whitespace or comma separated.
+
+    A compressed file is inflated in chunks and refused past ``budget`` bytes."""
+    text = read_text(p, compression, budget)
+    return cloud(loadtxt(text, p.name, ncols=3), p.name)
+
+
+def read_npy(p: Path) -> Obstacles:
+    """An (N, 3) numeric ``.npy`` array (no pickles)."""
+    check_file(p)
+    try:
+        arr = np.load(p, allow_pickle=False)
+    except (ValueError, EOFError, OSError) as exc:  # bad magic, truncated data, pickled array
+        msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise MapError(f"{p.name}: not a valid .npy array ({msg})") from None
+    if not isinstance(arr, np.ndarray) or arr.ndim != 2 or arr.shape[1] != 3:
+        raise MapError(f"{p.name}: .npy array must have shape (N, 3), got "
+                       f"{getattr(arr, 'shape', None)}")
+    if arr.dtype.kind not in "fiu":
+        raise MapError(f"{p.name}: .npy array must be numeric, got dtype {arr.dtype}")
+    return cloud(arr, p.name)

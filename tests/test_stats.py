@@ -1,0 +1,66 @@
+"""Paired lattice-vs-cubic statistics: intervals cover, tests reject only real differences."""
+
+import math
+
+import numpy as np
+
+from planner.analysis.stats import describe, paired_ratio
+
+
+def test_interval_contains_the_median_and_shrinks_with_more_queries():
+    rng = np.random.default_rng(3)
+    y = rng.uniform(50, 500, size=400)
+    x = y * rng.lognormal(mean=np.log(0.6), sigma=0.2, size=400)
+    small = paired_ratio(x[:40], y[:40])
+    large = paired_ratio(x, y)
+    for s in (small, large):
+        assert s.low <= s.median <= s.high
+    assert (large.high - large.low) < (small.high - small.low)
+    assert 0.55 < large.median < 0.65
+    assert large.low < 0.6 < large.high
+
+
+def test_identical_samples_are_no_difference():
+    y = np.arange(1.0, 31.0)
+    s = paired_ratio(y, y)
+    assert s.median == 1.0 and s.low == 1.0 and s.high == 1.0
+    assert not s.significant()
+    assert describe(s, "checks").startswith("no significant difference in checks")
+
+
+def test_noise_around_one_is_not_significant():
+    rng = np.random.default_rng(7)
+    y = rng.uniform(10, 20, size=30)
+    x = y * rng.lognormal(0.0, 0.05, size=30)
+    s = paired_ratio(x, y)
+    assert s.p > 0.05
+    assert describe(s, "length").startswith("no significant difference")
+
+
+def test_failed_queries_are_left_out_of_the_pairs():
+    x = np.array([1.0, 2.0, math.nan, 4.0, 0.0])
+    y = np.array([2.0, 4.0, 6.0, math.inf, 5.0])
+    s = paired_ratio(x, y)
+    assert s.n == 2 and s.median == 0.5
+
+
+def test_sentence_says_direction_interval_and_p():
+    rng = np.random.default_rng(1)
+    y = rng.uniform(100, 200, size=80)
+    s = paired_ratio(1.3 * y * rng.uniform(0.95, 1.05, 80), y)
+    text = describe(s, "checks", less="fewer", more="more")
+    assert text.startswith("more checks (median 1.")
+    assert "95% CI" in text and "p < 0.001" in text and "n = 80" in text
+
+
+def test_rotation_samples_are_uniform_and_shared():
+    from planner.bench.rotations import quaternion_matrix, sample_rotations
+
+    a = sample_rotations("so3", 2000, seed=5)
+    assert np.array_equal(a, sample_rotations("so3", 2000, seed=5))  # same for every lattice
+    z = np.array([quaternion_matrix(q)[:, 2] for q in a])  # image of the z axis
+    # Uniform rotations send z to a uniform direction: each coordinate has mean 0, var 1/3.
+    assert np.all(np.abs(z.mean(axis=0)) < 0.05)
+    assert np.all(np.abs(z.var(axis=0) - 1 / 3) < 0.03)
+    yaw = np.array([quaternion_matrix(q) for q in sample_rotations("yaw", 50, seed=2)])
+    assert np.allclose(yaw[:, 2], [0, 0, 1]) and np.allclose(yaw[:, :, 2], [0, 0, 1])
