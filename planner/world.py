@@ -139,7 +139,6 @@ class World:
     Examples
     --------
     >>> from planner.lattice import Lattice
-from planner.lattice._quantize import Quantizer
     >>> w = World(Lattice.named("cubic", 1.0), [[2, 2, 2]], [[0, 0, 0], [4, 4, 4]])
     >>> w.checker.is_valid((2.1, 1.9, 2.2)), w.checker.is_valid((0.5, 3.0, 1.0))
     (False, True)
