@@ -8,8 +8,11 @@ from ``u`` is free; the touched cells of a segment do not depend on its directio
 -1 = not looked up yet): one lookup of the node's own cell plus one per union-stencil
 offset, made once and redone only when a changed cell lies in that stencil.
 
-Priority queue: the indexed binary heap of :mod:`planner.search._heap` with key
-``(k1, -k2)`` (its tie-break prefers the larger second key, D* Lite the smaller k2).
+Priority queue: the indexed binary heap of :mod:`planner.search._heap` ordered by the
+first key ``k1`` (on a grid of 1e-9 move lengths), ties broken by ``tb`` descending:
+``inf`` for underconsistent nodes, else ``k2 = min(g, rhs)`` (the paper breaks ties the
+other way, by the smaller k2; that expands every node of the equal-cost region between goal
+and start, which on a lattice is most of it).
 Nodes live in a table in creation order, found through a dense slot map over the world's
 index box. The kernels never grow arrays: :class:`planner.search.incremental.DStarLite`
 makes room before each call (``GROW`` asks for more).
@@ -43,6 +46,7 @@ class DNodes(NamedTuple):
     mask: np.ndarray  # (cap,) int64 bit m: edge to key + moves[m] exists; -1 unknown
     pos: np.ndarray  # (cap,) int64 heap position, -1 not queued
     stamp: np.ndarray  # (cap,) int64 last update batch that collected the node
+    batch: np.ndarray  # (cap,) int64 the node's row in that batch
 
 
 class DBox(NamedTuple):
@@ -56,7 +60,7 @@ class DBox(NamedTuple):
 def new_nodes(cap: int) -> DNodes:
     i8, f8 = np.int64, np.float64
     return DNodes(np.empty(cap, i8), np.empty(cap, f8), np.empty(cap, f8), np.empty(cap, i8),
-                  np.empty(cap, i8), np.zeros(cap, i8))
+                  np.empty(cap, i8), np.zeros(cap, i8), np.zeros(cap, i8))
 
 
 @njit(cache=True, inline="always")
@@ -69,7 +73,7 @@ def _box(bx, v0, v1, v2):  # pragma: no cover - compiled
     return (a * bx.dims[1] + b) * bx.dims[2] + c
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def node(bx, nd, st, v0, v1, v2, create):  # pragma: no cover - compiled
     """Node of cell (v0, v1, v2); created (g = rhs = inf) when ``create``; -1 if none."""
     b = _box(bx, v0, v1, v2)
@@ -127,11 +131,6 @@ def _h(ms, start, v0, v1, v2):  # pragma: no cover - compiled
 
 
 @njit(cache=True, inline="always")
-def _less(a1, a2, b1, b2):  # pragma: no cover - compiled
-    return a1 < b1 or (a1 == b1 and a2 < b2)
-
-
-@njit(cache=True, inline="always")
 def _k1(ms, x):  # pragma: no cover - compiled
     """First key on a grid of 1e-9 move lengths: equal sums of the same moves in another
     order (float noise) mostly tie exactly, so the second key orders them."""
@@ -157,20 +156,27 @@ def _remove(heap, pos, st, s):  # pragma: no cover - compiled
 
 @njit(cache=True)
 def update_vertex(ms, nd, heap, st, km, start, s):  # pragma: no cover - compiled
-    """Queue ``s`` with its key when inconsistent, dequeue it when consistent."""
+    """Queue ``s`` with its key when inconsistent, dequeue it when consistent.
+
+    Queue order: first key ascending, then the tie-break ``tb`` descending (module
+    docstring): an underconsistent node (g < rhs: its g is stale and low) comes first
+    among ties, then the one with the larger ``min(g, rhs)`` (nearest the start, A*'s
+    dive)."""
     pos = nd.pos
-    if nd.g[s] != nd.rhs[s]:
-        gm = min(nd.g[s], nd.rhs[s])
+    g, rhs = nd.g[s], nd.rhs[s]
+    if g != rhs:
+        gm = min(g, rhs)
         u0, u1, u2 = unpack3(nd.key[s])
         k1 = _k1(ms, gm + _h(ms, start, u0, u1, u2) + km)
+        tb = np.inf if g < rhs else gm
         if pos[s] >= 0:
             i = pos[s]
             heap.f[i] = k1
-            heap.g[i] = -gm
+            heap.g[i] = tb
             sift_up(heap, pos, i)
             sift_down(heap, pos, pos[s], st[S_HN])
         else:
-            st[S_HN] = push(heap, pos, st[S_HN], s, k1, -gm)
+            st[S_HN] = push(heap, pos, st[S_HN], s, k1, tb)
     elif pos[s] >= 0:
         _remove(heap, pos, st, s)
 
@@ -211,23 +217,26 @@ def compute_path(occ, ms, ufree, bx, nd, heap, st, km, start):  # pragma: no cov
         ss = node(bx, nd, st, start[0], start[1], start[2], False)
         if ss >= 0:
             sg, srhs = nd.g[ss], nd.rhs[ss]
-            gm = min(sg, srhs)
-            ks1 = _k1(ms, gm + km)  # h(start, start) = 0
+            ks2 = min(sg, srhs)
+            ks1 = _k1(ms, ks2 + km)  # h(start, start) = 0
         else:
-            sg = srhs = ks1 = np.inf
-        k1o, k2o = heap_f[0], -heap_g[0]
-        # Fig. 4 stops once TopKey >= key(start) and rhs(start) <= g(start). Here only the
-        # first keys are compared, with float slack: a queued vertex whose fresh key ties
-        # the start's has a second key <= the start's, and one lost to float noise between
-        # the ties would leave a stale g on the path (expanding more is always safe).
-        if not (k1o <= ks1 + _TOL * (1.0 + abs(ks1)) or srhs > sg):
+            sg = srhs = ks1 = ks2 = np.inf
+        k1o, tbo = heap_f[0], heap_g[0]
+        # Fig. 4 runs while TopKey < key(start) or rhs(start) > g(start). With first keys
+        # equal up to float noise (sums of the same moves in another order), a queued node
+        # still goes first if it is underconsistent (its stale low g may sit on the
+        # start's path) or lies farther from the goal than the start; an overconsistent
+        # tie cannot make the start cheaper, so the search may stop before it (as A*
+        # stops at the goal among equal f).
+        e1 = _TOL * (1.0 + abs(ks1)) if ks1 < np.inf else 0.0
+        if not (srhs > sg or k1o < ks1 - e1 or (k1o <= ks1 + e1 and tbo > ks2)):
             break
         u = heap_s[0]
         st[S_EXP] += 1
         u0, u1, u2 = unpack3(nd.key[u])
         gm = min(nd.g[u], nd.rhs[u])
         k1n = _k1(ms, gm + _h(ms, start, u0, u1, u2) + km)
-        if _less(k1o, k2o, k1n, gm):
+        if k1o < k1n:  # a key from an earlier start: requeue (the tie-break is current)
             update_vertex(ms, nd, heap, st, km, start, u)
             continue
         mk = edges(occ, ms, ufree, nd, st, u)
@@ -261,9 +270,13 @@ def compute_path(occ, ms, ufree, bx, nd, heap, st, km, start):  # pragma: no cov
 
 
 @njit(cache=True)
-def collect(ms, bx, nd, st, cells, out_s, out_old):  # pragma: no cover - compiled
-    """Nodes with a cached edge mask whose stencil holds a changed cell (each once):
-    ``out_s[:n]`` and their old masks ``out_old[:n]``; returns n."""
+def collect(ms, affect, bx, nd, st, cells, blocked, out_s, out_old, out_redo):
+    # pragma: no cover - compiled
+    """Nodes with a cached edge mask whose stencil holds a changed cell, each once, in
+    ``out_s[:n]`` with their old masks (``out_old``); returns n. A newly blocked cell at
+    union offset j clears the moves ``affect[j]`` needs (all moves when it is the node's
+    own cell): no lookup. A newly freed cell marks the node for a fresh lookup
+    (``out_redo``)."""
     st[S_STAMP] += 1
     stamp = st[S_STAMP]
     ust = ms.union
@@ -276,48 +289,74 @@ def collect(ms, bx, nd, st, cells, out_s, out_old):  # pragma: no cover - compil
             else:
                 x0, x1, x2 = c0 - ust[j, 0], c1 - ust[j, 1], c2 - ust[j, 2]
             s = node(bx, nd, st, x0, x1, x2, False)
-            if s < 0 or nd.mask[s] < 0 or nd.stamp[s] == stamp:
+            if s < 0 or nd.mask[s] < 0:
                 continue
-            nd.stamp[s] = stamp
-            out_s[n] = s
-            out_old[n] = nd.mask[s]
-            n += 1
+            if nd.stamp[s] != stamp:
+                nd.stamp[s] = stamp
+                out_s[n] = s
+                out_old[n] = nd.mask[s]
+                out_redo[n] = False
+                nd.batch[s] = n
+                n += 1
+            if blocked[i]:
+                nd.mask[s] = 0 if j < 0 else nd.mask[s] & ~affect[j]
+            else:
+                out_redo[nd.batch[s]] = True
     return n
 
 
+@njit(cache=True, inline="always")
+def _touch(nd, u, stamp, touched, nt, redo):  # pragma: no cover - compiled
+    """List node ``u`` once per repair (``nd.batch`` 1: its rhs needs a recompute)."""
+    if nd.stamp[u] != stamp:
+        nd.stamp[u] = stamp
+        nd.batch[u] = 0
+        touched[nt] = u
+        nt += 1
+    if redo:
+        nd.batch[u] = 1
+    return nt
+
+
 @njit(cache=True)
-def _edge_changed(occ, ms, ufree, bx, nd, heap, st, km, start, u0, u1, u2, v, c_old, c_new):
+def _edge_changed(bx, nd, st, u0, u1, u2, v, c_old, c_new, stamp, touched, nt):
     # pragma: no cover - compiled
-    """The directed edge u -> v changed cost from c_old to c_new (fig. 4, lines 31-36)."""
+    """The directed edge u -> v changed cost from c_old to c_new (fig. 4, lines 31-36):
+    a cheaper edge lowers rhs(u) at once; a lost support marks rhs(u) for one recompute
+    after all changes (g does not change meanwhile). Returns the new touched count."""
     gv = nd.g[v] if v >= 0 else np.inf
     if gv == np.inf:
-        return  # neither a cheaper rhs nor a lost support
+        return nt  # neither a cheaper rhs nor a lost support
     goal = st[S_GOAL]
     if c_old > c_new:
         u = node(bx, nd, st, u0, u1, u2, True)
         c = c_new + gv
         if u != goal and c < nd.rhs[u]:
             nd.rhs[u] = c
-            update_vertex(ms, nd, heap, st, km, start, u)
+            nt = _touch(nd, u, stamp, touched, nt, False)
     else:
         u = node(bx, nd, st, u0, u1, u2, False)
         if u < 0 or u == goal:
-            return
+            return nt
         c = c_old + gv
         if abs(nd.rhs[u] - c) <= _TOL * c:
-            nd.rhs[u] = best_successor(occ, ms, ufree, bx, nd, st, u)[0]
-            update_vertex(ms, nd, heap, st, km, start, u)
+            nt = _touch(nd, u, stamp, touched, nt, True)
+    return nt
 
 
 @njit(cache=True)
-def apply_changes(occ, ms, ufree, bx, nd, heap, st, km, start, ss, old, n):
+def apply_changes(occ, ms, ufree, bx, nd, heap, st, km, start, ss, old, redo, n, touched):
     # pragma: no cover - compiled
-    """Redo the edge masks of the collected nodes, then repair every edge whose state
-    flipped, in both directions. Needs room for ``n * len(moves)`` new nodes."""
+    """Look up the edge masks of the collected nodes marked ``redo``, then repair every
+    edge whose state flipped, in both directions, recomputing each affected rhs once.
+    Needs room for ``n * len(moves)`` new nodes; ``touched``: scratch of 2 n len(moves)."""
     for i in range(n):
-        nd.mask[ss[i]] = -1
-    for i in range(n):
-        edges(occ, ms, ufree, nd, st, ss[i])
+        if redo[i]:
+            nd.mask[ss[i]] = -1
+            edges(occ, ms, ufree, nd, st, ss[i])
+    st[S_STAMP] += 1
+    stamp = st[S_STAMP]
+    nt = 0
     inf = np.inf
     for i in range(n):
         x = ss[i]
@@ -334,10 +373,13 @@ def apply_changes(occ, ms, ufree, bx, nd, heap, st, km, start, ss, old, n):
             c_new = c if nd.mask[x] & bit else inf
             v0, v1, v2 = x0 + ms.moves[m, 0], x1 + ms.moves[m, 1], x2 + ms.moves[m, 2]
             v = node(bx, nd, st, v0, v1, v2, False)
-            _edge_changed(occ, ms, ufree, bx, nd, heap, st, km, start, x0, x1, x2, v, c_old,
-                          c_new)
-            _edge_changed(occ, ms, ufree, bx, nd, heap, st, km, start, v0, v1, v2, x, c_old,
-                          c_new)
+            nt = _edge_changed(bx, nd, st, x0, x1, x2, v, c_old, c_new, stamp, touched, nt)
+            nt = _edge_changed(bx, nd, st, v0, v1, v2, x, c_old, c_new, stamp, touched, nt)
+    for i in range(nt):
+        u = touched[i]
+        if nd.batch[u] == 1:
+            nd.rhs[u] = best_successor(occ, ms, ufree, bx, nd, st, u)[0]
+        update_vertex(ms, nd, heap, st, km, start, u)
 
 
 @njit(cache=True)

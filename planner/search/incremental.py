@@ -79,6 +79,11 @@ class DStarLite:
             raise PlanError(f"D* Lite supports at most {_MAX_MOVES} moves, {neighbors!r} "
                             f"has {nm}")
         self.guarantee = carries_guarantee(lat, neighbors, corner_cutting)
+        # affect[j]: the moves whose safe-rule cells include union offset j
+        self._affect = np.zeros(len(self._ms.union), np.int64)
+        for m in range(nm):
+            for e in self._ms.idx[self._ms.ptr[m]:self._ms.ptr[m + 1]]:
+                self._affect[e] |= np.int64(1) << np.int64(m)
         occ = world.occupancy
         if occ.mode != 0:
             raise PlanError("D* Lite needs dense occupancy storage (a smaller world)")
@@ -126,21 +131,35 @@ class DStarLite:
         self._last = c.copy()
         self.start = c.copy()
 
-    def update(self, changed_cells) -> None:
+    def update(self, changed_cells, blocked: bool | None = None) -> None:
         """Repair after the cells ``changed_cells`` ((K, 3) int) flipped between free and
-        blocked in the world (already mutated). Only nodes whose edge stencil holds a
-        changed cell are looked up again; edges that flipped repair their end nodes."""
+        blocked in the world (already mutated).
+
+        ``blocked`` says what they all became (as :meth:`World.set_cells` was told);
+        None looks each one up (K cell checks). Nodes whose edge stencil holds a newly
+        blocked cell drop the moves it serves without a lookup; nodes near a newly freed
+        cell look their stencil up again; edges that flipped repair their end nodes.
+        """
         c = _cells(changed_cells) if len(changed_cells) else np.zeros((0, 3), np.int64)
         if not len(c):
             return
         t0 = time.perf_counter()
+        if blocked is None:
+            state = ~self.world.checker.cells_free(c)
+            self._st[dk.S_LOOK] += len(c)
+        else:
+            state = np.full(len(c), bool(blocked))
         nu = len(self._ms.union)
         ss = np.empty(len(c) * (nu + 1), np.int64)
         old = np.empty_like(ss)
-        n = dk.collect(self._ms, self._bx, self._nd, self._st, c, ss, old)
-        self._room(n * len(self._ms.moves) + 1)
+        redo = np.empty(len(ss), np.bool_)
+        n = dk.collect(self._ms, self._affect, self._bx, self._nd, self._st, c, state, ss,
+                       old, redo)
+        nm = len(self._ms.moves)
+        self._room(n * nm + 1)
         dk.apply_changes(self.world.occupancy, self._ms, self._ufree, self._bx, self._nd,
-                         self._heap, self._st, self._km, self.start, ss, old, n)
+                         self._heap, self._st, self._km, self.start, ss, old, redo, n,
+                         np.empty(2 * n * nm + 1, np.int64))
         self._seconds += time.perf_counter() - t0
 
     def plan(self) -> SearchResult:
