@@ -319,32 +319,6 @@ def _touch(nd, u, stamp, touched, nt, redo):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _edge_changed(bx, nd, st, u0, u1, u2, v, c_old, c_new, stamp, touched, nt):
-    # pragma: no cover - compiled
-    """The directed edge u -> v changed cost from c_old to c_new (fig. 4, lines 31-36):
-    a cheaper edge lowers rhs(u) at once; a lost support marks rhs(u) for one recompute
-    after all changes (g does not change meanwhile). Returns the new touched count."""
-    gv = nd.g[v] if v >= 0 else np.inf
-    if gv == np.inf:
-        return nt  # neither a cheaper rhs nor a lost support
-    goal = st[S_GOAL]
-    if c_old > c_new:
-        u = node(bx, nd, st, u0, u1, u2, True)
-        c = c_new + gv
-        if u != goal and c < nd.rhs[u]:
-            nd.rhs[u] = c
-            nt = _touch(nd, u, stamp, touched, nt, False)
-    else:
-        u = node(bx, nd, st, u0, u1, u2, False)
-        if u < 0 or u == goal:
-            return nt
-        c = c_old + gv
-        if abs(nd.rhs[u] - c) <= _TOL * c:
-            nt = _touch(nd, u, stamp, touched, nt, True)
-    return nt
-
-
-@njit(cache=True)
 def apply_changes(occ, ms, ufree, bx, nd, heap, st, km, start, ss, old, redo, n, touched):
     # pragma: no cover - compiled
     """Look up the edge masks of the collected nodes marked ``redo``, then repair every
@@ -354,27 +328,45 @@ def apply_changes(occ, ms, ufree, bx, nd, heap, st, km, start, ss, old, redo, n,
         if redo[i]:
             nd.mask[ss[i]] = -1
             edges(occ, ms, ufree, nd, st, ss[i])
+    # Each flipped edge x <-> v, both directions (fig. 4, lines 31-36): a freed edge
+    # lowers rhs at once; a lost support (rhs = c + g of the other end) marks the rhs for
+    # one recompute after all flips (g does not change meanwhile).
     st[S_STAMP] += 1
     stamp = st[S_STAMP]
+    goal = st[S_GOAL]
     nt = 0
-    inf = np.inf
     for i in range(n):
         x = ss[i]
-        diff = old[i] ^ nd.mask[x]
+        mx = nd.mask[x]
+        diff = old[i] ^ mx
         if diff == 0:
             continue
         x0, x1, x2 = unpack3(nd.key[x])
+        gx = nd.g[x]
         for m in range(ms.moves.shape[0]):
             bit = np.int64(1) << np.int64(m)
             if not diff & bit:
                 continue
             c = ms.cost[m]
-            c_old = c if old[i] & bit else inf
-            c_new = c if nd.mask[x] & bit else inf
             v0, v1, v2 = x0 + ms.moves[m, 0], x1 + ms.moves[m, 1], x2 + ms.moves[m, 2]
             v = node(bx, nd, st, v0, v1, v2, False)
-            nt = _edge_changed(bx, nd, st, x0, x1, x2, v, c_old, c_new, stamp, touched, nt)
-            nt = _edge_changed(bx, nd, st, v0, v1, v2, x, c_old, c_new, stamp, touched, nt)
+            gv = nd.g[v] if v >= 0 else np.inf
+            if mx & bit:  # freed
+                if gv < np.inf and x != goal and c + gv < nd.rhs[x]:
+                    nd.rhs[x] = c + gv
+                    nt = _touch(nd, x, stamp, touched, nt, False)
+                if gx < np.inf:
+                    if v < 0:
+                        v = node(bx, nd, st, v0, v1, v2, True)
+                    if v != goal and c + gx < nd.rhs[v]:
+                        nd.rhs[v] = c + gx
+                        nt = _touch(nd, v, stamp, touched, nt, False)
+            else:  # blocked
+                if gv < np.inf and x != goal and abs(nd.rhs[x] - (c + gv)) <= _TOL * (c + gv):
+                    nt = _touch(nd, x, stamp, touched, nt, True)
+                if (gx < np.inf and v >= 0 and v != goal
+                        and abs(nd.rhs[v] - (c + gx)) <= _TOL * (c + gx)):
+                    nt = _touch(nd, v, stamp, touched, nt, True)
     for i in range(nt):
         u = touched[i]
         if nd.batch[u] == 1:
