@@ -10,16 +10,19 @@ the two costs must agree (counted as ``mismatches``).
 Sensor (exact, noise-free): rays from the robot's position over a field of view (``fov``:
 horizontal total and vertical +- half-angle, degrees) at ``resolution`` degrees, up to
 ``sensor_range`` metres. The true map is the lattice occupied voxel list of the obstacle
-points (radius 0); a ray stops at the occupied cell whose closed Voronoi cell it enters
-first (the lattice segment walk plus the exact entry parameter of each touched cell). A hit
-reveals every obstacle point in that cell (a lidar return from that surface patch).
+points (radius 0), or of the cells overlapping the boxes of a box map (OctoMap leaves,
+``.3dmap``); a ray stops at the occupied cell whose closed Voronoi cell it enters first (the
+lattice segment walk plus the exact entry parameter of each touched cell). A hit reveals
+every obstacle point in that cell, or every box that can overlap it (a lidar return from
+that surface patch).
 
-Known map: the revealed points, inflated exactly for the radius
-(:func:`planner.voxels.exact_inflation`, only around the new points), so the known blocked
-cells are a subset of the true world's. Hence a move the robot takes is safe on what it
-knew, and a goal unreachable in the known world is unreachable in the true one. Every
-executed move is also walked in the true inflated world: a blocked cell there is a
-``contact`` (an obstacle within ``r`` that the sensor had not seen).
+Known map: the revealed obstacles, inflated for the radius by the same rule as the true
+world (:func:`planner.api.inflated_obstacles`: points exactly, boxes grown by the radius),
+only around the newly revealed ones, so the known blocked cells are a subset of the true
+world's. Hence a move the robot takes is safe on what it knew, and a goal unreachable in
+the known world is unreachable in the true one. Every executed move is also walked in the
+true inflated world: a blocked cell there is a ``contact`` (an obstacle within ``r`` that
+the sensor had not seen).
 """
 
 from __future__ import annotations
@@ -141,7 +144,8 @@ class ExploreResult:
         ax.set_aspect("equal")
         ax.set_title(f"{self.lattice}: {self.status}, {self.replans} replans, "
                      f"{self.mismatches} mismatches, {self.contacts} contacts", fontsize=9)
-        ax.legend(fontsize=7, loc="upper right")
+        ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(0.0, -0.08), ncol=3,
+                  frameon=False)
         i = np.arange(self.replans)
         for a, (d, s, what) in ((ac, (self.dstar_checks, self.astar_checks, "cell checks")),
                                 (at, (self.dstar_seconds, self.astar_seconds, "seconds"))):
@@ -248,19 +252,33 @@ def cast_rays(occupied, walk, origin, s, dirs, reach, hits):  # pragma: no cover
 
 
 class _Sensor:
-    """The true map as the sensor sees it: occupied cells (radius 0) and the obstacle
-    points in each, grouped by cell."""
+    """The true map as the sensor sees it.
 
-    def __init__(self, points: np.ndarray, lattice: Lattice, walk, dirs: np.ndarray,
-                 reach: float):
+    Points (``box_size`` 0): the occupied cells are those holding a point, and a hit
+    reveals the points in the hit cell. Boxes: the occupied cells are those overlapping a
+    box (:func:`planner.voxels.box_keys`), so every ray through a box stops at or before
+    it, and a hit reveals the boxes that can overlap the hit cell (centre within half the
+    box diagonal plus the covering radius of the cell centre).
+    """
+
+    def __init__(self, points: np.ndarray, box_size: float, lattice: Lattice, walk,
+                 dirs: np.ndarray, reach: float):
         from planner._world_kernels import build_key_set
 
-        self.points = points
-        cells = lattice.quantize(points)
-        keys = pack(cells)
-        self.order = np.argsort(keys, kind="stable")
-        self.sorted = keys[self.order]
-        uniq = np.unique(keys)
+        self.points, self.box_size = points, float(box_size)
+        if self.box_size > 0:
+            from scipy.spatial import cKDTree
+
+            from planner.voxels import box_keys
+
+            uniq = box_keys(points, self.box_size, lattice)
+            self.tree = cKDTree(points)
+            self.near = 0.5 * np.sqrt(3) * self.box_size + lattice.covering_radius
+        else:
+            keys = pack(lattice.quantize(points))
+            self.order = np.argsort(keys, kind="stable")
+            self.sorted = keys[self.order]
+            uniq = np.unique(keys)
         size = 16
         while size < 2 * len(uniq):
             size *= 2
@@ -275,15 +293,22 @@ class _Sensor:
         self.seen = np.zeros(len(points), bool)
 
     def scan(self, cell: np.ndarray) -> np.ndarray:
-        """Cast every ray from the centre of ``cell``; return the indices of the points
+        """Cast every ray from the centre of ``cell``; return the indices of the obstacles
         revealed for the first time."""
         origin = self.lattice.to_world(cell[None])[0]
         found = cast_rays(self.occ, self.walk, origin, cell, self.dirs, self.reach, self.hits)
-        hit = np.unique(pack(self.hits[found]))
-        lo = np.searchsorted(self.sorted, hit, "left")
-        hi = np.searchsorted(self.sorted, hit, "right")
-        idx = self.order[np.concatenate([np.arange(a, b) for a, b in zip(lo, hi, strict=True)])
-                         ] if len(hit) else np.zeros(0, np.int64)
+        hit = np.unique(self.hits[found], axis=0)
+        if not len(hit):
+            return np.zeros(0, np.int64)
+        if self.box_size > 0:
+            near = self.tree.query_ball_point(self.lattice.to_world(hit), self.near)
+            idx = np.unique(np.concatenate([np.asarray(x, np.int64) for x in near]))
+        else:
+            keys = pack(hit)
+            lo = np.searchsorted(self.sorted, keys, "left")
+            hi = np.searchsorted(self.sorted, keys, "right")
+            idx = self.order[np.concatenate([np.arange(a, b)
+                                             for a, b in zip(lo, hi, strict=True)])]
         idx = idx[~self.seen[idx]]
         self.seen[idx] = True
         return idx
@@ -310,8 +335,8 @@ def explore(
     ----------
     source : str, Path, ndarray (N, 3) or Obstacles
         The true map (as :func:`planner.build_world` takes it). Point maps are sensed by
-        their points; box maps (``.3dmap``) by their box centres (contacts are still
-        checked against the grown boxes).
+        the cells holding their points; box maps (``.3dmap``, OctoMap leaves) by the cells
+        overlapping their boxes, and a seen box is inflated as a box.
     start, goal : array_like, shape (3,)
         Metres; must be free in the true inflated world.
     lattice, cell_volume, bounds
@@ -333,10 +358,10 @@ def explore(
     -------
     ExploreResult
     """
-    from planner.api import _sidecar, as_obstacles, build_world
+    from planner import io
+    from planner.api import _sidecar, as_obstacles, build_world, inflated_obstacles
     from planner.search import search
     from planner.search.incremental import DStarLite
-    from planner.voxels import exact_inflation
     from planner.world import _walk
 
     side = _sidecar(source)
@@ -353,14 +378,17 @@ def explore(
     truth = build_world(obst, lattice, cell_volume=cell_volume, radius=radius,
                         bounds=side.get("bounds") if bounds is None else bounds)
     lat = truth.lattice
-    pts = obst.points if len(obst.points) else obst.boxes
+    boxes = len(obst.boxes) > 0 and (not len(obst.points) or np.array_equal(obst.points,
+                                                                           obst.boxes))
+    pts = obst.boxes if boxes else obst.points
     if not len(pts):
         raise MapError(f"{obst.source}: no obstacles to sense")
     start_p, s = truth.endpoint(start, "start")
     goal_p, gcell = truth.endpoint(goal, "goal")
     known = World(lat, np.zeros((0, 3), np.int64), truth.bounds, radius=truth.radius,
                   source=f"explored {obst.source}")
-    sensor = _Sensor(pts, lat, _walk(lat), dirs, sensor_range)
+    sensor = _Sensor(pts, obst.box_size if boxes else 0.0, lat, _walk(lat), dirs,
+                     sensor_range)
     dl = DStarLite(known, s, gcell, neighbors=neighbors)
     rec = {k: [] for k in ("changed", "ds", "dc", "de", "dcost", "as", "ac", "ae", "acost")}
     cur = s.copy()
@@ -372,7 +400,12 @@ def explore(
         new = sensor.scan(cur)
         changed = np.zeros((0, 3), np.int64)
         if len(new):
-            changed = known.set_cells(exact_inflation(pts[new], lat, radius).indices, True)
+            seen = io.Obstacles(
+                points=obst.points[new] if len(obst.points) else np.zeros((0, 3)),
+                boxes=obst.boxes[new] if boxes else np.zeros((0, 3)),
+                box_size=obst.box_size, bounds=None, resolution=None, source=obst.source)
+            cells = inflated_obstacles(seen, lat, radius).indices
+            changed = known.set_cells(cells, True)
         sense_secs += time.perf_counter() - t0
         if path is None or len(changed):
             t0 = time.perf_counter()

@@ -369,6 +369,14 @@ def apply_changes(occ, ms, ufree, bx, nd, heap, st, km, start, ss, old, redo, n,
                     nt = _touch(nd, v, stamp, touched, nt, True)
     for i in range(nt):
         u = touched[i]
+        if nd.mask[u] == 0:
+            # No edge left (its own cell blocked, or walled in): no rhs reads its g any
+            # more, so it is consistent at inf without queueing it.
+            nd.g[u] = np.inf
+            nd.rhs[u] = np.inf
+            if nd.pos[u] >= 0:
+                _remove(heap, nd.pos, st, u)
+            continue
         if nd.batch[u] == 1:
             nd.rhs[u] = best_successor(occ, ms, ufree, bx, nd, st, u)[0]
         update_vertex(ms, nd, heap, st, km, start, u)
