@@ -371,6 +371,8 @@ def explore(
             and sensor_range > 0):
         raise PlanError(f"sensor_range must be a positive number of metres, got "
                         f"{sensor_range!r}")
+    if isinstance(max_steps, bool) or not isinstance(max_steps, int) or max_steps < 0:
+        raise PlanError(f"max_steps must be a non-negative integer, got {max_steps!r}")
     dirs = ray_directions(fov, resolution)
     obst = as_obstacles(source)
     if cell_volume is None and not isinstance(lattice, Lattice):

@@ -52,6 +52,15 @@ def test_closed_wall_is_proved_unreachable():
     assert np.isinf(r.dstar_cost[-1]) and np.isinf(r.astar_cost[-1])
 
 
+def test_step_budget_stops_the_robot_and_start_at_goal_is_reached():
+    r = explore(_wall(door=True), [1, 1, 1], [9, 1, 1], lattice="cubic", radius=0.2,
+                cell_volume=0.1**3, bounds=BOUNDS, max_steps=3)
+    assert r.status == "budget" and len(r.trajectory) == 4
+    r = explore(_wall(door=True), [1, 1, 1], [1, 1, 1], lattice="cubic", radius=0.2,
+                cell_volume=0.1**3, bounds=BOUNDS)
+    assert r.status == "reached" and r.distance == 0 and r.replans == 1
+
+
 def test_summary_figure_is_written(tmp_path):
     r = explore(_wall(door=True), [1, 1, 1], [9, 1, 1], lattice="cubic", radius=0.2,
                 cell_volume=0.1**3, bounds=BOUNDS, sensor_range=3.0, resolution=6.0)
@@ -72,6 +81,9 @@ def test_bad_sensor_settings_are_one_clear_error():
     with pytest.raises(PlanError, match="sensor_range"):
         explore(_wall(True), [1, 1, 1], [9, 1, 1], radius=0.2, cell_volume=1e-3,
                 bounds=BOUNDS, sensor_range=-1)
+    with pytest.raises(PlanError, match="max_steps"):
+        explore(_wall(True), [1, 1, 1], [9, 1, 1], radius=0.2, cell_volume=1e-3,
+                bounds=BOUNDS, max_steps=-1)
     with pytest.raises(PlanError, match="fov"):
         ray_directions((400, 10), 2)
     with pytest.raises(PlanError, match="goal"):
