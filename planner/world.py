@@ -397,6 +397,28 @@ class World:
         return (f"World({self._lattice!r}, {len(self._blocked)} blocked cells, "
                 f"bounds={self._bounds.tolist()})")
 
+    def set_cells(self, cells: np.ndarray, blocked: bool) -> np.ndarray:
+        """Block or free cells in place (dense storage only), for incremental planning.
+
+        Cells outside the bounds stay out of bounds (blocked). Returns the (K, 3) int64
+        distinct cells whose state changed, the batch to pass to an incremental search.
+        """
+        w = np.unique(_cells(cells), axis=0)
+        occ = self.occupancy
+        if occ.mode != 0:
+            raise PlanError("set_cells needs dense occupancy storage (a smaller world)")
+        w = w[self.in_bounds(w)]
+        flat = ((w - occ.lo) * np.array([occ.dims[1] * occ.dims[2], occ.dims[2], 1])).sum(1)
+        new = 0 if blocked else 1
+        changed = occ.grid[flat] != new
+        occ.grid[flat[changed]] = new
+        w = w[changed]
+        if blocked:
+            self._blocked = np.concatenate([self._blocked, w])
+        elif len(w):
+            self._blocked = self._blocked[~np.isin(pack(self._blocked), pack(w))]
+        return w
+
 
 def _cells(indices) -> np.ndarray:
     w = np.asarray(indices)

@@ -1,0 +1,407 @@
+"""D* Lite kernels (numba): the optimised version of Koenig & Likhachev (2002, fig. 4), with
+``km``, searching from the goal towards a moving start.
+
+Graph: the lattice search's (:mod:`planner.search.stencils`). The undirected edge between
+``u`` and ``u + moves[m]`` exists iff ``u`` is free and every safe-rule cell of move ``m``
+from ``u`` is free; the touched cells of a segment do not depend on its direction, so
+``c(u, v) = c(v, u)``. Each node caches its edges as a bit mask over the moves (``mask``,
+-1 = not looked up yet): one lookup of the node's own cell plus one per union-stencil
+offset, made once and redone only when a changed cell lies in that stencil.
+
+Priority queue: the indexed binary heap of :mod:`planner.search._heap` ordered by the
+first key ``k1`` (on a grid of 1e-9 move lengths), ties broken by ``tb`` descending:
+``inf`` for underconsistent nodes, else ``k2 = min(g, rhs)`` (the paper breaks ties the
+other way, by the smaller k2; that expands every node of the equal-cost region between goal
+and start, which on a lattice is most of it).
+Nodes live in a table in creation order, found through a dense slot map over the world's
+index box. The kernels never grow arrays: :class:`planner.search.incremental.DStarLite`
+makes room before each call (``GROW`` asks for more).
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from planner._world_kernels import occ_free
+from planner.keys import pack3, unpack3
+from planner.search._heap import push, sift_down, sift_up
+from planner.search.stencils import move_allowed
+
+# int64 state vector: node count, heap size, expansions, lookups, update stamp, goal slot
+S_N, S_HN, S_EXP, S_LOOK, S_STAMP, S_GOAL = 0, 1, 2, 3, 4, 5
+S_SIZE = 6
+DONE, GROW = 0, 1
+_TOL = 1e-9  # relative: "rhs(s) = c + g_old" tested with slack (a spare recompute is safe)
+
+
+class DNodes(NamedTuple):
+    """One row per node (capacity ``len(key)``)."""
+
+    key: np.ndarray  # (cap,) int64 packed cell
+    g: np.ndarray  # (cap,) float64 cost-to-goal estimate (m)
+    rhs: np.ndarray  # (cap,) float64 one-step lookahead (m)
+    mask: np.ndarray  # (cap,) int64 bit m: edge to key + moves[m] exists; -1 unknown
+    pos: np.ndarray  # (cap,) int64 heap position, -1 not queued
+    stamp: np.ndarray  # (cap,) int64 last update batch that collected the node
+    batch: np.ndarray  # (cap,) int64 the node's row in that batch
+
+
+class DBox(NamedTuple):
+    """Dense cell -> node map over the world's index box."""
+
+    slot: np.ndarray  # (prod(dims),) int32 node of each cell, -1 none
+    lo: np.ndarray  # (3,) int64
+    dims: np.ndarray  # (3,) int64
+
+
+def new_nodes(cap: int) -> DNodes:
+    i8, f8 = np.int64, np.float64
+    return DNodes(np.empty(cap, i8), np.empty(cap, f8), np.empty(cap, f8), np.empty(cap, i8),
+                  np.empty(cap, i8), np.zeros(cap, i8), np.zeros(cap, i8))
+
+
+@njit(cache=True, inline="always")
+def _box(bx, v0, v1, v2):  # pragma: no cover - compiled
+    a = v0 - bx.lo[0]
+    b = v1 - bx.lo[1]
+    c = v2 - bx.lo[2]
+    if a < 0 or b < 0 or c < 0 or a >= bx.dims[0] or b >= bx.dims[1] or c >= bx.dims[2]:
+        return -1
+    return (a * bx.dims[1] + b) * bx.dims[2] + c
+
+
+@njit(cache=True, inline="always")
+def node(bx, nd, st, v0, v1, v2, create):  # pragma: no cover - compiled
+    """Node of cell (v0, v1, v2); created (g = rhs = inf) when ``create``; -1 if none."""
+    b = _box(bx, v0, v1, v2)
+    if b < 0:
+        return -1
+    s = np.int64(bx.slot[b])
+    if s >= 0 or not create:
+        return s
+    s = st[S_N]
+    st[S_N] = s + 1
+    bx.slot[b] = s
+    nd.key[s] = pack3(v0, v1, v2)
+    nd.g[s] = np.inf
+    nd.rhs[s] = np.inf
+    nd.mask[s] = -1
+    nd.pos[s] = -1
+    nd.stamp[s] = 0
+    return s
+
+
+@njit(cache=True)
+def edges(occ, ms, ufree, nd, st, s):  # pragma: no cover - compiled
+    """Edge mask of node ``s`` (looked up once, then cached)."""
+    if nd.mask[s] >= 0:
+        return nd.mask[s]
+    u0, u1, u2 = unpack3(nd.key[s])
+    st[S_LOOK] += 1
+    m = np.int64(0)
+    if occ_free(occ, u0, u1, u2):
+        ust = ms.union
+        nu = ust.shape[0]
+        for j in range(nu):
+            ufree[j] = occ_free(occ, u0 + ust[j, 0], u1 + ust[j, 1], u2 + ust[j, 2])
+        st[S_LOOK] += nu
+        for k in range(ms.moves.shape[0]):
+            if move_allowed(ufree, ms.ptr, ms.idx, k):
+                m |= np.int64(1) << np.int64(k)
+    nd.mask[s] = m
+    return m
+
+
+@njit(cache=True, inline="always")
+def _h(ms, start, v0, v1, v2):  # pragma: no cover - compiled
+    """Gauge heuristic between the start and a cell (symmetric: the move set is)."""
+    hm = ms.hmat
+    e0 = v0 - start[0]
+    e1 = v1 - start[1]
+    e2 = v2 - start[2]
+    hv = 0.0
+    for f in range(hm.shape[0]):
+        x = hm[f, 0] * e0 + hm[f, 1] * e1 + hm[f, 2] * e2
+        if x > hv:
+            hv = x
+    return hv
+
+
+@njit(cache=True, inline="always")
+def _k1(ms, x):  # pragma: no cover - compiled
+    """First key on a grid of 1e-9 move lengths: equal sums of the same moves in another
+    order (float noise) mostly tie exactly, so the second key orders them."""
+    q = 1e-9 * ms.cost[0]
+    return np.floor(x / q + 0.5) * q
+
+
+@njit(cache=True)
+def _remove(heap, pos, st, s):  # pragma: no cover - compiled
+    i = pos[s]
+    pos[s] = -1
+    hn = st[S_HN] - 1
+    st[S_HN] = hn
+    if i < hn:
+        x = heap.slot[hn]
+        heap.slot[i] = x
+        heap.f[i] = heap.f[hn]
+        heap.g[i] = heap.g[hn]
+        pos[x] = i
+        sift_up(heap, pos, i)
+        sift_down(heap, pos, pos[x], hn)
+
+
+@njit(cache=True)
+def update_vertex(ms, nd, heap, st, km, start, s):  # pragma: no cover - compiled
+    """Queue ``s`` with its key when inconsistent, dequeue it when consistent.
+
+    Queue order: first key ascending, then the tie-break ``tb`` descending (module
+    docstring): an underconsistent node (g < rhs: its g is stale and low) comes first
+    among ties, then the one with the larger ``min(g, rhs)`` (nearest the start, A*'s
+    dive)."""
+    pos = nd.pos
+    g, rhs = nd.g[s], nd.rhs[s]
+    if g != rhs:
+        gm = min(g, rhs)
+        u0, u1, u2 = unpack3(nd.key[s])
+        k1 = _k1(ms, gm + _h(ms, start, u0, u1, u2) + km)
+        tb = np.inf if g < rhs else gm
+        if pos[s] >= 0:
+            i = pos[s]
+            heap.f[i] = k1
+            heap.g[i] = tb
+            sift_up(heap, pos, i)
+            sift_down(heap, pos, pos[s], st[S_HN])
+        else:
+            st[S_HN] = push(heap, pos, st[S_HN], s, k1, tb)
+    elif pos[s] >= 0:
+        _remove(heap, pos, st, s)
+
+
+@njit(cache=True)
+def best_successor(occ, ms, ufree, bx, nd, st, s):  # pragma: no cover - compiled
+    """``(min_m c(s, s + m) + g(s + m), node of the argmin or -1, its edge cost)``."""
+    mk = edges(occ, ms, ufree, nd, st, s)
+    u0, u1, u2 = unpack3(nd.key[s])
+    best = np.inf
+    arg = np.int64(-1)
+    bc = np.inf
+    for m in range(ms.moves.shape[0]):
+        if (mk >> np.int64(m)) & 1:
+            v = node(bx, nd, st, u0 + ms.moves[m, 0], u1 + ms.moves[m, 1], u2 + ms.moves[m, 2],
+                     False)
+            if v >= 0:
+                c = ms.cost[m] + nd.g[v]
+                if c < best:
+                    best = c
+                    arg = v
+                    bc = ms.cost[m]
+    return best, arg, bc
+
+
+@njit(cache=True)
+def compute_path(occ, ms, ufree, bx, nd, heap, st, km, start):  # pragma: no cover - compiled
+    """ComputeShortestPath: expand until the start is consistent and no queued key is
+    smaller than its key (ties, up to float noise, are expanded too). Returns DONE, or
+    GROW when a new node might not fit."""
+    cap = nd.key.shape[0]
+    nm = ms.moves.shape[0]
+    goal = st[S_GOAL]
+    heap_f, heap_g, heap_s = heap.f, heap.g, heap.slot
+    while st[S_HN] > 0:
+        if st[S_N] + nm > cap:
+            return GROW
+        ss = node(bx, nd, st, start[0], start[1], start[2], False)
+        if ss >= 0:
+            sg, srhs = nd.g[ss], nd.rhs[ss]
+            ks2 = min(sg, srhs)
+            ks1 = _k1(ms, ks2 + km)  # h(start, start) = 0
+        else:
+            sg = srhs = ks1 = ks2 = np.inf
+        k1o, tbo = heap_f[0], heap_g[0]
+        # Fig. 4 runs while TopKey < key(start) or rhs(start) > g(start). With first keys
+        # equal up to float noise (sums of the same moves in another order), a queued node
+        # still goes first if it is underconsistent (its stale low g may sit on the
+        # start's path) or lies farther from the goal than the start; an overconsistent
+        # tie cannot make the start cheaper, so the search may stop before it (as A*
+        # stops at the goal among equal f).
+        e1 = _TOL * (1.0 + abs(ks1)) if ks1 < np.inf else 0.0
+        if not (srhs > sg or k1o < ks1 - e1 or (k1o <= ks1 + e1 and tbo > ks2)):
+            break
+        u = heap_s[0]
+        st[S_EXP] += 1
+        u0, u1, u2 = unpack3(nd.key[u])
+        gm = min(nd.g[u], nd.rhs[u])
+        k1n = _k1(ms, gm + _h(ms, start, u0, u1, u2) + km)
+        if k1o < k1n:  # a key from an earlier start: requeue (the tie-break is current)
+            update_vertex(ms, nd, heap, st, km, start, u)
+            continue
+        mk = edges(occ, ms, ufree, nd, st, u)
+        if nd.g[u] > nd.rhs[u]:
+            gu = nd.rhs[u]
+            nd.g[u] = gu
+            _remove(heap, nd.pos, st, u)
+            for m in range(nm):
+                if (mk >> np.int64(m)) & 1:
+                    s = node(bx, nd, st, u0 + ms.moves[m, 0], u1 + ms.moves[m, 1],
+                             u2 + ms.moves[m, 2], True)
+                    c = ms.cost[m] + gu
+                    if s != goal and c < nd.rhs[s]:
+                        nd.rhs[s] = c
+                        update_vertex(ms, nd, heap, st, km, start, s)
+        else:
+            g_old = nd.g[u]
+            nd.g[u] = np.inf
+            for m in range(nm):
+                if (mk >> np.int64(m)) & 1:
+                    s = node(bx, nd, st, u0 + ms.moves[m, 0], u1 + ms.moves[m, 1],
+                             u2 + ms.moves[m, 2], False)
+                    if s < 0 or s == goal:
+                        continue
+                    c = ms.cost[m] + g_old
+                    if abs(nd.rhs[s] - c) <= _TOL * c:
+                        nd.rhs[s] = best_successor(occ, ms, ufree, bx, nd, st, s)[0]
+                        update_vertex(ms, nd, heap, st, km, start, s)
+            update_vertex(ms, nd, heap, st, km, start, u)
+    return DONE
+
+
+@njit(cache=True)
+def collect(ms, affect, bx, nd, st, cells, blocked, out_s, out_old, out_redo):
+    # pragma: no cover - compiled
+    """Nodes with a cached edge mask whose stencil holds a changed cell, each once, in
+    ``out_s[:n]`` with their old masks (``out_old``); returns n. A newly blocked cell at
+    union offset j clears the moves ``affect[j]`` needs (all moves when it is the node's
+    own cell): no lookup. A newly freed cell marks the node for a fresh lookup
+    (``out_redo``)."""
+    st[S_STAMP] += 1
+    stamp = st[S_STAMP]
+    ust = ms.union
+    n = 0
+    for i in range(cells.shape[0]):
+        c0, c1, c2 = cells[i, 0], cells[i, 1], cells[i, 2]
+        for j in range(-1, ust.shape[0]):
+            if j < 0:
+                x0, x1, x2 = c0, c1, c2
+            else:
+                x0, x1, x2 = c0 - ust[j, 0], c1 - ust[j, 1], c2 - ust[j, 2]
+            s = node(bx, nd, st, x0, x1, x2, False)
+            if s < 0 or nd.mask[s] < 0:
+                continue
+            if nd.stamp[s] != stamp:
+                nd.stamp[s] = stamp
+                out_s[n] = s
+                out_old[n] = nd.mask[s]
+                out_redo[n] = False
+                nd.batch[s] = n
+                n += 1
+            if blocked[i]:
+                nd.mask[s] = 0 if j < 0 else nd.mask[s] & ~affect[j]
+            else:
+                out_redo[nd.batch[s]] = True
+    return n
+
+
+@njit(cache=True, inline="always")
+def _touch(nd, u, stamp, touched, nt, redo):  # pragma: no cover - compiled
+    """List node ``u`` once per repair (``nd.batch`` 1: its rhs needs a recompute)."""
+    if nd.stamp[u] != stamp:
+        nd.stamp[u] = stamp
+        nd.batch[u] = 0
+        touched[nt] = u
+        nt += 1
+    if redo:
+        nd.batch[u] = 1
+    return nt
+
+
+@njit(cache=True)
+def apply_changes(occ, ms, ufree, bx, nd, heap, st, km, start, ss, old, redo, n, touched):
+    # pragma: no cover - compiled
+    """Look up the edge masks of the collected nodes marked ``redo``, then repair every
+    edge whose state flipped, in both directions, recomputing each affected rhs once.
+    Needs room for ``n * len(moves)`` new nodes; ``touched``: scratch of 2 n len(moves)."""
+    for i in range(n):
+        if redo[i]:
+            nd.mask[ss[i]] = -1
+            edges(occ, ms, ufree, nd, st, ss[i])
+    # Each flipped edge x <-> v, both directions (fig. 4, lines 31-36): a freed edge
+    # lowers rhs at once; a lost support (rhs = c + g of the other end) marks the rhs for
+    # one recompute after all flips (g does not change meanwhile).
+    st[S_STAMP] += 1
+    stamp = st[S_STAMP]
+    goal = st[S_GOAL]
+    nt = 0
+    for i in range(n):
+        x = ss[i]
+        mx = nd.mask[x]
+        diff = old[i] ^ mx
+        if diff == 0:
+            continue
+        x0, x1, x2 = unpack3(nd.key[x])
+        gx = nd.g[x]
+        for m in range(ms.moves.shape[0]):
+            bit = np.int64(1) << np.int64(m)
+            if not diff & bit:
+                continue
+            c = ms.cost[m]
+            v0, v1, v2 = x0 + ms.moves[m, 0], x1 + ms.moves[m, 1], x2 + ms.moves[m, 2]
+            v = node(bx, nd, st, v0, v1, v2, False)
+            gv = nd.g[v] if v >= 0 else np.inf
+            if mx & bit:  # freed
+                if gv < np.inf and x != goal and c + gv < nd.rhs[x]:
+                    nd.rhs[x] = c + gv
+                    nt = _touch(nd, x, stamp, touched, nt, False)
+                if gx < np.inf:
+                    if v < 0:
+                        v = node(bx, nd, st, v0, v1, v2, True)
+                    if v != goal and c + gx < nd.rhs[v]:
+                        nd.rhs[v] = c + gx
+                        nt = _touch(nd, v, stamp, touched, nt, False)
+            else:  # blocked
+                if gv < np.inf and x != goal and abs(nd.rhs[x] - (c + gv)) <= _TOL * (c + gv):
+                    nt = _touch(nd, x, stamp, touched, nt, True)
+                if (gx < np.inf and v >= 0 and v != goal
+                        and abs(nd.rhs[v] - (c + gx)) <= _TOL * (c + gx)):
+                    nt = _touch(nd, v, stamp, touched, nt, True)
+    for i in range(nt):
+        u = touched[i]
+        if nd.mask[u] == 0:
+            # No edge left (its own cell blocked, or walled in): no rhs reads its g any
+            # more, so it is consistent at inf without queueing it.
+            nd.g[u] = np.inf
+            nd.rhs[u] = np.inf
+            if nd.pos[u] >= 0:
+                _remove(heap, nd.pos, st, u)
+            continue
+        if nd.batch[u] == 1:
+            nd.rhs[u] = best_successor(occ, ms, ufree, bx, nd, st, u)[0]
+        update_vertex(ms, nd, heap, st, km, start, u)
+
+
+@njit(cache=True)
+def extract(occ, ms, ufree, bx, nd, st, start, out):  # pragma: no cover - compiled
+    """Greedy descent from the start: next = argmin c(s, s') + g(s'), to the goal.
+    Writes packed keys to ``out``; returns (count, cost), count 0 when unreachable or
+    when the descent does not reach the goal within ``len(out)`` steps."""
+    s = node(bx, nd, st, start[0], start[1], start[2], False)
+    if s < 0 or nd.rhs[s] == np.inf:  # the start may stay overconsistent (fig. 4)
+        return 0, np.inf
+    goal = st[S_GOAL]
+    cost = 0.0
+    out[0] = nd.key[s]
+    k = 1
+    while s != goal:
+        if k >= out.shape[0]:
+            return 0, np.inf
+        best, v, c = best_successor(occ, ms, ufree, bx, nd, st, s)
+        if v < 0 or best == np.inf:
+            return 0, np.inf
+        cost += c
+        out[k] = nd.key[v]
+        k += 1
+        s = v
+    return k, cost

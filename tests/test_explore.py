@@ -1,0 +1,91 @@
+"""Exploration: the robot discovers a wall it did not know, detours through its door, and
+every repaired plan costs what A* from scratch finds on the same map state."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from planner.errors import PlanError
+from planner.explore import explore, ray_directions
+
+BOUNDS = [[0.0, 0.0, 0.0], [10.0, 6.0, 2.0]]
+
+
+def _wall(door: bool, step: float = 0.05) -> np.ndarray:
+    """Points on the plane x = 5 over the whole box cross-section, with a door at
+    y 4..5.5 (full height) when ``door``."""
+    y, z = np.meshgrid(np.arange(0, 6 + 1e-9, step), np.arange(0, 2 + 1e-9, step))
+    y, z = y.ravel(), z.ravel()
+    if door:
+        keep = (y < 4.0) | (y > 5.5)
+        y, z = y[keep], z[keep]
+    return np.column_stack([np.full_like(y, 5.0), y, z])
+
+
+@pytest.mark.parametrize("lattice", ["cubic", "fcc"])
+def test_robot_finds_the_door_and_replans_like_astar(lattice):
+    r = explore(_wall(door=True), [1, 1, 1], [9, 1, 1], lattice=lattice, radius=0.2,
+                cell_volume=0.1**3, bounds=BOUNDS, sensor_range=3.0, fov=(360, 20),
+                resolution=5.0)
+    assert r.status == "reached"
+    assert r.mismatches == 0 and r.contacts == 0
+    assert r.replans >= 3  # the first plan, then the wall coming into view
+    assert np.all(r.changed[1:] > 0)  # a replan happens only when the map changed
+    # It went through the door: some trajectory point crosses x = 5 inside y 4..5.5.
+    near = r.trajectory[np.abs(r.trajectory[:, 0] - 5.0) < 0.15]
+    assert len(near) and np.all((near[:, 1] > 4.0) & (near[:, 1] < 5.5))
+    assert r.distance > 2 * np.hypot(4.0, 3.0)  # via the door: x = 5, y > 4
+    assert np.all(np.isfinite(r.dstar_cost)) and np.allclose(r.dstar_cost, r.astar_cost,
+                                                             atol=1e-9)
+    assert r.dstar_checks[1:].sum() < r.astar_checks[1:].sum()
+    s = r.summary()
+    assert s["replans"] == r.replans and s["points_seen"] == int(r.seen.sum()) > 0
+
+
+def test_closed_wall_is_proved_unreachable():
+    r = explore(_wall(door=False), [1, 1, 1], [9, 1, 1], lattice="cubic", radius=0.2,
+                cell_volume=0.1**3, bounds=BOUNDS, sensor_range=3.0, fov=(360, 30),
+                resolution=5.0)
+    assert r.status == "unreachable"
+    assert r.mismatches == 0 and r.contacts == 0
+    assert np.isinf(r.dstar_cost[-1]) and np.isinf(r.astar_cost[-1])
+
+
+def test_step_budget_stops_the_robot_and_start_at_goal_is_reached():
+    r = explore(_wall(door=True), [1, 1, 1], [9, 1, 1], lattice="cubic", radius=0.2,
+                cell_volume=0.1**3, bounds=BOUNDS, max_steps=3)
+    assert r.status == "budget" and len(r.trajectory) == 4
+    r = explore(_wall(door=True), [1, 1, 1], [1, 1, 1], lattice="cubic", radius=0.2,
+                cell_volume=0.1**3, bounds=BOUNDS)
+    assert r.status == "reached" and r.distance == 0 and r.replans == 1
+
+
+def test_summary_figure_is_written(tmp_path):
+    r = explore(_wall(door=True), [1, 1, 1], [9, 1, 1], lattice="cubic", radius=0.2,
+                cell_volume=0.1**3, bounds=BOUNDS, sensor_range=3.0, resolution=6.0)
+    out = r.plot(tmp_path / "explore.png")
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_ray_directions_cover_the_field_of_view():
+    d = ray_directions((360, 30), 10)
+    assert np.allclose(np.linalg.norm(d, axis=1), 1)
+    assert len(d) == 36 * 7
+    el = np.degrees(np.arcsin(d[:, 2]))
+    assert el.min() == pytest.approx(-30) and el.max() == pytest.approx(30)
+    assert len(ray_directions((90, 0), 10)) == 10  # -45..45 inclusive, one elevation
+
+
+def test_bad_sensor_settings_are_one_clear_error():
+    with pytest.raises(PlanError, match="sensor_range"):
+        explore(_wall(True), [1, 1, 1], [9, 1, 1], radius=0.2, cell_volume=1e-3,
+                bounds=BOUNDS, sensor_range=-1)
+    with pytest.raises(PlanError, match="max_steps"):
+        explore(_wall(True), [1, 1, 1], [9, 1, 1], radius=0.2, cell_volume=1e-3,
+                bounds=BOUNDS, max_steps=-1)
+    with pytest.raises(PlanError, match="fov"):
+        ray_directions((400, 10), 2)
+    with pytest.raises(PlanError, match="goal"):
+        explore(_wall(True), [1, 1, 1], [5, 1, 1], radius=0.2, cell_volume=1e-3,
+                bounds=BOUNDS)

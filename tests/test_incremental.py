@@ -1,0 +1,132 @@
+"""Incremental search (D* Lite): after every batch of changed cells and start moves, the
+repaired path costs exactly what a from-scratch A* finds on the updated world."""
+
+from __future__ import annotations
+
+import math
+import zlib
+
+import numpy as np
+import pytest
+
+from planner.errors import PlanError
+from planner.lattice import NAMED_LATTICES, Lattice
+from planner.search import move_stencils, search
+from planner.search.incremental import DStarLite
+from planner.world import World
+
+
+def _free_cells(world: World) -> np.ndarray:
+    occ = world.occupancy
+    flat = np.flatnonzero(occ.grid)
+    return np.stack(np.unravel_index(flat, tuple(occ.dims)), axis=1) + occ.lo
+
+
+def _in_bounds_cells(world: World) -> np.ndarray:
+    occ = world.occupancy
+    box = np.stack(np.unravel_index(np.arange(len(occ.grid)), tuple(occ.dims)), 1) + occ.lo
+    return box[world.in_bounds(box)]
+
+
+def _astar_cost(world, start, goal, neighbors) -> float:
+    try:
+        r = search(world, start, goal, method="astar", neighbors=neighbors)
+    except PlanError:  # start or goal blocked
+        return math.inf
+    return r.cost
+
+
+def _assert_valid(world, cells, neighbors):
+    moves, cost, _, _, _, per_move = move_stencils(world.lattice, neighbors)
+    index = {tuple(m): i for i, m in enumerate(moves.tolist())}
+    total = 0.0
+    assert world.is_free(cells).all()
+    for a, b in zip(cells[:-1], cells[1:], strict=True):
+        m = index[tuple((b - a).tolist())]  # KeyError: not a move
+        assert world.is_free(a + per_move[m]).all(), "a move's safe-rule cell is blocked"
+        total += cost[m]
+    return total
+
+
+@pytest.mark.parametrize("neighbors", ["face", "full"])
+@pytest.mark.parametrize("name", NAMED_LATTICES)
+def test_dstar_lite_matches_astar_after_every_batch(name, neighbors, seed=0):
+    rng = np.random.default_rng([zlib.crc32(f"{name}/{neighbors}".encode()), seed])
+    lat = Lattice.named(name, 1.0)
+    world = World(lat, np.zeros((0, 3), np.int64), [[0, 0, 0], [7, 7, 5]])
+    cells = _in_bounds_cells(world)
+    world.set_cells(cells[rng.random(len(cells)) < 0.18], blocked=True)
+    free = _free_cells(world)
+    d = np.linalg.norm(lat.to_world(free)[:, None] - lat.to_world(free)[None], axis=2)
+    i, j = np.unravel_index(np.argmax(d), d.shape)
+    start, goal = free[i], free[j]
+    dl = DStarLite(world, start, goal, neighbors=neighbors)
+    checked = 0
+    for batch in range(8):
+        r = dl.plan()
+        want = _astar_cost(world, dl.start, goal, neighbors)
+        if math.isinf(want):
+            assert not r.found and math.isinf(r.cost)
+        else:
+            assert r.found and abs(r.cost - want) <= 1e-9, (batch, r.cost, want)
+            assert abs(_assert_valid(world, r.cells, neighbors) - r.cost) <= 1e-9
+            assert np.array_equal(r.cells[0], dl.start) and np.array_equal(r.cells[-1], goal)
+            checked += 1
+            if len(r.cells) > 3 and batch % 2:
+                dl.move_start(r.cells[1])  # the robot takes a step
+        # A batch: block some cells on the current path (not its ends), then flip random
+        # cells both ways (after a dead end, mostly free cells).
+        ends = np.array([dl.start, goal])
+        on_path = r.cells[1:-1] if r.found else np.zeros((0, 3), np.int64)
+        block = on_path[rng.random(len(on_path)) < 0.3]
+        flip = cells[rng.random(len(cells)) < (0.05 if r.found else 0.3)]
+        if not r.found:
+            flip = flip[~world.is_free(flip) | (rng.random(len(flip)) < 0.1)]
+        block, flip = (x[~(x[:, None] == ends[None]).all(2).any(1)] for x in (block, flip))
+        now_free = world.is_free(flip)
+        # Three ways to report: the new state given (no lookups), or looked up.
+        dl.update(world.set_cells(block, True), blocked=True)
+        dl.update(world.set_cells(flip[~now_free], False), blocked=False)
+        dl.update(world.set_cells(flip[now_free], True))
+    assert checked >= 3  # most batches have a path to compare
+
+
+def test_unchanged_world_costs_like_astar_and_counts_checks():
+    lat = Lattice.named("fcc", 1.0)
+    world = World(lat, [[3, 0, 1], [2, 2, 0]], [[0, 0, 0], [8, 8, 8]])
+    s, g = world.lattice.quantize(np.array([[0.5, 0.5, 0.5], [7.5, 7.5, 7.5]]))
+    a = search(world, s, g)
+    r = DStarLite(world, s, g).plan()
+    assert abs(r.cost - a.cost) <= 1e-9 and r.cell_checks > 0 and r.expansions > 0
+    assert r.guarantee
+
+
+def test_blocked_start_is_unreachable_not_an_error_after_an_update():
+    world = World(Lattice.named("cubic", 1.0), [], [[0, 0, 0], [4, 4, 4]])
+    d = DStarLite(world, [0, 0, 0], [4, 4, 4])
+    assert d.plan().found
+    d.update(world.set_cells([[0, 0, 0]], True))
+    r = d.plan()
+    assert not r.found and r.status == "blocked"
+    d.update(world.set_cells([[0, 0, 0]], False))
+    assert abs(d.plan().cost - 4 * math.sqrt(3)) <= 1e-12
+
+
+def test_walled_off_goal_is_unreachable_then_reachable_again():
+    world = World(Lattice.named("cubic", 1.0), [], [[0, 0, 0], [4, 4, 4]])
+    d = DStarLite(world, [0, 0, 0], [4, 4, 4])
+    wall = np.array([[2, j, k] for j in range(5) for k in range(5)])
+    d.update(world.set_cells(wall, True))
+    assert d.plan().status == "unreachable"
+    d.update(world.set_cells([[2, 4, 4]], False))
+    r = d.plan()
+    assert r.found and abs(r.cost - _astar_cost(world, [0, 0, 0], [4, 4, 4], "full")) < 1e-9
+
+
+def test_bad_input_is_one_clear_error():
+    world = World(Lattice.named("cubic", 1.0), [[1, 1, 1]], [[0, 0, 0], [4, 4, 4]])
+    with pytest.raises(PlanError, match="start"):
+        DStarLite(world, [1, 1, 1], [4, 4, 4])
+    with pytest.raises(PlanError, match="dense"):
+        DStarLite(World(Lattice.named("cubic", 1.0), [], [[0, 0, 0], [4, 4, 4]],
+                        dense_budget=0), [0, 0, 0], [4, 4, 4])
