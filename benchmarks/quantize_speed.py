@@ -26,8 +26,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from planner.analysis.measure import NAMED, format_table, paper_delta_errors, quantize_eq2_numpy
 from planner.lattice import Lattice
-from planner.measure import NAMED, format_table, paper_delta_errors, quantize_eq2_numpy
 
 CUBE27 = np.array(np.meshgrid(*[(-1, 0, 1)] * 3, indexing="ij")).reshape(3, -1).T
 

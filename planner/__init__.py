@@ -2,8 +2,8 @@
 
 The pipeline, one module per step: points (:mod:`planner.io`) -> lattice indices
 (:class:`Lattice`) -> occupied voxel list (:class:`OccupiedVoxelList`) -> planning world
-(:class:`World`) -> search (:mod:`planner.search`, :mod:`planner.baseline`) -> path
-(:class:`PlanResult`) -> metrics (:mod:`planner.bench`).
+(:class:`World`) -> search (:mod:`planner.search`, :mod:`planner.ompl`) -> path
+(:class:`PlanResult`) -> metrics (:mod:`planner.bench`, :mod:`planner.analysis`).
 """
 
 from planner.errors import LatticeError, MapError, PlanError, PlannerError
@@ -34,8 +34,8 @@ _LAZY = {
 }
 
 
-_SUBMODULES = ("api", "baseline", "bench", "io", "lattice", "maps", "measure", "report",
-               "search", "voxels", "world")
+_SUBMODULES = ("analysis", "api", "bench", "io", "lattice", "maps", "ompl", "paths", "search",
+               "voxels", "world")
 
 
 def __getattr__(name: str):

@@ -84,7 +84,7 @@ def _resolve(p: str, base: Path) -> Path | None:
 
 
 def _check_methods(path: Path, methods: tuple[str, ...], planners: tuple[str, ...]) -> None:
-    from planner.baseline import PLANNERS
+    from planner.ompl import PLANNERS
     from planner.search import METHODS
 
     for m in methods:
