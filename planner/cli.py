@@ -108,6 +108,18 @@ def _lattice_list(text: str) -> list[str]:
     return names
 
 
+def _explore_lattices(text: str) -> list[str]:
+    return list(NAMED_LATTICES) if text.strip() == "all" else _lattice_list(text)
+
+
+def _fov(text: str) -> tuple[float, float]:
+    h, v = _numbers(text, 2, "field of view")
+    if not (0 < h <= 360 and 0 <= v <= 90):
+        raise argparse.ArgumentTypeError(f"field of view must be 0<h<=360, 0<=v<=90 degrees, "
+                                         f"got {text!r}")
+    return float(h), float(v)
+
+
 def _generator(text: str):
     """A custom lattice: ``"a,b,c;d,e,f;g,h,i"`` (rows of G) or a ``.npy`` file."""
     from planner.lattice import Lattice
@@ -131,7 +143,8 @@ def _generator(text: str):
 
 
 _OUTPUTS = {("plan", "out"): (".csv", ".json"), ("voxels", "out"): (".npz",),
-            ("plan", "plot"): PLOT_SUFFIXES, ("compare", "plot"): PLOT_SUFFIXES}
+            ("plan", "plot"): PLOT_SUFFIXES, ("compare", "plot"): PLOT_SUFFIXES,
+            ("explore", "plot"): (".png",)}
 
 
 def _check_output(option: str, text: str, suffixes: tuple[str, ...]) -> None:
@@ -238,6 +251,23 @@ def build_parser() -> argparse.ArgumentParser:
     _add_world_args(p)
     p.add_argument("--out", required=True, help="output .npz")
 
+    p = sub.add_parser("explore", help="explore an unknown map with a simulated range sensor, "
+                                       "replanning with D* Lite (checked against A*)")
+    _add_world_args(p, lattice=False)
+    p.add_argument("--lattice", default="fcc", type=_explore_lattices,
+                   help="named lattice, comma-separated names, or 'all'")
+    p.add_argument("--start", type=_vec3, required=True, help="x,y,z (m); negatives allowed")
+    p.add_argument("--goal", type=_vec3, required=True, help="x,y,z (m); negatives allowed")
+    p.add_argument("--neighbors", default="full", help="full, face, face+k or full+k")
+    p.add_argument("--sensor-range", type=_positive, default=4.0, help="metres")
+    p.add_argument("--fov", type=_fov, default=(360.0, 30.0),
+                   help="horizontal,vertical field of view in degrees (vertical is +-)")
+    p.add_argument("--resolution", type=_positive, default=3.0, help="ray spacing, degrees")
+    p.add_argument("--max-steps", type=_int_range(1), default=100_000, help="move budget")
+    p.add_argument("--plot", help="summary figure (PNG); with several lattices, one per "
+                                  "lattice (name suffixed)")
+    p.add_argument("--json", action="store_true", help="print the summaries as JSON")
+
     p = sub.add_parser("bench", help="run a benchmark suite (which lattice for my map?)")
     p.add_argument("suite", help="bundled suite name (quick, paper, full) or a TOML file")
     p.add_argument("--out", default=None, help="output folder (None: results/<suite>)")
@@ -337,6 +367,29 @@ def _cmd_voxels(a) -> int:
     return 0
 
 
+def _cmd_explore(a) -> int:
+    from planner.analysis.compare import map_defaults
+    from planner.analysis.tables import format_table
+    from planner.explore import explore
+
+    radius, cell_volume = map_defaults(a.map, a.radius, a.cell_volume)
+    rows, bad = [], 0
+    for name in a.lattice:
+        res = explore(a.map, a.start, a.goal, lattice=name, radius=radius,
+                      cell_volume=cell_volume, bounds=a.bounds, sensor_range=a.sensor_range,
+                      fov=a.fov, resolution=a.resolution, neighbors=a.neighbors,
+                      max_steps=a.max_steps)
+        rows.append(res.summary())
+        bad += res.mismatches + res.contacts
+        if a.plot:
+            p = Path(a.plot)
+            res.plot(p if len(a.lattice) == 1 else p.with_name(f"{p.stem}_{name}{p.suffix}"))
+    print(json.dumps(rows) if a.json else format_table(rows))
+    if bad:  # D* Lite disagreed with A* from scratch, or the robot touched the true map
+        raise PlannerError(f"{bad} mismatches/contacts: see the table")
+    return 0 if all(r["status"] == "reached" for r in rows) else 1
+
+
 def _cmd_bench(a) -> int:
     from planner.bench.session import run_suite
 
@@ -345,7 +398,8 @@ def _cmd_bench(a) -> int:
 
 
 _COMMANDS = {"lattices": _cmd_lattices, "stats": _cmd_stats, "plan": _cmd_plan,
-             "compare": _cmd_compare, "voxels": _cmd_voxels, "bench": _cmd_bench}
+             "compare": _cmd_compare, "voxels": _cmd_voxels, "explore": _cmd_explore,
+             "bench": _cmd_bench}
 
 
 def main(argv: list[str] | None = None) -> int:

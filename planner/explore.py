@@ -391,6 +391,7 @@ def explore(
                   source=f"explored {obst.source}")
     sensor = _Sensor(pts, obst.box_size if boxes else 0.0, lat, _walk(lat), dirs,
                      sensor_range)
+    _warm_up(lat, neighbors, DStarLite, search)
     dl = DStarLite(known, s, gcell, neighbors=neighbors)
     rec = {k: [] for k in ("changed", "ds", "dc", "de", "dcost", "as", "ac", "ae", "acost")}
     cur = s.copy()
@@ -456,6 +457,19 @@ def explore(
         astar_expansions=arr["ae"].astype(np.int64), astar_cost=arr["acost"].astype(float),
         mismatches=mismatches, contacts=contacts, start=start_p, goal=goal_p, points=pts,
         seen=sensor.seen, rays=len(dirs) * len(traj), sense_seconds=sense_secs)
+
+
+def _warm_up(lat: Lattice, neighbors: str, dstar, search) -> None:
+    """Compile (or load) the D* Lite and A* kernels on a tiny world of the same lattice, so
+    that no replan's time includes JIT compilation."""
+    tiny = World(lat, np.zeros((0, 3), np.int64), lat.to_world(np.array([[-3, -3, -3],
+                                                                          [3, 3, 3]])))
+    a, b = np.zeros(3, np.int64), np.ones(3, np.int64)
+    dl = dstar(tiny, a, b, neighbors=neighbors)
+    dl.plan()
+    dl.update(tiny.set_cells(np.array([[0, 0, 1]]), True), blocked=True)
+    dl.plan()
+    _scratch_astar(search, tiny, a, b, neighbors)
 
 
 def _scratch_astar(search, world, cur, goal, neighbors) -> tuple[float, int, int, float]:
