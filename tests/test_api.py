@@ -107,9 +107,12 @@ def test_no_path_is_reported_not_raised(wall):
 
 
 def test_bad_api_arguments_are_plan_errors(wall):
-    for radius in ("0.2", None, -1.0, float("nan")):
+    for radius in ("0.2", -1.0, float("nan")):
         with pytest.raises(PlanError, match="radius must be"):
             planner.build_world(wall, "fcc", cell_volume=0.001, radius=radius, bounds=BOUNDS)
+    # None means "the saved world's radius, else 0" (a map is not inflated by default)
+    assert planner.build_world(wall, "fcc", cell_volume=0.001, radius=None,
+                               bounds=BOUNDS).radius == 0.0
     with pytest.raises(PlanError, match="method must be a string"):
         planner.plan(wall, START, GOAL, method=None)
 
