@@ -443,6 +443,7 @@ def plan(
     path_cells = res.cells
     checks = res.cell_checks
     seconds = res.seconds
+    raw_length = path_length(np.concatenate([s[None], lat.to_world(path_cells), g[None]]), 0.0)
     if shortcut and method in ("astar", "dijkstra"):
         t0 = time.perf_counter()
         before = world.cell_checks
@@ -454,7 +455,9 @@ def plan(
     return PlanResult(
         found=True, path=path, cells=path_cells, length=length, cell_checks=checks,
         expansions=res.expansions, generated=res.generated, seconds=seconds,
-        peak_bytes=res.peak_bytes, extra={"cost_between_centres": res.cost},
+        peak_bytes=res.peak_bytes,
+        extra={"cost_between_centres": res.cost, "raw_length": raw_length,
+               "smoothed_length": length if shortcut else None},
         guarantee=res.guarantee, unknown_cells=unknown_on_path(world, path), **common,
     )
 

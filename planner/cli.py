@@ -21,6 +21,7 @@ import numpy as np
 
 from planner.errors import PlannerError
 from planner.lattice import NAMED_LATTICES
+from planner.lattice.paper import NAMED_LATTICES_2D
 
 METHODS = "astar, dijkstra, theta, lazy-theta, ompl:<planner>"
 PLOT_SUFFIXES = (".png", ".pdf", ".svg")
@@ -101,7 +102,7 @@ def _lattice_list(text: str) -> list[str]:
     names = [s.strip().lower() for s in text.split(",") if s.strip()]
     if not names:
         raise argparse.ArgumentTypeError(f"expected lattice names from {', '.join(NAMED_LATTICES)}")
-    bad = [n for n in names if n not in NAMED_LATTICES]
+    bad = [n for n in names if n not in NAMED_LATTICES + NAMED_LATTICES_2D]
     if bad:
         raise argparse.ArgumentTypeError(
             f"unknown lattice {bad[0]!r}; expected names from {', '.join(NAMED_LATTICES)}")
@@ -130,7 +131,8 @@ def _generator(text: str):
         raise argparse.ArgumentTypeError(str(exc)) from None
 
 
-_OUTPUTS = {("plan", "out"): (".csv", ".json"), ("voxels", "out"): (".npz",),
+_OUTPUTS = {("plan", "out"): (".csv", ".json"), ("world", "out"): (".npz",),
+            ("voxels", "out"): (".npz",),
             ("plan", "plot"): PLOT_SUFFIXES, ("compare", "plot"): PLOT_SUFFIXES}
 
 
@@ -164,7 +166,9 @@ def _add_world_args(p: argparse.ArgumentParser, *, lattice: bool = True) -> None
                         "narrow_passage)")
     if lattice:
         g = p.add_mutually_exclusive_group()
-        g.add_argument("--lattice", default="fcc", choices=NAMED_LATTICES, help="named lattice")
+        g.add_argument("--lattice", default="fcc", choices=NAMED_LATTICES + NAMED_LATTICES_2D,
+                       help="named lattice (2D maps: square or hex2d; a saved world keeps its "
+                            "own unless another is named)")
         g.add_argument("--generator", type=_generator, default=None,
                        help="custom lattice: generator rows 'a,b,c;d,e,f;g,h,i' (columns are "
                             "the basis vectors, metres) or a .npy file")
@@ -178,6 +182,10 @@ def _add_world_args(p: argparse.ArgumentParser, *, lattice: bool = True) -> None
     p.add_argument("--format", default=None,
                    help="file format instead of the extension: ply, pcd, xyz, npy, bt, 3dmap, "
                         "or poses (a pose list of scans, merged)")
+    p.add_argument("--unknown", choices=("blocked", "free"), default=None,
+                   help="unknown space: blocked (kept the robot radius away, as obstacles) or "
+                        "free (None: blocked when the map says what was observed free, else "
+                        "free)")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -234,9 +242,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--plot", help="write a figure of the paths")
     p.add_argument("--json", action="store_true", help="print the rows as JSON")
 
-    p = sub.add_parser("voxels", help="build an (inflated) occupied voxel list and save it")
-    _add_world_args(p)
-    p.add_argument("--out", required=True, help="output .npz")
+    for name in ("world", "voxels"):  # "voxels": the former name, kept as an alias
+        p = sub.add_parser(name, help="build a planning world once and save it (.npz) for "
+                                      "plan and compare")
+        _add_world_args(p)
+        p.add_argument("--out", required=True, help="output .npz")
 
     p = sub.add_parser("bench", help="run a benchmark suite (which lattice for my map?)")
     p.add_argument("suite", help="bundled suite name (quick, paper, full) or a TOML file")
@@ -287,15 +297,22 @@ def _cmd_stats(a) -> int:
 
 def _build(a):
     from planner import api
+    from planner._world_file import is_world_file
     from planner.analysis.compare import map_defaults
 
-    radius, cell_volume = map_defaults(a.map, a.radius, a.cell_volume)
     lattice = a.generator if a.generator is not None else a.lattice
+    if is_world_file(a.map):  # a saved world: loaded, options only checked against it
+        if lattice == "fcc":  # the parser's default: the saved lattice
+            lattice = None
+        world = api.build_world(a.map, lattice, cell_volume=a.cell_volume, radius=a.radius,
+                                bounds=a.bounds, unknown=a.unknown)
+        return world, world.lattice.name or "custom"
+    radius, cell_volume = map_defaults(a.map, a.radius, a.cell_volume)
     if a.generator is not None:
         cell_volume = a.cell_volume  # a custom generator keeps its own scale unless given
     world = api.build_world(a.map, lattice, cell_volume=cell_volume, radius=radius,
-                            bounds=a.bounds, format=a.format)
-    return world, (a.generator.name if a.generator is not None else a.lattice)
+                            bounds=a.bounds, format=a.format, unknown=a.unknown)
+    return world, (a.generator.name if a.generator is not None else world.lattice.name)
 
 
 def _cmd_plan(a) -> int:
@@ -308,7 +325,9 @@ def _cmd_plan(a) -> int:
         corner_cutting=a.corner_cutting, shortcut=a.shortcut, time_limit=a.time, seed=a.seed,
     )
     if a.out:
-        compare.write_path(a.out, res)
+        from planner._pathfile import write_path
+
+        write_path(a.out, res, world, a.start, a.goal)
     if a.plot and res.found:
         compare.plot_paths(a.plot, world, {label: res})
     print(json.dumps(res.to_dict()) if a.json else compare.describe(res))
@@ -316,11 +335,17 @@ def _cmd_plan(a) -> int:
 
 
 def _cmd_compare(a) -> int:
+    from planner._world_file import is_world_file, load_world
     from planner.analysis import compare
 
     lattices = list(a.lattices) + ([a.generator] if a.generator is not None else [])
+    radius = a.radius
+    if is_world_file(a.map):  # one lattice: the saved one
+        saved = load_world(a.map)
+        lattices = [saved.lattice]
+        radius = saved.radius if radius is None else radius
     rows = compare.compare(
-        a.map, lattices=lattices, cell_volume=a.cell_volume, radius=a.radius, bounds=a.bounds,
+        a.map, lattices=lattices, cell_volume=a.cell_volume, radius=radius, bounds=a.bounds,
         start=a.start, goal=a.goal, method=a.method, neighbors=a.neighbors, plot=a.plot,
         progress=not a.json and sys.stderr.isatty(), format=a.format,
     )
@@ -328,12 +353,14 @@ def _cmd_compare(a) -> int:
     return 0 if all(r["found"] for r in rows) else 1
 
 
-def _cmd_voxels(a) -> int:
+def _cmd_world(a) -> int:
+    from planner._world_file import save_world
+
     world, label = _build(a)
-    Path(a.out).parent.mkdir(parents=True, exist_ok=True)  # as plan --out does
-    world.blocked_voxels().save(a.out)
-    print(f"{a.out}: {world.n_blocked} blocked {label} cells, "
-          f"cell volume {world.lattice.cell_volume:.6g} m^3")
+    save_world(world, a.out)
+    print(f"{a.out}: {label} world, {world.n_blocked} blocked and {world.n_unknown} unknown "
+          f"cells, radius {world.radius:g} m, unknown space {world.unknown_policy}, built in "
+          f"{world.build_seconds:.2f} s")
     return 0
 
 
@@ -345,7 +372,8 @@ def _cmd_bench(a) -> int:
 
 
 _COMMANDS = {"lattices": _cmd_lattices, "stats": _cmd_stats, "plan": _cmd_plan,
-             "compare": _cmd_compare, "voxels": _cmd_voxels, "bench": _cmd_bench}
+             "compare": _cmd_compare, "world": _cmd_world, "voxels": _cmd_world,
+             "bench": _cmd_bench}
 
 
 def main(argv: list[str] | None = None) -> int:

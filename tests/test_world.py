@@ -9,7 +9,6 @@ import numpy as np
 import pytest
 
 import planner
-from planner import api
 from planner.errors import MapError, PlanError
 from planner.io import Obstacles
 from planner.lattice import NAMED_LATTICES, Lattice
