@@ -4,10 +4,11 @@ File format (numpy ``.npz``, uncompressed for a fast load; written atomically):
 
 * ``format`` = ``"planner.World"``, ``version`` = 1;
 * ``generator`` (3, 3) float64 (m) and ``lattice`` (its name, ``""`` for a custom one);
-* ``blocked`` (M,) int64 and ``unknown`` (U,) int64: sorted packed keys
-  (:func:`planner.keys.pack`) of the blocked cells (inflated for ``radius``; under the
-  ``"blocked"`` policy unknown space too) and of the cells meeting unknown space. Free cells
-  are the in-bounds cells in neither list (not stored: they are the bulk of the box);
+* ``blocked`` (M, 3) int32: the distinct blocked cells (inflated for ``radius``; under the
+  ``"blocked"`` policy unknown space too), and ``unknown`` (U,) int64: sorted packed keys
+  (:func:`planner.keys.pack`) of the cells meeting unknown space. Free cells are the
+  in-bounds cells in neither list (not stored: they are the bulk of the box). Both are
+  stored as the world uses them, so loading does no conversion work;
 * ``bounds`` (2, 3) float64 (m), ``radius`` (m), ``unknown_policy``;
 * ``source`` (the map file name) and ``source_sha256`` (hex digest of its bytes, ``""`` for
   in-memory data); ``dim`` (2 for a 2D map planned on a prism of its 2D lattice).
@@ -69,7 +70,9 @@ def save_world(world, path: str | os.PathLike) -> None:
     digest = getattr(world, "source_sha256", "") or ""
     if not digest and src and Path(src).is_file():
         digest = sha256(src)
-    blocked = unique_keys(pack(world.blocked)) if len(world.blocked) else np.zeros(0, np.int64)
+    from planner.keys import unpack
+
+    blocked = unpack(unique_keys(pack(world.blocked)), 3).astype(np.int32)
     arrays = {
         "format": np.array(FORMAT), "version": np.array(VERSION, dtype=np.int64),
         "generator": np.asarray(world.lattice.generator, dtype=np.float64),
@@ -96,7 +99,6 @@ def load_world(path: str | os.PathLike):
     MapError
         Not a saved world, another format version, or a damaged file.
     """
-    from planner.keys import unpack
     from planner.lattice import Lattice
     from planner.world import World
 
@@ -113,10 +115,17 @@ def load_world(path: str | os.PathLike):
     except (OSError, ValueError, KeyError, zipfile.BadZipFile) as exc:
         raise MapError(f"{p.name}: cannot read saved world: {exc}") from None
     name = str(d["lattice"]) or None
-    lat = Lattice(d["generator"], name=name)
-    world = World(lat, unpack(d["blocked"], 3), d["bounds"], source=str(d["source"]),
-                  radius=float(d["radius"]), unknown_cells=unpack(d["unknown"], 3),
-                  unknown_policy=str(d["unknown_policy"]), dim=int(d["dim"]))
+    dim = int(d["dim"])
+    g, bounds = d["generator"], d["bounds"]
+    if dim == 2:  # the 2D lattice; World plans on its prism again
+        g, bounds = g[:2, :2], bounds[:, :2]
+    lat = Lattice(g, name=name)
+    world = World(lat, np.zeros((0, dim), np.int64), bounds, source=str(d["source"]),
+                  radius=float(d["radius"]), unknown_policy=str(d["unknown_policy"]),
+                  dim=dim)
+    # Written by save_world from a checked world: in range, distinct and sorted as stored.
+    world._blocked = np.ascontiguousarray(d["blocked"], dtype=np.int64).reshape(-1, 3)
+    world._unknown_keys = np.ascontiguousarray(d["unknown"], dtype=np.int64)
     world.source_sha256 = str(d["source_sha256"])
     world.saved_path = str(p)
     return world

@@ -288,7 +288,9 @@ class World:
         w = _cells(indices)
         if not len(self._unknown_keys) or not len(w):
             return np.zeros(len(w), dtype=bool)
-        return np.isin(pack(w), self._unknown_keys)
+        k = pack(w)
+        pos = np.minimum(np.searchsorted(self._unknown_keys, k), len(self._unknown_keys) - 1)
+        return self._unknown_keys[pos] == k
 
     @property
     def unknown_note(self) -> str:

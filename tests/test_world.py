@@ -204,3 +204,32 @@ def test_2d_lattices_are_named_and_world_accepts_them():
     res = planner.plan(w, (0.2, 0.5), (0.8, 0.5))
     assert res.found and np.abs(res.path[:, 1] - 0.5).max() >= 0.1 - 1e-9  # around the cell
     assert not (res.cells == [5, 5, 0]).all(axis=1).any()
+
+
+def test_saved_2d_world_keeps_planar_moves(tmp_path):
+    yaml = _ros_map(tmp_path)
+    w = planner.build_world(yaml, "hex2d", cell_volume=0.03**2, radius=0.05)
+    out = tmp_path / "room2d.npz"
+    planner._world_file.save_world(w, out)
+    back = planner.build_world(out)
+    assert back.dim == 2 and back.lattice.neighbors("full").shape == (6, 3)
+    assert back.n_blocked == w.n_blocked and back.n_unknown == w.n_unknown
+    a = planner.plan(w, (-0.7, 0.0), (0.3, 0.3))
+    b = planner.plan(back, (-0.7, 0.0), (0.3, 0.3))
+    assert a.found and np.allclose(a.path, b.path)
+
+
+@pytest.mark.skipif(not GEB.is_file(), reason="geb079.bt not present")
+def test_geb079_default_planning_stays_in_observed_space():
+    # Unknown space planned as free (the old behaviour) solves this query straight through
+    # unobserved space; by default the start is reported blocked by unknown space, and a
+    # query between observed free cells finds a path touching no unknown cell.
+    free = planner.build_world(GEB, "cubic", cell_volume=0.1**3, radius=0.2, unknown="free")
+    old = planner.plan(free, (0, 0, 1), (20, 0, 1))
+    assert old.found and old.unknown_cells > 0
+    world = planner.build_world(GEB, "cubic", cell_volume=0.1**3, radius=0.2)
+    assert world.unknown_policy == "blocked"
+    with pytest.raises(PlanError, match="start .* is blocked by unknown space"):
+        planner.plan(world, (0, 0, 1), (20, 0, 1))
+    res = planner.plan(world, (-0.2, -0.5, 1.0), (8.1, 0.0, 1.0))
+    assert res.found and res.unknown_cells == 0
