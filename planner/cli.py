@@ -51,6 +51,8 @@ def _numbers(text: str, n: int, what: str) -> np.ndarray:
 
 
 def _vec3(text: str) -> np.ndarray:
+    if text.count(",") == 1:  # x,y on a 2D map (the world checks the map is 2D)
+        return _numbers(text, 2, "three finite numbers x,y,z (x,y on a 2D map)")
     return _numbers(text, 3, "three finite numbers x,y,z")
 
 
@@ -217,8 +219,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("plan", help="plan a path on a lattice")
     _add_world_args(p)
-    p.add_argument("--start", type=_vec3, required=True, help="x,y,z (m); negatives allowed")
-    p.add_argument("--goal", type=_vec3, required=True, help="x,y,z (m); negatives allowed")
+    p.add_argument("--start", type=_vec3, required=True, help="x,y,z (m; x,y on a 2D map); negatives allowed")
+    p.add_argument("--goal", type=_vec3, required=True, help="x,y,z (m; x,y on a 2D map); negatives allowed")
     p.add_argument("--method", default="astar", help=METHODS)
     p.add_argument("--neighbors", default="full", help="full, face, face+k or full+k")
     p.add_argument("--corner-cutting", action="store_true", help="check the target cell only")

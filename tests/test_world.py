@@ -233,3 +233,47 @@ def test_geb079_default_planning_stays_in_observed_space():
         planner.plan(world, (0, 0, 1), (20, 0, 1))
     res = planner.plan(world, (-0.2, -0.5, 1.0), (8.1, 0.0, 1.0))
     assert res.found and res.unknown_cells == 0
+
+
+def test_cli_world_round_trip_and_path_file(tmp_path, capsys):
+    import json
+
+    from planner.cli import main
+
+    yaml = _ros_map(tmp_path)
+    out = tmp_path / "w.npz"
+    assert main(["world", str(yaml), "--lattice", "square", "--cell-volume", "0.0009",
+                 "--radius", "0.05", "--out", str(out)]) == 0
+    path = tmp_path / "p.json"
+    assert main(["plan", str(out), "--start", "-0.7,0.0", "--goal", "0.3,0.3", "--out",
+                 str(path), "--shortcut"]) == 0
+    rec = json.loads(path.read_text())
+    assert rec["map"] == "room.yaml" and rec["frame"] == "map" and rec["lattice"] == "square"
+    assert rec["radius"] == 0.05 and rec["cell_volume"] == 0.0009 and rec["dim"] == 2
+    assert rec["start"] == [-0.7, 0.0] and rec["goal"] == [0.3, 0.3]
+    assert rec["unknown_cells"] == 0 and rec["unknown_policy"] == "blocked"
+    assert rec["smoothed_length"] <= rec["raw_length"]
+    wp = np.array(rec["waypoints"])
+    assert wp.shape[1] == 3 and np.allclose(wp[0, :2], [-0.7, 0.0])
+    d = np.diff(wp[:, :2], axis=0)
+    moving = np.abs(d).sum(axis=1) > 0
+    assert np.allclose(wp[:-1][moving, 2], np.arctan2(d[moving, 1], d[moving, 0]), atol=1e-6)
+    csv_path = tmp_path / "p.csv"
+    assert main(["plan", str(out), "--start", "-0.7,0.0", "--goal", "0.3,0.3", "--out",
+                 str(csv_path)]) == 0
+    text = csv_path.read_text()
+    assert "# radius: 0.05" in text and "x,y,yaw" in text
+    capsys.readouterr()
+    assert main(["plan", str(out), "--radius", "0.1", "--start", "-0.7,0.0", "--goal",
+                 "0.3,0.3"]) == 2
+    assert "saved with radius 0.05 m, asked for 0.1 m" in capsys.readouterr().err
+    assert main(["compare", str(out), "--start", "-0.7,0.0", "--goal", "0.3,0.3"]) == 0
+    assert "square" in capsys.readouterr().out
+
+
+def test_bundled_floorplan_compares_square_and_hex(capsys):
+    from planner.cli import main
+
+    assert main(["compare", "floorplan", "--lattices", "square,hex2d"]) == 0
+    out = capsys.readouterr().out
+    assert "square" in out and "hex2d" in out and "3/3" in out
