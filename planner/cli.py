@@ -219,8 +219,10 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("plan", help="plan a path on a lattice")
     _add_world_args(p)
-    p.add_argument("--start", type=_vec3, required=True, help="x,y,z (m; x,y on a 2D map); negatives allowed")
-    p.add_argument("--goal", type=_vec3, required=True, help="x,y,z (m; x,y on a 2D map); negatives allowed")
+    p.add_argument("--start", type=_vec3, required=True,
+                   help="x,y,z (m; x,y on a 2D map); negatives allowed")
+    p.add_argument("--goal", type=_vec3, required=True,
+                   help="x,y,z (m; x,y on a 2D map); negatives allowed")
     p.add_argument("--method", default="astar", help=METHODS)
     p.add_argument("--neighbors", default="full", help="full, face, face+k or full+k")
     p.add_argument("--corner-cutting", action="store_true", help="check the target cell only")
