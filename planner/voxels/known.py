@@ -166,16 +166,11 @@ def unknown_box_keys(boxes: np.ndarray, box_sizes: np.ndarray, free_boxes: np.nd
 # -- rays --------------------------------------------------------------------------------------
 @njit_cached
 def _mark_rays(occ, walk, a, b, s, grid, lo, dims):  # pragma: no cover - compiled
-    """Mark in ``grid`` (flat uint8 over the index box ``lo``, ``dims``) every cell the
+    """Set to 0 in ``grid`` (flat uint8 over the index box ``lo``, ``dims``) every cell the
     segment a[i] -> b[i] touches, walking from cell s[i]."""
     for i in range(a.shape[0]):
         cells, _, _ = wk.segment_walk(occ, walk, a[i], b[i], s[i], False)
-        for n in range(cells.shape[0]):
-            x = cells[n, 0] - lo[0]
-            y = cells[n, 1] - lo[1]
-            z = cells[n, 2] - lo[2]
-            if 0 <= x < dims[0] and 0 <= y < dims[1] and 0 <= z < dims[2]:
-                grid[(x * dims[1] + y) * dims[2] + z] = 1
+        wk.clear_cells(grid, lo, dims, cells)
 
 
 def ray_free_keys(points: np.ndarray, origins: np.ndarray, point_origin: np.ndarray,
@@ -213,14 +208,14 @@ def ray_free_keys(points: np.ndarray, origins: np.ndarray, point_origin: np.ndar
     both = np.concatenate([s, ends])
     lo = both.min(axis=0) - 2
     dims = both.max(axis=0) + 2 - lo + 1
-    grid = np.zeros(int(np.prod(dims)), dtype=np.uint8)
+    grid = np.ones(int(np.prod(dims)), dtype=np.uint8)  # 0: crossed by a ray
     g = _c(lattice.generator, float)
     dummy = wk.Occupancy(0, np.ones(1, np.uint8), np.zeros(3, np.int64), np.ones(3, np.int64),
                          np.full(1, -1, np.int64), 0, g, np.zeros(3), np.zeros(3))
     _mark_rays(dummy, _walk(lattice), a, b, s, grid, lo.astype(np.int64),
                dims.astype(np.int64))
-    grid[(ends - lo) @ grid_strides(dims)] = 0
-    flat = np.flatnonzero(grid)
+    grid[(ends - lo) @ grid_strides(dims)] = 1  # a point's own cell is occupied, not free
+    flat = np.flatnonzero(grid == 0)
     idx = np.stack(np.unravel_index(flat, tuple(int(x) for x in dims)), axis=1) + lo
     return unique_keys(pack(idx))
 
