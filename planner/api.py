@@ -95,16 +95,13 @@ def as_obstacles(source, format: str | None = None):
     """Obstacles from a file path, an (N, 3) point array or an Obstacles instance.
 
     ``format`` overrides the file extension (see :func:`planner.io.load_obstacles`);
-    ``"poses"`` reads a pose list and merges its scans (:func:`planner.io.load_posed_scans`).
+    ``"poses"`` reads a pose list and merges its scans, keeping each scan's sensor origin
+    for ray-cast free space.
     """
     from planner import io
 
     if isinstance(source, io.Obstacles):
         return source
-    if isinstance(source, str | Path) and format == "poses":
-        pts = io.load_posed_scans(source)
-        return io.Obstacles(points=pts, boxes=np.zeros((0, 3)), box_size=0.0, bounds=None,
-                            resolution=None, source=str(source))
     if isinstance(source, str | Path):
         return io.load_obstacles(source, format)
     pts = np.asarray(source, dtype=float)

@@ -277,3 +277,34 @@ def test_bundled_floorplan_compares_square_and_hex(capsys):
     assert main(["compare", "floorplan", "--lattices", "square,hex2d"]) == 0
     out = capsys.readouterr().out
     assert "square" in out and "hex2d" in out and "3/3" in out
+
+
+def test_posed_scans_plan_in_ray_cast_free_space(tmp_path, capsys):
+    # Two scans of a 4 x 4 x 2 m room from sensors inside it: planning inside works by
+    # default, and a goal outside the walls (never observed) is blocked by unknown space.
+    from planner.cli import main
+
+    g = np.arange(0, 4.001, 0.1)
+    h = np.arange(0, 2.001, 0.1)
+    walls = []
+    for fixed, axis in [(0.0, 0), (4.0, 0), (0.0, 1), (4.0, 1)]:
+        a, z = np.meshgrid(g, h)
+        p = np.zeros((a.size, 3))
+        p[:, axis], p[:, 1 - axis], p[:, 2] = fixed, a.ravel(), z.ravel()
+        walls.append(p)
+    fx, fy = np.meshgrid(g, g)
+    for zz in (0.0, 2.0):
+        walls.append(np.column_stack([fx.ravel(), fy.ravel(), np.full(fx.size, zz)]))
+    room = np.concatenate(walls)
+    for i, origin in enumerate([(1.0, 2.0, 1.0), (3.0, 2.0, 1.0)]):
+        np.savetxt(tmp_path / f"s{i}.xyz", room - origin)  # scans in the sensor frame
+    (tmp_path / "poses.txt").write_text("s0.xyz 1 2 1 0 0 0 1\ns1.xyz 3 2 1 0 0 0 1\n")
+    common = ["plan", str(tmp_path / "poses.txt"), "--format", "poses", "--lattice", "fcc",
+              "--cell-volume", "0.001", "--radius", "0.1", "--bounds", "-1,-1,0,5,5,2"]
+    assert main([*common, "--start", "1,1,1", "--goal", "3,3,1", "--json"]) == 0
+    import json
+
+    res = json.loads(capsys.readouterr().out)
+    assert res["found"] and res["unknown_cells"] == 0
+    assert main([*common, "--start", "1,1,1", "--goal", "4.6,2,1"]) == 2
+    assert "blocked by unknown space" in capsys.readouterr().err
