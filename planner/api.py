@@ -18,7 +18,7 @@ from planner.lattice import Lattice
 
 __all__ = [
     "PlanResult", "as_obstacles", "build_world", "default_cell_volume", "inflated_obstacles",
-    "plan",
+    "plan", "unknown_on_path",
 ]
 
 # Default planning resolution for raw clouds: about this many cells in the bounding box.
@@ -51,6 +51,11 @@ class PlanResult:
         inflation): True for OMPL (exact motion checks) and for lattice methods unless
         ``corner_cutting`` lets moves cut blocked corners
         (:func:`planner.search.stencils.carries_guarantee`).
+    unknown_cells : int
+        Distinct cells the path's segments touch that meet unknown space (0 whenever unknown
+        space is blocked; may be > 0 under ``unknown="free"``).
+    unknown_note : str
+        How the world treats unknown space (:attr:`planner.World.unknown_note`).
     """
 
     found: bool
@@ -71,6 +76,8 @@ class PlanResult:
     extra: dict = field(default_factory=dict)
     status: str = "found"
     guarantee: bool = True
+    unknown_cells: int = 0
+    unknown_note: str = ""
 
     def to_dict(self) -> dict:
         """JSON-ready dict (arrays as nested lists, inf as None)."""
@@ -88,16 +95,13 @@ def as_obstacles(source, format: str | None = None):
     """Obstacles from a file path, an (N, 3) point array or an Obstacles instance.
 
     ``format`` overrides the file extension (see :func:`planner.io.load_obstacles`);
-    ``"poses"`` reads a pose list and merges its scans (:func:`planner.io.load_posed_scans`).
+    ``"poses"`` reads a pose list and merges its scans, keeping each scan's sensor origin
+    for ray-cast free space.
     """
     from planner import io
 
     if isinstance(source, io.Obstacles):
         return source
-    if isinstance(source, str | Path) and format == "poses":
-        pts = io.load_posed_scans(source)
-        return io.Obstacles(points=pts, boxes=np.zeros((0, 3)), box_size=0.0, bounds=None,
-                            resolution=None, source=str(source))
     if isinstance(source, str | Path):
         return io.load_obstacles(source, format)
     pts = np.asarray(source, dtype=float)
@@ -132,9 +136,10 @@ def _obstacle_bounds(obst) -> np.ndarray:
 
 
 def default_cell_volume(obst, bounds: np.ndarray | None = None) -> float:
-    """Native resolution cubed where the map has one, else ~2 million cells in its box (m^3)."""
+    """Native resolution cubed (squared for a 2D map: an area, m^2) where the map has one,
+    else ~2 million cells in its box (m^3)."""
     if obst.resolution:
-        return float(obst.resolution) ** 3
+        return float(obst.resolution) ** obst.dim
     b = _obstacle_bounds(obst) if bounds is None else np.asarray(bounds, dtype=float)
     vol = float(np.prod(np.maximum(b[1] - b[0], 1e-3)))
     return vol / _DEFAULT_CELLS
@@ -142,41 +147,59 @@ def default_cell_volume(obst, bounds: np.ndarray | None = None) -> float:
 
 def build_world(
     source,
-    lattice: str | Lattice = "fcc",
+    lattice: str | Lattice | None = None,
     *,
     cell_volume: float | None = None,
-    radius: float = 0.0,
+    radius: float | None = None,
     bounds: np.ndarray | None = None,
     format: str | None = None,
+    unknown: str | None = None,
 ):
     """Build the planning world once; query it many times with :func:`plan`.
 
     Parameters
     ----------
     source : str, Path, ndarray (N, 3) or Obstacles
-        Map file (any format :func:`planner.io.load_obstacles` reads) or obstacle points (m).
-    lattice : str or Lattice
-        Lattice name (``cubic``, ``bcc``, ``fcc``, ``mcc``, ``hex``) or a Lattice instance
-        (its own scale is then used and ``cell_volume`` must be None).
+        Map file (any format :func:`planner.io.load_obstacles` reads), a saved world
+        (``.npz`` from ``planner world``: loaded, not rebuilt; an option that differs from
+        what it was built with is a MapError) or obstacle points (m).
+    lattice : str or Lattice, optional
+        Lattice name (``cubic``, ``bcc``, ``fcc``, ``mcc``, ``hex``; 2D maps: ``square``,
+        ``hex2d``) or a Lattice instance (its own scale is then used unless ``cell_volume``
+        is given). Default ``fcc`` (2D maps: ``hex2d``).
     cell_volume : float, optional
-        Cell volume in m^3. Default: the map's native resolution cubed (OctoMap, .3dmap),
-        the bundled map's suggestion, or about two million cells over the map's box.
-    radius : float
-        Robot radius (m): cells a robot centre must not enter are blocked (see
-        :meth:`planner.voxels.OccupiedVoxelList.inflate` for the guarantee).
-    bounds : array_like, shape (2, 3), optional
+        Cell volume in m^3 (2D maps: cell area in m^2). Default: the map's native
+        resolution cubed (squared in 2D), the bundled map's suggestion, or about two
+        million cells over the map's box.
+    radius : float, optional
+        Robot radius (m, default 0): cells a robot centre must not enter are blocked,
+        exactly (see :func:`inflated_obstacles`).
+    bounds : array_like, shape (2, d), optional
         World box [min, max] (m) the robot centre must stay in. Default: the map's own
-        bounds (.3dmap grid box, bundled map sidecar) or the obstacles' bounding box.
+        bounds (.3dmap grid box, ROS map image, bundled map sidecar) or the obstacles'
+        bounding box.
     format : str, optional
         File format overriding the extension, or ``"poses"`` for a pose list of scans.
+    unknown : {"blocked", "free"}, optional
+        How unknown space is treated (default: the map's ``unknown_default``: blocked when
+        the map says what was observed free, else free). ``"blocked"``: a cell is usable only
+        if its closed Voronoi cell stays ``radius`` away from unknown space (as from
+        obstacles). ``"free"``: paths may cross unknown cells; results count them.
 
     Returns
     -------
     World
     """
+    from planner._world_file import check_options, is_world_file, load_world
     from planner.world import World
 
     t0 = time.perf_counter()
+    if is_world_file(source):
+        world = load_world(source)
+        check_options(world, lattice, cell_volume, radius, unknown, bounds)
+        world.build_seconds = time.perf_counter() - t0
+        return world
+    radius = 0.0 if radius is None else radius
     side = _sidecar(source)
     obst = as_obstacles(source, format)
     if bounds is None:
@@ -186,52 +209,142 @@ def build_world(
             bounds = side["bounds"]
         else:
             bounds = _obstacle_bounds(obst)
+    d = obst.dim
     bounds = np.asarray(bounds, dtype=float)
-    if bounds.shape != (2, 3) or not np.isfinite(bounds).all() or np.any(bounds[1] < bounds[0]):
-        raise MapError(f"bounds must be [[xmin, ymin, zmin], [xmax, ymax, zmax]], got {bounds}")
+    if bounds.shape != (2, d) or not np.isfinite(bounds).all() or np.any(bounds[1] < bounds[0]):
+        raise MapError(f"bounds must be [[xmin, ...], [xmax, ...]] with {d} numbers each, got "
+                       f"{bounds.tolist()}")
     if (isinstance(radius, bool) or not isinstance(radius, int | float | np.floating)
             or not math.isfinite(radius) or radius < 0):
         raise PlanError(f"radius must be a non-negative number of metres, got {radius!r}")
-    if isinstance(lattice, Lattice):
-        if cell_volume is not None:
-            lat = lattice.scaled(cell_volume)
-        else:
-            lat = lattice
-    else:
-        if cell_volume is None:
-            cell_volume = side.get("cell_volume") or default_cell_volume(obst, bounds)
-        lat = Lattice.named(lattice, cell_volume=cell_volume)
+    policy = obst.unknown_default if unknown is None else unknown
+    if policy not in ("blocked", "free"):
+        raise MapError(f"unknown must be 'blocked' or 'free', got {unknown!r}")
+    if policy == "blocked" and not obst.has_free_space:
+        raise MapError(f"{obst.source}: the map says nothing about free space (a plain "
+                       f"cloud), so --unknown blocked would block everything; use free")
+    lat = _lattice(lattice, cell_volume, side, obst, bounds)
+    if d == 2:
+        from planner.lattice.planar import planar_prism
+
+        obst, bounds, lat = _lift(obst), _lift_bounds(bounds), planar_prism(lat)
     cells = inflated_obstacles(obst, lat, radius).indices
-    return World(lat, cells, bounds, source=obst.source, radius=float(radius), obstacles=obst,
-                 build_seconds=time.perf_counter() - t0)
+    unknown_cells = None
+    if obst.has_free_space:
+        ukeys = _unknown_keys(obst, lat, bounds, radius, d == 2)
+        if policy == "blocked":
+            from planner.keys import unpack
+            from planner.voxels.known import unknown_inflation
+
+            cells = np.concatenate([cells, unpack(unknown_inflation(ukeys, lat, radius), 3)])
+        unknown_cells = ukeys
+    if d == 2:  # only the plane z = 0 is in bounds
+        cells = cells[cells[:, 2] == 0]
+    if unknown_cells is not None:
+        from planner.keys import unpack
+
+        unknown_cells = unpack(unknown_cells, 3)
+        if d == 2:
+            unknown_cells = unknown_cells[unknown_cells[:, 2] == 0]
+    world = World(lat, cells, bounds, source=obst.source, radius=float(radius), obstacles=obst,
+                  build_seconds=time.perf_counter() - t0, unknown_cells=unknown_cells,
+                  unknown_policy=policy, dim=d)
+    if isinstance(source, str | Path) and Path(source).is_file():
+        world.source_file = str(source)
+    return world
+
+
+def _lattice(lattice, cell_volume, side, obst, bounds) -> Lattice:
+    """The lattice asked for, at the cell volume (area in 2D) asked for or the map's."""
+    if isinstance(lattice, Lattice):
+        if lattice.dim != obst.dim:
+            raise MapError(f"{obst.source}: a {obst.dim}D map needs a {obst.dim}D lattice, "
+                           f"got a {lattice.dim}D one")
+        return lattice.scaled(cell_volume) if cell_volume is not None else lattice
+    if lattice is None:
+        lattice = "fcc" if obst.dim == 3 else "hex2d"
+    if cell_volume is None:
+        cell_volume = side.get("cell_volume") or default_cell_volume(obst, bounds)
+    lat = Lattice.named(lattice, cell_volume=cell_volume)
+    if lat.dim != obst.dim:
+        raise MapError(f"{obst.source}: a {obst.dim}D map needs a {obst.dim}D lattice "
+                       f"({'square, hex2d' if obst.dim == 2 else 'cubic, bcc, fcc, mcc, hex'}),"
+                       f" got {lattice!r}")
+    return lat
+
+
+def _lift(obst):
+    """A 2D map as 3D obstacles in the plane z = 0: points at z = 0, squares as cubes centred
+    on it. A prism cell of the plane and a cube both contain z = 0 in their z-ranges, so
+    their distance is the 2D distance of the square and the 2D cell."""
+    from planner import io
+
+    def pts(a):
+        return np.concatenate([a, np.zeros((len(a), 1))], axis=1)
+
+    return io.Obstacles(points=pts(obst.points), boxes=pts(obst.boxes), box_size=obst.box_size,
+                        box_sizes=obst.box_sizes, free_boxes=pts(obst.free_boxes),
+                        free_box_sizes=obst.free_box_sizes, bounds=None,
+                        resolution=obst.resolution, source=obst.source,
+                        unknown_default=obst.unknown_default, dim=3)
+
+
+def _lift_bounds(bounds: np.ndarray) -> np.ndarray:
+    return np.concatenate([bounds, np.zeros((2, 1))], axis=1)
+
+
+def _unknown_keys(obst, lat: Lattice, bounds: np.ndarray, radius: float, planar: bool
+                  ) -> np.ndarray:
+    """Keys of the cells meeting unknown space, over the bounds padded by the reach of a
+    robot centre's cell (radius + twice the covering radius)."""
+    from planner.voxels import exact_inflation
+    from planner.voxels.known import ray_free_keys, unknown_box_keys, unknown_cell_keys
+
+    pad = radius + 2 * lat.covering_radius
+    lo, hi = bounds[0] - pad, bounds[1] + pad
+    parts = []
+    if len(obst.free_boxes):
+        res = obst.resolution or float(np.min(np.concatenate([obst.box_sizes,
+                                                              obst.free_box_sizes])))
+        if planar:
+            lo[2], hi[2] = -res / 2, res / 2  # a lifted 2D map: one layer of voxels
+        parts.append(unknown_box_keys(obst.boxes, obst.box_sizes, obst.free_boxes,
+                                      obst.free_box_sizes, res, lat, lo, hi))
+    if obst.origins is not None:
+        free = ray_free_keys(obst.points, obst.origins, obst.point_origin, lat)
+        occ = exact_inflation(obst.points, lat, 0.0).keys
+        cell_unknown = unknown_cell_keys(free, occ, lat, lo, hi)
+        # Both sources: unknown only where neither says free (intersection).
+        parts = [np.intersect1d(parts[0], cell_unknown)] if parts else [cell_unknown]
+    return parts[0]
 
 
 def inflated_obstacles(obst, lattice: Lattice, radius: float):
-    """The cells a robot centre of radius ``radius`` (m) must not enter, as tight as is cheap.
-
-    Points: exactly the cells whose closed Voronoi cell is closer than ``radius`` to a point
-    (:func:`planner.voxels.exact_inflation`). Boxes (``.3dmap`` voxels): the cells that
-    overlap the box grown by ``radius`` on every side, a superset of the exact set (the
-    grown box contains every point within ``radius`` of the box). Either way a path whose
-    segments touch only free cells keeps distance >= ``radius`` from every obstacle, and
-    the stencil inflation of :meth:`OccupiedVoxelList.inflate` is only needed when the
-    points are gone (a saved voxel list).
+    """The cells a robot centre of radius ``radius`` (m) must not enter: exactly the cells
+    whose closed Voronoi cell comes closer than ``radius`` to an obstacle point
+    (:func:`planner.voxels.exact_inflation`) or an occupied box, each at its own size
+    (:func:`planner.voxels.exact_box_inflation`; an OctoMap leaf is a box, inflated once).
+    A path whose segments touch only cells outside this set keeps distance >= ``radius``
+    from every obstacle. With ``radius`` 0: the cells containing a point or overlapping a
+    box.
 
     Returns
     -------
     OccupiedVoxelList
     """
-    from planner.keys import unpack
-    from planner.voxels import OccupiedVoxelList, box_keys, exact_inflation
+    from planner.voxels import OccupiedVoxelList, exact_box_inflation, exact_inflation
+    from planner.voxels._checks import unique_keys
 
     keys = []
     if len(obst.points):
         keys.append(exact_inflation(obst.points, lattice, radius).keys)
     if len(obst.boxes):
-        keys.append(box_keys(obst.boxes, obst.box_size + 2 * radius, lattice))
+        half = obst.box_sizes[:, None] / 2
+        keys.append(exact_box_inflation(obst.boxes - half, obst.boxes + half, lattice,
+                                        radius).keys)
     if not keys:
         raise MapError(f"{obst.source}: no obstacles")
-    return OccupiedVoxelList.from_indices(unpack(np.concatenate(keys), lattice.dim), lattice)
+    return OccupiedVoxelList._from_keys(lattice, unique_keys(np.concatenate(keys)))
 
 
 def plan(
@@ -287,8 +400,8 @@ def plan(
     from planner.paths import path_length
     from planner.world import World, as_point
 
-    as_point(start, "start")  # malformed input fails before any map is built
-    as_point(goal, "goal")
+    as_point(start, "start", 2)  # malformed input fails before any map is built
+    as_point(goal, "goal", 2)
     if not isinstance(method, str):
         raise PlanError(f"method must be a string, got {method!r}")
     if method.startswith("ompl:"):
@@ -303,8 +416,10 @@ def plan(
         )
     lat = world.lattice
     common = dict(
-        lattice=lat.name or "custom", cell_volume=lat.cell_volume, method=method,
+        lattice=lat.name or "custom",
+        cell_volume=lat.cell_area if world.dim == 2 else lat.cell_volume, method=method,
         neighbors=neighbors, build_seconds=world.build_seconds or 0.0,
+        unknown_note=world.unknown_note,
     )
     s, s_cell = world.endpoint(start, "start")
     g, g_cell = world.endpoint(goal, "goal")
@@ -325,6 +440,7 @@ def plan(
     path_cells = res.cells
     checks = res.cell_checks
     seconds = res.seconds
+    raw_length = path_length(np.concatenate([s[None], lat.to_world(path_cells), g[None]]), 0.0)
     if shortcut and method in ("astar", "dijkstra"):
         t0 = time.perf_counter()
         before = world.cell_checks
@@ -336,9 +452,22 @@ def plan(
     return PlanResult(
         found=True, path=path, cells=path_cells, length=length, cell_checks=checks,
         expansions=res.expansions, generated=res.generated, seconds=seconds,
-        peak_bytes=res.peak_bytes, extra={"cost_between_centres": res.cost},
-        guarantee=res.guarantee, **common,
+        peak_bytes=res.peak_bytes,
+        extra={"cost_between_centres": res.cost, "raw_length": raw_length,
+               "smoothed_length": length if shortcut else None},
+        guarantee=res.guarantee, unknown_cells=unknown_on_path(world, path), **common,
     )
+
+
+def unknown_on_path(world, path: np.ndarray) -> int:
+    """Distinct cells meeting unknown space that the polyline ``path`` ((K, 3), m) touches
+    (every cell whose closed Voronoi cell a segment touches)."""
+    if not world.n_unknown or len(path) == 0:
+        return 0
+    parts = [world.segment_cells(a, b) for a, b in zip(path[:-1], path[1:], strict=True)]
+    cells = np.concatenate(parts) if parts else world.lattice.quantize(path[:1])
+    cells = np.unique(cells, axis=0)
+    return int(world.is_unknown(cells).sum())
 
 
 def _plan_ompl(world, s, g, planner_name, time_limit, seed, common) -> PlanResult:
@@ -352,5 +481,6 @@ def _plan_ompl(world, s, g, planner_name, time_limit, seed, common) -> PlanResul
         cells=np.zeros((0, 3), np.int64), length=r.length if r.found else math.inf,
         cell_checks=r.cell_checks, expansions=0, generated=0, seconds=r.seconds,
         reason=r.reason, extra={k: v for k, v in d.items() if k not in ("path", "path_simplified")},
-        status="found" if r.found else r.status, guarantee=True, **common,
+        status="found" if r.found else r.status, guarantee=True,
+        unknown_cells=unknown_on_path(world, path) if r.found else 0, **common,
     )

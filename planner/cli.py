@@ -21,6 +21,7 @@ import numpy as np
 
 from planner.errors import PlannerError
 from planner.lattice import NAMED_LATTICES
+from planner.lattice.paper import NAMED_LATTICES_2D
 
 METHODS = "astar, dijkstra, theta, lazy-theta, ompl:<planner>"
 PLOT_SUFFIXES = (".png", ".pdf", ".svg")
@@ -50,6 +51,8 @@ def _numbers(text: str, n: int, what: str) -> np.ndarray:
 
 
 def _vec3(text: str) -> np.ndarray:
+    if text.count(",") == 1:  # x,y on a 2D map (the world checks the map is 2D)
+        return _numbers(text, 2, "three finite numbers x,y,z (x,y on a 2D map)")
     return _numbers(text, 3, "three finite numbers x,y,z")
 
 
@@ -101,7 +104,7 @@ def _lattice_list(text: str) -> list[str]:
     names = [s.strip().lower() for s in text.split(",") if s.strip()]
     if not names:
         raise argparse.ArgumentTypeError(f"expected lattice names from {', '.join(NAMED_LATTICES)}")
-    bad = [n for n in names if n not in NAMED_LATTICES]
+    bad = [n for n in names if n not in NAMED_LATTICES + NAMED_LATTICES_2D]
     if bad:
         raise argparse.ArgumentTypeError(
             f"unknown lattice {bad[0]!r}; expected names from {', '.join(NAMED_LATTICES)}")
@@ -142,7 +145,8 @@ def _generator(text: str):
         raise argparse.ArgumentTypeError(str(exc)) from None
 
 
-_OUTPUTS = {("plan", "out"): (".csv", ".json"), ("voxels", "out"): (".npz",),
+_OUTPUTS = {("plan", "out"): (".csv", ".json"), ("world", "out"): (".npz",),
+            ("voxels", "out"): (".npz",),
             ("plan", "plot"): PLOT_SUFFIXES, ("compare", "plot"): PLOT_SUFFIXES,
             ("explore", "plot"): (".png",)}
 
@@ -177,7 +181,9 @@ def _add_world_args(p: argparse.ArgumentParser, *, lattice: bool = True) -> None
                         "narrow_passage)")
     if lattice:
         g = p.add_mutually_exclusive_group()
-        g.add_argument("--lattice", default="fcc", choices=NAMED_LATTICES, help="named lattice")
+        g.add_argument("--lattice", default="fcc", choices=NAMED_LATTICES + NAMED_LATTICES_2D,
+                       help="named lattice (2D maps: square or hex2d; a saved world keeps its "
+                            "own unless another is named)")
         g.add_argument("--generator", type=_generator, default=None,
                        help="custom lattice: generator rows 'a,b,c;d,e,f;g,h,i' (columns are "
                             "the basis vectors, metres) or a .npy file")
@@ -191,6 +197,10 @@ def _add_world_args(p: argparse.ArgumentParser, *, lattice: bool = True) -> None
     p.add_argument("--format", default=None,
                    help="file format instead of the extension: ply, pcd, xyz, npy, bt, 3dmap, "
                         "or poses (a pose list of scans, merged)")
+    p.add_argument("--unknown", choices=("blocked", "free"), default=None,
+                   help="unknown space: blocked (kept the robot radius away, as obstacles) or "
+                        "free (None: blocked when the map says what was observed free, else "
+                        "free)")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -222,8 +232,10 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("plan", help="plan a path on a lattice")
     _add_world_args(p)
-    p.add_argument("--start", type=_vec3, required=True, help="x,y,z (m); negatives allowed")
-    p.add_argument("--goal", type=_vec3, required=True, help="x,y,z (m); negatives allowed")
+    p.add_argument("--start", type=_vec3, required=True,
+                   help="x,y,z (m; x,y on a 2D map); negatives allowed")
+    p.add_argument("--goal", type=_vec3, required=True,
+                   help="x,y,z (m; x,y on a 2D map); negatives allowed")
     p.add_argument("--method", default="astar", help=METHODS)
     p.add_argument("--neighbors", default="full", help="full, face, face+k or full+k")
     p.add_argument("--corner-cutting", action="store_true", help="check the target cell only")
@@ -247,9 +259,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--plot", help="write a figure of the paths")
     p.add_argument("--json", action="store_true", help="print the rows as JSON")
 
-    p = sub.add_parser("voxels", help="build an (inflated) occupied voxel list and save it")
-    _add_world_args(p)
-    p.add_argument("--out", required=True, help="output .npz")
+    for name in ("world", "voxels"):  # "voxels": the former name, kept as an alias
+        p = sub.add_parser(name, help="build a planning world once and save it (.npz) for "
+                                      "plan and compare")
+        _add_world_args(p)
+        p.add_argument("--out", required=True, help="output .npz")
 
     p = sub.add_parser("explore", help="explore an unknown map with a simulated range sensor, "
                                        "replanning with D* Lite (checked against A*)")
@@ -317,15 +331,22 @@ def _cmd_stats(a) -> int:
 
 def _build(a):
     from planner import api
+    from planner._world_file import is_world_file
     from planner.analysis.compare import map_defaults
 
-    radius, cell_volume = map_defaults(a.map, a.radius, a.cell_volume)
     lattice = a.generator if a.generator is not None else a.lattice
+    if is_world_file(a.map):  # a saved world: loaded, options only checked against it
+        if lattice == "fcc":  # the parser's default: the saved lattice
+            lattice = None
+        world = api.build_world(a.map, lattice, cell_volume=a.cell_volume, radius=a.radius,
+                                bounds=a.bounds, unknown=a.unknown)
+        return world, world.lattice.name or "custom"
+    radius, cell_volume = map_defaults(a.map, a.radius, a.cell_volume)
     if a.generator is not None:
         cell_volume = a.cell_volume  # a custom generator keeps its own scale unless given
     world = api.build_world(a.map, lattice, cell_volume=cell_volume, radius=radius,
-                            bounds=a.bounds, format=a.format)
-    return world, (a.generator.name if a.generator is not None else a.lattice)
+                            bounds=a.bounds, format=a.format, unknown=a.unknown)
+    return world, (a.generator.name if a.generator is not None else world.lattice.name)
 
 
 def _cmd_plan(a) -> int:
@@ -338,7 +359,9 @@ def _cmd_plan(a) -> int:
         corner_cutting=a.corner_cutting, shortcut=a.shortcut, time_limit=a.time, seed=a.seed,
     )
     if a.out:
-        compare.write_path(a.out, res)
+        from planner._pathfile import write_path
+
+        write_path(a.out, res, world, a.start, a.goal)
     if a.plot and res.found:
         compare.plot_paths(a.plot, world, {label: res})
     print(json.dumps(res.to_dict()) if a.json else compare.describe(res))
@@ -346,11 +369,17 @@ def _cmd_plan(a) -> int:
 
 
 def _cmd_compare(a) -> int:
+    from planner._world_file import is_world_file, load_world
     from planner.analysis import compare
 
     lattices = list(a.lattices) + ([a.generator] if a.generator is not None else [])
+    radius = a.radius
+    if is_world_file(a.map):  # one lattice: the saved one
+        saved = load_world(a.map)
+        lattices = [saved.lattice]
+        radius = saved.radius if radius is None else radius
     rows = compare.compare(
-        a.map, lattices=lattices, cell_volume=a.cell_volume, radius=a.radius, bounds=a.bounds,
+        a.map, lattices=lattices, cell_volume=a.cell_volume, radius=radius, bounds=a.bounds,
         start=a.start, goal=a.goal, method=a.method, neighbors=a.neighbors, plot=a.plot,
         progress=not a.json and sys.stderr.isatty(), format=a.format,
     )
@@ -358,12 +387,14 @@ def _cmd_compare(a) -> int:
     return 0 if all(r["found"] for r in rows) else 1
 
 
-def _cmd_voxels(a) -> int:
+def _cmd_world(a) -> int:
+    from planner._world_file import save_world
+
     world, label = _build(a)
-    Path(a.out).parent.mkdir(parents=True, exist_ok=True)  # as plan --out does
-    world.blocked_voxels().save(a.out)
-    print(f"{a.out}: {world.n_blocked} blocked {label} cells, "
-          f"cell volume {world.lattice.cell_volume:.6g} m^3")
+    save_world(world, a.out)
+    print(f"{a.out}: {label} world, {world.n_blocked} blocked and {world.n_unknown} unknown "
+          f"cells, radius {world.radius:g} m, unknown space {world.unknown_policy}, built in "
+          f"{world.build_seconds:.2f} s")
     return 0
 
 
@@ -398,7 +429,8 @@ def _cmd_bench(a) -> int:
 
 
 _COMMANDS = {"lattices": _cmd_lattices, "stats": _cmd_stats, "plan": _cmd_plan,
-             "compare": _cmd_compare, "voxels": _cmd_voxels, "explore": _cmd_explore,
+             "compare": _cmd_compare, "world": _cmd_world, "voxels": _cmd_world,
+             "explore": _cmd_explore,
              "bench": _cmd_bench}
 
 

@@ -27,9 +27,11 @@ import numpy as np
 from planner import _world_kernels as wk
 from planner._world_kernels import Occupancy, Walk
 from planner.errors import MapError, PlanError
+from planner.io._obstacles import UNKNOWN_POLICIES
 from planner.keys import pack
 from planner.lattice import Lattice
 from planner.lattice._quantize import Quantizer
+from planner.voxels._checks import unique_keys
 
 __all__ = ["World", "DENSE_BUDGET", "Occupancy", "ValidityChecker", "Walk", "as_point"]
 
@@ -130,6 +132,14 @@ class World:
         Time it took to build the world from its source (s).
     dense_budget : int
         Largest dense occupancy grid in bytes; beyond it the hash set is used.
+    unknown_cells : array_like of int, shape (U, 3), optional
+        Cells whose closed Voronoi cell meets unknown space (see :meth:`is_unknown`).
+    unknown_policy : str
+        ``"blocked"`` (the unknown cells and every cell within ``radius`` of them are among
+        ``blocked_indices``) or ``"free"`` (paths may cross unknown cells; results count
+        them).
+    dim : int
+        2 for a 2D map planned in the plane z = 0 (see :func:`planner.build_world`).
 
     Attributes
     ----------
@@ -157,12 +167,25 @@ class World:
         obstacles=None,
         build_seconds: float | None = None,
         dense_budget: int = DENSE_BUDGET,
+        unknown_cells: np.ndarray | None = None,
+        unknown_policy: str = "free",
+        dim: int = 3,
     ):
         if not isinstance(lattice, Lattice):
             raise MapError(f"lattice must be a Lattice, got {type(lattice).__name__}")
-        if lattice.dim != 3:
-            raise MapError(f"World supports 3D lattices only, got dimension {lattice.dim}")
         b = np.asarray(blocked_indices)
+        if lattice.dim == 2:  # a 2D world: the plane z = 0 of the lattice's prism
+            from planner.lattice.planar import planar_prism
+
+            lattice, dim = planar_prism(lattice), 2
+            b = b.reshape(-1, 2) if b.size == 0 else b
+            if b.ndim == 2 and b.shape[1] == 2:
+                b = np.concatenate([b, np.zeros((len(b), 1), dtype=b.dtype)], axis=1)
+            bounds = np.asarray(bounds, dtype=float)
+            if bounds.shape == (2, 2):
+                bounds = np.concatenate([bounds, np.zeros((2, 1))], axis=1)
+        if lattice.dim != 3:
+            raise MapError(f"World supports 2D and 3D lattices, got dimension {lattice.dim}")
         if b.size == 0:
             b = np.zeros((0, 3), dtype=np.int64)
         if b.ndim != 2 or b.shape[1] != 3 or not np.issubdtype(b.dtype, np.integer):
@@ -188,6 +211,19 @@ class World:
         self.dense_budget = int(dense_budget)
         self.cell_checks = 0
         self._checker: ValidityChecker | None = None
+        if unknown_policy not in UNKNOWN_POLICIES:
+            raise MapError(f"unknown_policy must be one of {', '.join(UNKNOWN_POLICIES)}, got "
+                           f"{unknown_policy!r}")
+        u = np.zeros((0, 3), dtype=np.int64) if unknown_cells is None else np.asarray(
+            unknown_cells)
+        if u.size == 0:
+            u = np.zeros((0, 3), dtype=np.int64)
+        if u.ndim != 2 or u.shape[1] != 3 or not np.issubdtype(u.dtype, np.integer):
+            raise MapError(f"unknown cells must be an (U, 3) integer array, got {u.shape}")
+        self._unknown_keys = unique_keys(pack(np.ascontiguousarray(u, dtype=np.int64)))
+        self.unknown_policy = unknown_policy
+        self.dim = int(dim)  # 2: a 2D map planned in the plane z = 0 of a prism lattice
+        self.source_sha256 = ""
 
     # -- pickling: plain arrays only; lookup structures rebuilt on first use -----------
     def __getstate__(self) -> dict:
@@ -221,12 +257,49 @@ class World:
     @property
     def n_blocked(self) -> int:
         """Number of distinct blocked cells."""
-        return len(np.unique(pack(self._blocked))) if len(self._blocked) else 0
+        return len(unique_keys(pack(self._blocked))) if len(self._blocked) else 0
 
     @property
     def storage(self) -> str:
         """``"dense"`` or ``"hash"`` (module docstring)."""
         return "dense" if self.occupancy.mode == 0 else "hash"
+
+    @property
+    def unknown(self) -> np.ndarray:
+        """(U, 3) int64 cells whose closed Voronoi cell meets unknown space (empty when the
+        map says nothing is unknown: a plain cloud, where everything not occupied is free)."""
+        from planner.keys import unpack
+
+        return unpack(self._unknown_keys, 3)
+
+    @property
+    def n_unknown(self) -> int:
+        """Number of cells meeting unknown space."""
+        return len(self._unknown_keys)
+
+    def is_unknown(self, indices: np.ndarray) -> np.ndarray:
+        """(N,) bool: the cell meets unknown space (no lookup counted).
+
+        Each cell's state is one of: *blocked* (not :meth:`is_free`: out of bounds, within
+        the radius of an obstacle, or, under ``unknown_policy == "blocked"``, within the
+        radius of unknown space), *unknown* (free to plan through only under the ``"free"``
+        policy; this test) or *free* (observed free, or a plain cloud's non-occupied space).
+        """
+        w = _cells(indices)
+        if not len(self._unknown_keys) or not len(w):
+            return np.zeros(len(w), dtype=bool)
+        k = pack(w)
+        pos = np.minimum(np.searchsorted(self._unknown_keys, k), len(self._unknown_keys) - 1)
+        return self._unknown_keys[pos] == k
+
+    @property
+    def unknown_note(self) -> str:
+        """One line saying how unknown space is treated, for results and reports."""
+        if self.unknown_policy == "blocked":
+            return "unknown space blocked (with the robot radius)"
+        if not len(self._unknown_keys):
+            return "no free-space information: everything in bounds not occupied is free"
+        return "unknown space planned through as free"
 
     def blocked_centres(self) -> np.ndarray:
         """(M, 3) centres of the blocked cells (m)."""
@@ -330,11 +403,13 @@ class World:
 
     def endpoint(self, p, what: str = "point") -> tuple[np.ndarray, np.ndarray]:
         """Check a start or goal point (m): returns the point (3,) and its cell (3,) int64.
+        A 2D world takes (x, y) or (x, y, 0).
 
         Raises PlanError saying which end is wrong and why: malformed, outside the bounds,
-        or inside an obstacle after inflation (with the nearest free cell centre).
+        inside an obstacle after inflation (with the nearest free cell centre), or blocked
+        by unknown space.
         """
-        a = as_point(p, what)
+        a = as_point(p, what, self.dim)
         lo, hi = self._bounds
         if np.any(a < lo - _BOUNDS_TOL) or np.any(a > hi + _BOUNDS_TOL):
             raise PlanError(f"{what} {_fmt(a)} is outside the map bounds {_fmt(lo)} .. {_fmt(hi)}")
@@ -357,12 +432,26 @@ class World:
         """The one endpoint message: which end, where, why, and the nearest free cell."""
         if self.is_free(cell[None])[0]:
             return
-        where = "outside the map bounds" if not self.in_bounds(cell[None])[0] else (
-            "inside an obstacle (after inflation for the robot radius)")
+        if not self.in_bounds(cell[None])[0]:
+            where = "outside the map bounds"
+        elif self._near_unknown(cell):
+            where = ("blocked by unknown space (not observed free within the robot radius; "
+                     "--unknown free plans through it)")
+        else:
+            where = "inside an obstacle (after inflation for the robot radius)"
         near = self.nearest_free(cell)
         hint = "; no free cell nearby" if near is None else (
             f"; nearest free cell centre: {_fmt(self._lattice.to_world(near[None])[0])}")
         raise PlanError(f"{label} is {where}{hint}")
+
+    def _near_unknown(self, cell: np.ndarray) -> bool:
+        """Unknown space is blocked and the cell is unknown or within the radius of it."""
+        if self.unknown_policy != "blocked" or not len(self._unknown_keys):
+            return False
+        from planner.voxels import inflation_stencil
+
+        near = cell[None] + inflation_stencil(self._lattice, self.radius)
+        return bool(self.is_unknown(near).any())
 
     def nearest_free(self, cell: np.ndarray, max_radius: float | None = None) -> np.ndarray | None:
         """Nearest free cell to ``cell`` by centre distance, searching outward in growing
@@ -431,12 +520,15 @@ def _cells(indices) -> np.ndarray:
     return np.ascontiguousarray(w, dtype=np.int64)
 
 
-def as_point(p, what: str = "point") -> np.ndarray:
-    """``p`` as a finite (3,) float array (m); PlanError naming ``what`` otherwise."""
+def as_point(p, what: str = "point", dim: int = 3) -> np.ndarray:
+    """``p`` as a finite (3,) float array (m); PlanError naming ``what`` otherwise. With
+    ``dim`` 2, (x, y) is accepted too and becomes (x, y, 0)."""
     try:
         a = np.asarray(p, dtype=float).reshape(-1)
     except (TypeError, ValueError):
         raise PlanError(f"{what} must be three numbers x, y, z, got {p!r}") from None
+    if dim == 2 and a.shape == (2,) and np.isfinite(a).all():
+        a = np.append(a, 0.0)
     if a.shape != (3,) or not np.isfinite(a).all():
         raise PlanError(f"{what} must be three finite numbers x, y, z, got {p!r}")
     return a

@@ -107,9 +107,12 @@ def test_no_path_is_reported_not_raised(wall):
 
 
 def test_bad_api_arguments_are_plan_errors(wall):
-    for radius in ("0.2", None, -1.0, float("nan")):
+    for radius in ("0.2", -1.0, float("nan")):
         with pytest.raises(PlanError, match="radius must be"):
             planner.build_world(wall, "fcc", cell_volume=0.001, radius=radius, bounds=BOUNDS)
+    # None means "the saved world's radius, else 0" (a map is not inflated by default)
+    assert planner.build_world(wall, "fcc", cell_volume=0.001, radius=None,
+                               bounds=BOUNDS).radius == 0.0
     with pytest.raises(PlanError, match="method must be a string"):
         planner.plan(wall, START, GOAL, method=None)
 
@@ -127,8 +130,13 @@ def test_cli_plan_writes_path_json_and_plot(wall_file, tmp_path, capsys):
             "--plot", str(png)]
     assert main(argv) == 0
     assert "bcc" in capsys.readouterr().out
-    rows = np.loadtxt(out, delimiter=",", skiprows=1)
-    assert np.allclose(rows[0], START) and np.allclose(rows[-1], GOAL)
+    lines = out.read_text().splitlines()
+    meta = [ln for ln in lines if ln.startswith("# ")]  # "# key: value" metadata first
+    assert "# lattice: \"bcc\"" in meta and "# radius: 0.3" in meta
+    body = [ln for ln in lines if not ln.startswith("#")]
+    assert body[0] == "x,y,z,yaw"
+    rows = np.loadtxt(body[1:], delimiter=",")
+    assert np.allclose(rows[0, :3], START) and np.allclose(rows[-1, :3], GOAL)
     assert png.stat().st_size > 10_000
     assert main([*argv[:-4], "--json"]) == 0
     d = json.loads(capsys.readouterr().out)
@@ -138,9 +146,13 @@ def test_cli_plan_writes_path_json_and_plot(wall_file, tmp_path, capsys):
 def test_cli_exit_status_and_one_line_errors(wall_file, tmp_path, capsys):
     common = ["--cell-volume", "0.002", "--radius", "0.3", "--bounds", "0,0,0,10,6,3"]
     with pytest.raises(SystemExit) as e:
-        main(["plan", str(wall_file), "--start", "1,2", "--goal", "8,3,1.5"])
+        main(["plan", str(wall_file), "--start", "1", "--goal", "8,3,1.5"])
     assert e.value.code == 2
     assert capsys.readouterr().err.count("\n") == 1
+    # x,y is a 2D map's point: on a 3D map the world refuses it in one line
+    assert main(["plan", str(wall_file), *common, "--start", "1,2", "--goal", "8,3,1.5"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "start must be three finite numbers" in err
     assert main(["plan", str(tmp_path / "missing.ply"), "--start", "2,3,1.5",
                  "--goal", "8,3,1.5"]) == 2
     err = capsys.readouterr().err

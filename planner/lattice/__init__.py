@@ -107,7 +107,7 @@ class Lattice:
         if not math.isfinite(v) or v <= 0:
             raise LatticeError(f"cell_volume must be positive and finite, got {cell_volume!r}")
         key = name.lower()
-        return cls(g * v ** (1 / 3), name=key, _kind=key)
+        return cls(g * v ** (1 / len(g)), name=key, _kind=key)
 
     # -- basic properties ---------------------------------------------------------------
     @property

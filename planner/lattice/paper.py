@@ -12,9 +12,10 @@ import numpy as np
 
 from planner.errors import LatticeError
 
-__all__ = ["NAMED_LATTICES", "PAPER_DELTAS", "named_generator"]
+__all__ = ["NAMED_LATTICES", "NAMED_LATTICES_2D", "PAPER_DELTAS", "named_generator"]
 
 NAMED_LATTICES: tuple[str, ...] = ("cubic", "bcc", "fcc", "mcc", "hex")
+NAMED_LATTICES_2D: tuple[str, ...] = ("square", "hex2d")  # for 2D maps (ROS map_server)
 
 
 def named_generator(name: str) -> np.ndarray:
@@ -25,9 +26,11 @@ def named_generator(name: str) -> np.ndarray:
     ``h = 3**(-1/6)``, and MCC the upper Cholesky factor of its Gram matrix
     ``((1+s, -1, 1-s), (-1, 1+s, -1), (1-s, -1, 1+s)) / 2`` with ``s = sqrt(2)``.
 
+    ``square`` and ``hex2d`` are the 2D square and hexagonal lattices (for 2D maps).
+
     Returns
     -------
-    ndarray, shape (3, 3)
+    ndarray, shape (3, 3) or (2, 2)
         Columns are the basis vectors; ``|det| == 1``.
 
     Examples
@@ -52,7 +55,12 @@ def named_generator(name: str) -> np.ndarray:
         h = 3.0 ** (-1 / 6)
         a = math.sqrt(2.0) * h
         return np.array([[a, -a / 2, 0], [0, a * math.sqrt(3) / 2, 0], [0, 0, h]])
-    names = ", ".join(NAMED_LATTICES)
+    if key == "square":
+        return np.eye(2)
+    if key == "hex2d":  # the hexagonal (triangular) lattice, unit area
+        a = math.sqrt(2 / math.sqrt(3))
+        return np.array([[a, a / 2], [0, a * math.sqrt(3) / 2]])
+    names = ", ".join(NAMED_LATTICES + NAMED_LATTICES_2D)
     raise LatticeError(f"unknown lattice name {name!r}; expected one of {names}")
 
 

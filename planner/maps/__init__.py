@@ -157,6 +157,8 @@ def resolve(name_or_path: str | os.PathLike[str]) -> Path:
     p = Path(name_or_path)
     if p.exists():
         return p
+    if p.name == "floorplan" and p.parent == Path("."):  # the bundled 2D map (ROS map)
+        return MAPS_DIR / "floorplan.yaml"
     stem = p.name[:-4] if p.name.endswith(".ply") else p.name
     if stem in MAPS and p.parent == Path("."):
         return map_path(stem)

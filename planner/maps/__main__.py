@@ -17,4 +17,8 @@ args = parser.parse_args()
 for name, (ply, _) in maps.generate_all(args.out_dir, seed=args.seed).items():
     n = maps.load_map_info(ply)["n_points"]
     print(f"{name:15s} {n:8d} points {ply.stat().st_size / 1e6:6.2f} MB  {ply}")
+from planner.maps.floorplan import generate_floorplan  # noqa: E402 - the 2D map
+
+pgm, _, _ = generate_floorplan(args.out_dir)
+print(f"{'floorplan':15s} {'2D':>8s} map    {pgm.stat().st_size / 1e6:6.2f} MB  {pgm}")
 sys.exit(0)

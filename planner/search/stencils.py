@@ -136,6 +136,8 @@ def _facets_cached(gen: bytes, neighbors: str, lat: Lattice) -> np.ndarray:
     moves = lat.neighbors(neighbors)
     s = moves @ lat.generator.T
     u = s / np.linalg.norm(s, axis=1, keepdims=True)
+    if np.allclose(s[:, 2], 0):  # planar moves (2D map on a prism): the bipyramid with
+        u = np.concatenate([u, [[0, 0, 1], [0, 0, -1]]])  # +-z has the polygon's in-plane gauge
     hull = ConvexHull(u)
     eq = hull.equations  # n . y + off <= 0 inside, |n| = 1
     n = eq[:, :3] / (-eq[:, 3:4])

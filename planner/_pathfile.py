@@ -1,0 +1,89 @@
+"""Path files written by ``planner plan --out``: JSON (everything) or CSV (waypoints + header).
+
+Both carry the map (file name and sha256 when known), frame, lattice, cell volume (area for
+a 2D map), radius, unknown policy, start, goal, raw and smoothed length, the number of path
+cells meeting unknown space, and per waypoint x, y, z and heading (yaw in the x-y plane,
+radians, of the segment leaving the waypoint; the last repeats the one before). Numbers are
+rounded to 1 um / 1 urad so files carry no float noise.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from planner.errors import PlanError
+from planner.fsutil import atomic_path
+
+__all__ = ["headings", "path_record", "write_path"]
+
+_DIGITS = 6
+
+
+def headings(path: np.ndarray) -> np.ndarray:
+    """(K,) yaw of each waypoint's outgoing segment (rad, atan2(dy, dx)); 0 for K < 2."""
+    if len(path) < 2:
+        return np.zeros(len(path))
+    d = np.diff(path[:, :2], axis=0)
+    yaw = np.arctan2(d[:, 1], d[:, 0])
+    # a zero-length segment (start at a cell centre) keeps the next heading
+    for i in range(len(yaw) - 2, -1, -1):
+        if not d[i].any():
+            yaw[i] = yaw[i + 1]
+    return np.append(yaw, yaw[-1])
+
+
+def _r(x):
+    return None if x is None or not math.isfinite(x) else round(float(x), _DIGITS)
+
+
+def path_record(res, world, start, goal) -> dict:
+    """The metadata and waypoints of a :class:`planner.PlanResult` as a JSON-ready dict."""
+    src = world.source or ""
+    raw = res.extra.get("raw_length", res.length)
+    smooth = res.extra.get("smoothed_length")
+    path = np.asarray(res.path, dtype=float)
+    yaw = headings(path)
+    pts = path[:, :2] if world.dim == 2 else path
+    return {
+        "map": Path(src).name if src else None,
+        "map_sha256": getattr(world, "source_sha256", "") or None,
+        "frame": getattr(world.obstacles, "frame", None) or "map",
+        "dim": world.dim,
+        "lattice": res.lattice, "cell_volume": _r(res.cell_volume),
+        "cell_volume_unit": "m^2" if world.dim == 2 else "m^3",
+        "radius": _r(world.radius), "unknown_policy": world.unknown_policy,
+        "method": res.method, "neighbors": res.neighbors,
+        "start": [_r(v) for v in np.asarray(start, dtype=float)],
+        "goal": [_r(v) for v in np.asarray(goal, dtype=float)],
+        "found": res.found, "status": res.status, "reason": res.reason,
+        "raw_length": _r(raw), "smoothed_length": _r(smooth),
+        "unknown_cells": int(res.unknown_cells), "guarantee": res.guarantee,
+        "path": [[_r(v) for v in p] for p in path],
+        "waypoints": [[_r(v) for v in p] + [_r(h)] for p, h in zip(pts, yaw, strict=True)],
+        "waypoint_columns": (["x", "y"] if world.dim == 2 else ["x", "y", "z"]) + ["yaw"],
+    }
+
+
+def write_path(path: str, res, world, start, goal) -> None:
+    """Write the path as JSON (:func:`path_record`) or CSV (``# key: value`` header lines,
+    then ``x,y[,z],yaw`` rows), atomically."""
+    suffix = Path(path).suffix.lower()
+    if suffix not in (".csv", ".json"):
+        raise PlanError(f"{path}: unknown output format {suffix!r}; use .csv or .json")
+    rec = path_record(res, world, start, goal)
+    with atomic_path(path) as tmp:
+        if suffix == ".json":
+            tmp.write_text(json.dumps(rec, indent=1))
+            return
+        with open(tmp, "w", newline="") as f:
+            for k, v in rec.items():
+                if k not in ("path", "waypoints", "waypoint_columns"):
+                    f.write(f"# {k}: {json.dumps(v)}\n")
+            w = csv.writer(f)
+            w.writerow(rec["waypoint_columns"])
+            w.writerows(rec["waypoints"])

@@ -1,0 +1,253 @@
+"""Known and unknown space on a lattice: what a tri-state map says about each cell.
+
+A map's space is occupied, observed free, or unknown (:class:`planner.io.Obstacles`). This
+module turns the free-space information into lattice cells:
+
+* :func:`ray_free_keys`: cells a sensor ray crosses before its end cell (posed scans, bags),
+  by the exact segment walk of the world (every cell whose closed Voronoi cell the ray
+  touches);
+* :func:`unknown_box_keys`: for maps whose free space is a set of boxes on a voxel grid
+  (OctoMap free leaves, ROS map free cells), the cells whose Voronoi cell meets unknown space
+  (voxels covered by neither an occupied nor a free box), in a box padded around the bounds;
+* :func:`unknown_cell_keys`: the same for cell-level free space (rays): every cell in the
+  padded box that is neither observed free nor occupied;
+* :func:`unknown_inflation`: the cells a robot of radius r must not enter when unknown space
+  counts as an obstacle.
+
+The guarantee: unknown space U lies inside the union of the closed Voronoi cells of the keys
+returned (every point of U is in some closed cell meeting U with positive volume, up to
+1e-9 cell diameters), so blocking every cell whose closed Voronoi cell comes closer than r
+to one of those cells (:func:`planner.voxels.inflation_stencil`, exact for cell pairs)
+keeps every point of every usable cell at distance >= r from U.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from planner import _world_kernels as wk
+from planner._jit import njit_cached
+from planner.errors import MapError
+from planner.keys import pack
+from planner.lattice import Lattice
+from planner.voxels._checks import DEFAULT_BUDGET, grid_strides, unique_keys
+
+__all__ = ["cells_in_box", "ray_free_keys", "unknown_box_keys", "unknown_cell_keys",
+           "unknown_inflation"]
+
+
+@njit_cached
+def _box_cells(g, ilo, idims, lo, hi, out, fill):  # pragma: no cover - compiled
+    """Cells of the index box ``ilo + [0, idims)`` whose centre lies in ``[lo, hi]``: the
+    count, and with ``fill`` their indices in ``out``."""
+    n = 0
+    for a in range(idims[0]):
+        i = ilo[0] + a
+        for b in range(idims[1]):
+            j = ilo[1] + b
+            x0 = g[0, 0] * i + g[0, 1] * j
+            x1 = g[1, 0] * i + g[1, 1] * j
+            x2 = g[2, 0] * i + g[2, 1] * j
+            for c in range(idims[2]):
+                k = ilo[2] + c
+                y0 = x0 + g[0, 2] * k
+                y1 = x1 + g[1, 2] * k
+                y2 = x2 + g[2, 2] * k
+                if (lo[0] <= y0 <= hi[0] and lo[1] <= y1 <= hi[1] and lo[2] <= y2 <= hi[2]):
+                    if fill:
+                        out[n, 0] = i
+                        out[n, 1] = j
+                        out[n, 2] = k
+                    n += 1
+    return n
+
+
+def cells_in_box(lattice: Lattice, lo: np.ndarray, hi: np.ndarray,
+                 budget: float = DEFAULT_BUDGET) -> np.ndarray:
+    """Every cell of a 3D lattice whose centre lies in the closed box ``[lo, hi]`` (m,
+    shape (3,) each).
+
+    Returns
+    -------
+    ndarray, shape (N, 3), int64
+    """
+    lo = np.ascontiguousarray(lo, dtype=float)
+    hi = np.ascontiguousarray(hi, dtype=float)
+    g = np.ascontiguousarray(lattice.generator, dtype=float)
+    corners = np.array([[(lo, hi)[c][a] for a, c in enumerate(bits)]
+                        for bits in np.ndindex(2, 2, 2)])
+    w = corners @ np.linalg.inv(g).T
+    ilo = np.floor(w.min(axis=0)).astype(np.int64) - 1
+    idims = np.ceil(w.max(axis=0)).astype(np.int64) + 1 - ilo + 1
+    out = np.zeros((0, 3), dtype=np.int64)
+    n = _box_cells(g, ilo, idims, lo, hi, out, False)
+    if n * 24 > budget:
+        raise MapError(f"the box {lo.tolist()} .. {hi.tolist()} holds {n:,} cells, too many "
+                       f"to enumerate within {budget / 2**30:.1f} GB; use larger cells")
+    out = np.empty((n, 3), dtype=np.int64)
+    _box_cells(g, ilo, idims, lo, hi, out, True)
+    return out
+
+
+# -- boxes on a voxel grid ---------------------------------------------------------------------
+def unknown_box_keys(boxes: np.ndarray, box_sizes: np.ndarray, free_boxes: np.ndarray,
+                     free_sizes: np.ndarray, resolution: float, lattice: Lattice,
+                     lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """Keys of the cells whose closed Voronoi cell meets unknown space, for boxes on a grid.
+
+    Known space is the union of the occupied and free boxes (each an axis-aligned cube of
+    edge a multiple of ``resolution``, aligned to one voxel grid, as OctoMap leaves and ROS
+    map cells are); unknown space is every voxel of that grid in ``[lo, hi]`` (rounded out
+    to whole voxels) that no box covers, and everything outside that region.
+
+    Parameters
+    ----------
+    boxes, free_boxes : ndarray, shape (M, d), (K, d)
+        Occupied and free box centres (m).
+    box_sizes, free_sizes : ndarray, shape (M,), (K,)
+        Box edges (m).
+    resolution : float
+        Voxel edge (m).
+    lattice : Lattice
+    lo, hi : ndarray, shape (d,)
+        The region to classify (m): the world bounds padded by the robot's reach.
+
+    Returns
+    -------
+    ndarray, shape (U,), int64
+        Sorted unique keys.
+    """
+    from planner.voxels.inflate import box_keys
+
+    d = lattice.dim
+    res = float(resolution)
+    known_c = np.concatenate([boxes, free_boxes]).reshape(-1, d)
+    known_s = np.concatenate([box_sizes, free_sizes])
+    # Grid aligned to the boxes: voxel v spans phase + res * [v, v + 1).
+    ref = known_c[0] - known_s[0] / 2 if len(known_c) else np.zeros(d)
+    phase = ref - res * np.floor(ref / res)
+    g0 = np.floor((np.asarray(lo) - phase) / res).astype(np.int64)
+    g1 = np.ceil((np.asarray(hi) - phase) / res).astype(np.int64)
+    dims = g1 - g0
+    known = np.zeros(tuple(int(x) for x in dims), dtype=bool)
+    if len(known_c):
+        n = np.maximum(np.rint(known_s / res).astype(np.int64), 1)
+        first = np.rint((known_c - n[:, None] * res / 2 - phase) / res).astype(np.int64) - g0
+        for m in np.unique(n):
+            sel = first[n == m]
+            steps = np.stack(np.meshgrid(*[np.arange(m)] * d, indexing="ij"), -1).reshape(-1, d)
+            for s in steps:
+                v = sel + s
+                ok = np.all((v >= 0) & (v < dims), axis=1)
+                known[tuple(v[ok].T)] = True
+    unknown = ~known
+    # Boundary unknown voxels (a known voxel among their 3^d neighbours): every point of U
+    # not deep inside it lies in one, so the cells overlapping them plus the cells whose
+    # centre lies in U cover U.
+    pad = np.pad(known, 1, constant_values=False)
+    near_known = np.zeros_like(known)
+    for off in np.ndindex(*(3,) * d):
+        near_known |= pad[tuple(slice(o, o + dims[a]) for a, o in enumerate(off))]
+    edge = np.argwhere(unknown & near_known)
+    parts = []
+    if len(edge):
+        centres = phase + (edge + g0 + 0.5) * res
+        parts.append(box_keys(centres, res, lattice))
+    cells = cells_in_box(lattice, lo, hi)
+    if len(cells):
+        v = np.floor((cells @ lattice.generator.T - phase) / res).astype(np.int64) - g0
+        v = np.clip(v, 0, dims - 1)
+        parts.append(pack(cells[unknown[tuple(v.T)]]))
+    if not parts:
+        return np.zeros(0, dtype=np.int64)
+    return unique_keys(np.concatenate(parts))
+
+
+# -- rays --------------------------------------------------------------------------------------
+@njit_cached
+def _mark_rays(occ, walk, a, b, s, grid, lo, dims):  # pragma: no cover - compiled
+    """Set to 0 in ``grid`` (flat uint8 over the index box ``lo``, ``dims``) every cell the
+    segment a[i] -> b[i] touches, walking from cell s[i]."""
+    for i in range(a.shape[0]):
+        cells, _, _ = wk.segment_walk(occ, walk, a[i], b[i], s[i], False)
+        wk.clear_cells(grid, lo, dims, cells)
+
+
+def ray_free_keys(points: np.ndarray, origins: np.ndarray, point_origin: np.ndarray,
+                  lattice: Lattice) -> np.ndarray:
+    """Cells observed free by sensor rays: every cell whose closed Voronoi cell the segment
+    from a point's sensor origin to the point touches, except the cell containing the point
+    and every cell containing some point (occupied wins).
+
+    Parameters
+    ----------
+    points : ndarray, shape (N, 3)
+        Obstacle points (m).
+    origins : ndarray, shape (S, 3)
+        Sensor origins (m).
+    point_origin : ndarray, shape (N,), int
+        Index into ``origins`` of each point.
+    lattice : Lattice
+        A 3D lattice.
+
+    Returns
+    -------
+    ndarray, shape (F,), int64
+        Sorted unique keys.
+    """
+    from planner.world import _c, _walk
+
+    if lattice.dim != 3:
+        raise MapError(f"ray casting needs a 3D lattice, got {lattice.dim}D")
+    b = np.ascontiguousarray(points, dtype=float)
+    a = np.ascontiguousarray(np.asarray(origins, dtype=float)[point_origin])
+    if not len(b):
+        return np.zeros(0, dtype=np.int64)
+    s = np.ascontiguousarray(lattice.quantize(a))
+    ends = lattice.quantize(b)
+    both = np.concatenate([s, ends])
+    lo = both.min(axis=0) - 2
+    dims = both.max(axis=0) + 2 - lo + 1
+    grid = np.ones(int(np.prod(dims)), dtype=np.uint8)  # 0: crossed by a ray
+    g = _c(lattice.generator, float)
+    dummy = wk.Occupancy(0, np.ones(1, np.uint8), np.zeros(3, np.int64), np.ones(3, np.int64),
+                         np.full(1, -1, np.int64), 0, g, np.zeros(3), np.zeros(3))
+    _mark_rays(dummy, _walk(lattice), a, b, s, grid, lo.astype(np.int64),
+               dims.astype(np.int64))
+    grid[(ends - lo) @ grid_strides(dims)] = 1  # a point's own cell is occupied, not free
+    flat = np.flatnonzero(grid == 0)
+    idx = np.stack(np.unravel_index(flat, tuple(int(x) for x in dims)), axis=1) + lo
+    return unique_keys(pack(idx))
+
+
+def unknown_cell_keys(free_keys: np.ndarray, occupied_keys: np.ndarray, lattice: Lattice,
+                      lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """Keys of the cells with centre in ``[lo, hi]`` (m) that are neither observed free
+    (``free_keys``) nor occupied (``occupied_keys``): unknown at cell level.
+
+    Returns
+    -------
+    ndarray, shape (U,), int64
+        Sorted unique keys.
+    """
+    keys = unique_keys(pack(cells_in_box(lattice, lo, hi)))
+    known = unique_keys(np.concatenate([free_keys, occupied_keys]))
+    return keys[~np.isin(keys, known, assume_unique=True)]
+
+
+def unknown_inflation(unknown_keys: np.ndarray, lattice: Lattice, radius: float,
+                      budget: float = DEFAULT_BUDGET) -> np.ndarray:
+    """Keys of the cells whose closed Voronoi cell comes closer than ``radius`` (m) to the
+    closed Voronoi cell of an unknown cell (the unknown cells themselves included): where a
+    robot centre may not go when unknown space counts as an obstacle (module docstring).
+
+    Returns
+    -------
+    ndarray, shape (B,), int64
+    """
+    from planner.voxels.inflate import stencil_inflation
+
+    keys = unique_keys(np.asarray(unknown_keys, dtype=np.int64))
+    if radius == 0 or not len(keys):
+        return keys
+    return stencil_inflation(keys, lattice, float(radius), budget)
