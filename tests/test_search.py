@@ -250,6 +250,30 @@ def test_hash_storage_gives_same_results():
     assert a.cost == pytest.approx(b.cost) and a.cell_checks == b.cell_checks
 
 
+@pytest.mark.parametrize("name", NAMED_LATTICES)
+def test_dense_and_paged_node_maps_agree(name, monkeypatch):
+    """The dense cell -> node array (reused and cleared between searches) and the paged map
+    give the same searches, repeated searches on one world included."""
+    from planner.search import _driver
+
+    world, s, g = _random_world(name, 3, n=6)
+    methods = ("astar", "dijkstra", "lazy-theta")
+    dense = [[S.search(world, s, g, method=m) for m in methods] for _ in range(2)]
+    monkeypatch.setattr(_driver, "DENSE_SLOT_BUDGET", 0)
+    paged = [S.search(world, s, g, method=m) for m in methods]
+    for a, b, c in zip(dense[0], dense[1], paged, strict=True):
+        assert a.cost == b.cost == c.cost
+        assert a.expansions == b.expansions == c.expansions
+        assert np.array_equal(a.cells, c.cells)
+
+
+def test_search_time_never_includes_compilation():
+    w = _box_world(n=4)
+    S.search(w, [0, 0, 0], [4, 4, 4])
+    assert S.warm_up() == 0.0  # done once per process, before the first search's clock
+    assert S.search(w, [0, 0, 0], [4, 4, 3]).compile_seconds == 0.0
+
+
 def test_search_counts_checks_in_world():
     world, s, g = _random_world("bcc", 3)
     before = world.cell_checks
@@ -323,5 +347,5 @@ def test_every_lattice_shares_one_compiled_kernel():
             world.segment_free(world.lattice.to_world(s[None])[0], [0.5, 0.5, 0.5])
     # (segment_walk is left out: numba adds a specialisation per literal ``check`` flag
     # when other kernels call it, cheap and independent of the lattice.)
-    for kernel in (_astar.search_run, _astar.search_init, _los.shortcut_kernel, free_many):
+    for kernel in (_astar.search_run, _los.shortcut_kernel, free_many):
         assert len(kernel.signatures) == 1, (kernel, kernel.signatures)
