@@ -84,7 +84,7 @@ def search_init(start, goal, ms, g, nodes, heap, slots, st):  # pragma: no cover
     st[ST_NP] = 0
     st[ST_HN] = _heap.push(heap, nodes.pos, 0, 0, nodes.f[0], 0.0)
     if slots.dense.shape[0] > 1:
-        slots.dense[dense_index(slots, start[0], start[1], start[2])] = 0
+        slots.dense[dense_index(slots, start[0], start[1], start[2])] = 1  # slot 0, + 1
     else:
         bk = block_key(start[0], start[1], start[2])
         q = new_page(slots, st, bk, mix64(bk) & bmask)
@@ -220,7 +220,7 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st):
                 continue
             if dense:
                 loc = ((v0 - lo0) * d1 + (v1 - lo1)) * d2 + (v2 - lo2)
-                t = np.int64(dsl[loc])
+                t = np.int64(dsl[loc]) - 1  # stored as slot + 1, 0 none
             else:
                 bk = block_key(v0, v1, v2)
                 if bk != last_bk:
@@ -242,7 +242,7 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st):
                 t = n
                 n += 1
                 if dense:
-                    dsl[loc] = t
+                    dsl[loc] = t + 1
                 else:
                     pages[loc] = t
                 nkey[t] = pack3(v0, v1, v2)

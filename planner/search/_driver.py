@@ -64,7 +64,7 @@ def _take_dense(occ) -> np.ndarray | None:
     with _LOCK:
         a = _POOL.pop(key, None)
     if a is None:
-        a = np.full(occ.grid.size, -1, np.int32)
+        a = np.zeros(occ.grid.size, np.int32)  # pages zeroed lazily by the OS
     return a
 
 

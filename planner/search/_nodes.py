@@ -55,7 +55,7 @@ class SlotMap(NamedTuple):
     pages: np.ndarray  # (P * PAGE,) int32 node slot per cell of each page, -1 none
     btab: np.ndarray  # (T,) int64 open-addressing table block key -> page, -1 empty
     bkeys: np.ndarray  # (P,) int64 block key of each page
-    dense: np.ndarray  # (prod(dims),) int32 slot per cell, -1 none; (1,) when paged
+    dense: np.ndarray  # (prod(dims),) int32 slot + 1 per cell, 0 none; (1,) when paged
     lo: np.ndarray  # (3,) int64 lowest index of the dense box
     dims: np.ndarray  # (3,) int64 dense box size
 
@@ -66,14 +66,15 @@ def new_nodes(cap: int) -> NodeTable:
                      np.empty(cap, f8), np.empty(cap, i8), np.empty(cap, i8))
 
 
-_NO_DENSE = np.full(1, _EMPTY, np.int32)
+_NO_DENSE = np.zeros(1, np.int32)
 _ZERO3 = np.zeros(3, np.int64)
 
 
 def new_slots(pcap: int, dense: np.ndarray | None = None, lo: np.ndarray | None = None,
               dims: np.ndarray | None = None) -> SlotMap:
     """Paged slot map with ``pcap`` pages, or dense over the box ``lo``, ``dims`` when
-    ``dense`` (all -1) is given."""
+    ``dense`` (all 0: it stores slot + 1, so a fresh array is ``np.zeros``, whose pages the
+    OS supplies zeroed on first touch instead of a fill of the whole box) is given."""
     if dense is None:
         dense, lo, dims = _NO_DENSE, _ZERO3, _ZERO3
     return SlotMap(np.empty(pcap * PAGE, np.int32), np.full(2 * pcap, _EMPTY, np.int64),
@@ -88,10 +89,10 @@ def dense_index(sm, v0, v1, v2):  # pragma: no cover - compiled
 
 @njit_cached
 def clear_dense(sm, key, n):  # pragma: no cover - compiled
-    """Reset the dense slots of the first ``n`` nodes (packed cells ``key``) to -1."""
+    """Reset the dense slots of the first ``n`` nodes (packed cells ``key``) to none (0)."""
     for i in range(n):
         v0, v1, v2 = unpack3(key[i])
-        sm.dense[dense_index(sm, v0, v1, v2)] = _EMPTY
+        sm.dense[dense_index(sm, v0, v1, v2)] = 0
 
 
 @njit_cached(inline="always")
@@ -112,7 +113,7 @@ def find_slot(sm, v0, v1, v2):  # pragma: no cover - compiled
         a, b, c = v0 - sm.lo[0], v1 - sm.lo[1], v2 - sm.lo[2]
         if a < 0 or b < 0 or c < 0 or a >= sm.dims[0] or b >= sm.dims[1] or c >= sm.dims[2]:
             return _EMPTY
-        return np.int64(sm.dense[(a * sm.dims[1] + b) * sm.dims[2] + c])
+        return np.int64(sm.dense[(a * sm.dims[1] + b) * sm.dims[2] + c]) - 1
     btab, bkeys = sm.btab, sm.bkeys
     bmask = btab.shape[0] - 1
     bk = block_key(v0, v1, v2)
