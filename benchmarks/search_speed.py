@@ -295,6 +295,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--geb-queries", type=int, default=20, help="geb079 queries (>= 10 m)")
     ap.add_argument("--no-lattices", dest="lattices", action="store_false",
                     help="skip the per-lattice cost table on geb079")
+    ap.add_argument("--no-anchor", dest="anchor", action="store_false",
+                    help="skip the A* vs C++ anchor table")
     ap.add_argument("--anyangle", type=int, default=20,
                     help="queries per world for Lazy Theta* vs A* (0: skip)")
     a = ap.parse_args(argv)
@@ -313,7 +315,7 @@ def main(argv: list[str] | None = None) -> int:
             f"{'exp ratio':>9s} {'cost!=':>8s}")
     print(head)
     total_bad = []
-    for name in MAPS:
+    for name in MAPS if a.anchor else ():
         world, scen = load_warframe(name)
         S.search(world, scen[0, :3].astype(np.int64), scen[0, 3:6].astype(np.int64))
         qs = scen if a.all_warframe else scen[:: max(1, len(scen) // a.sample)][: a.sample]
@@ -321,7 +323,7 @@ def main(argv: list[str] | None = None) -> int:
         total_bad += [(name, *b) for b in r["bad"]]
         print(anchor_row(name, r, qs, world))
     geb = geb079(a.geb_queries) if a.geb079 else None
-    if geb is not None:
+    if geb is not None and a.anchor:
         gw, gq = geb
         S.search(gw, gq[0, :3].astype(np.int64), gq[0, 3:6].astype(np.int64))
         print(anchor_row("geb079", numba_batch(gw, gq), gq, gw))

@@ -110,7 +110,9 @@ def run(occ, walk, ms, start, goal, params, span: float, cap: int = 4096):
     dense = _take_dense(occ)
     slots = new_slots(pcap) if dense is None else new_slots(pcap, dense, occ.lo, occ.dims)
     st = np.zeros(ST_SIZE, np.int64)
-    sc = new_scratch(span, walk) if span > 0 else _no_sight()
+    # The walk scratch serves the generic line of sight; cubic sight lines need none.
+    cubic = bool(np.array_equal(walk.g, walk.g[0, 0] * np.eye(3)))
+    sc = new_scratch(span, walk) if span > 0 and not cubic else _no_sight()
     ufree = np.empty(len(ms.union), np.bool_)
     ends = np.empty((2, 3), np.int64)
     ends[0], ends[1] = start, goal
