@@ -1,10 +1,15 @@
-"""Search engine speed: numba A* vs networkx A* (graph build included) vs plain Python A*.
+"""Search engine speed: our A* vs a minimal C++ A* (the anchor), per lattice, Lazy Theta*
+vs A*, DA1 throughput, and numba vs networkx vs plain Python A* on cropped worlds.
 
 Usage::
 
-    python benchmarks/search_speed.py                 # sampled Warframe + geb079 table
+    python benchmarks/search_speed.py                 # every table, sampled queries
     python benchmarks/search_speed.py --all-warframe  # all 30,000 Warframe queries, mismatches
     python benchmarks/search_speed.py --da1 1000      # time 1,000 DA1 queries
+
+The C++ anchor (``benchmarks/cpp_anchor.py``) is compiled at run time with the system
+compiler and skipped with a note when there is none. Every ratio is measured in one run on
+the same queries (the machine may be shared: trust ratios, not absolute times).
 
 Cubic lattice, 26 neighbours, safe rule (= MovingAI no corner cutting). networkx and the
 Python baseline run on a cropped world (the start/goal box padded by ``--pad`` cells) so
@@ -23,7 +28,6 @@ import time
 from pathlib import Path
 
 import numpy as np
-from numba import njit
 
 from planner import search as S
 from planner.lattice import Lattice
@@ -111,124 +115,51 @@ def numba_batch(world: World, queries: np.ndarray) -> dict:
     exp = checks = 0
     ksec = 0.0
     bad = []
+    costs = np.empty(len(queries))
     t0 = time.perf_counter()
-    for q in queries:
+    for i, q in enumerate(queries):
         r = S.search(world, q[:3].astype(np.int64), q[3:6].astype(np.int64))
+        costs[i] = r.cost
         exp += r.expansions
         checks += r.cell_checks
         ksec += r.seconds
         if len(q) > 6 and (not r.found or abs(r.cost - q[6]) > 1e-6 * q[6]):
             bad.append((q[:6].astype(int).tolist(), q[6], r.cost))
     wall = time.perf_counter() - t0
-    return dict(n=len(queries), exp=exp, checks=checks, ksec=ksec, wall=wall, bad=bad)
+    return dict(n=len(queries), exp=exp, checks=checks, ksec=ksec, wall=wall, bad=bad,
+                costs=costs)
 
 
-@njit(cache=True)
-def _minimal_astar(free, d1, d2, s, gl, moves, mcost, g, pos, heap, hf):  # pragma: no cover
-    """The smallest compiled A* we could write for cubic-26 with the safe rule: dense g /
-    position arrays over the whole map (memory proportional to the box: the design the
-    product avoids), octile heuristic, binary heap. A floor for the per-expansion cost on
-    this machine, not a planner. Returns (expansions, cost)."""
-    hn = 1
-    heap[0] = s
-    hf[0] = 0.0
-    g[s] = 0.0
-    pos[s] = 0
-    exp = 0
-    ga, gb, gc = gl // (d1 * d2), (gl // d2) % d1, gl % d2
-    r3, r2 = math.sqrt(3.0), math.sqrt(2.0)
-    d0 = free.shape[0] // (d1 * d2)
-    while hn > 0:
-        x = heap[0]
-        if x == gl:
-            return exp, g[x]
-        hn -= 1
-        if hn > 0:
-            y, yf = heap[hn], hf[hn]
-            i = 0
-            while True:
-                c = 2 * i + 1
-                if c >= hn:
-                    break
-                if c + 1 < hn and hf[c + 1] < hf[c]:
-                    c += 1
-                if not hf[c] < yf:
-                    break
-                heap[i], hf[i] = heap[c], hf[c]
-                pos[heap[i]] = i
-                i = c
-            heap[i], hf[i] = y, yf
-            pos[y] = i
-        pos[x] = -1
-        exp += 1
-        a, b, cc = x // (d1 * d2), (x // d2) % d1, x % d2
-        for m in range(moves.shape[0]):
-            a2, b2, c2 = a + moves[m, 0], b + moves[m, 1], cc + moves[m, 2]
-            if a2 < 0 or b2 < 0 or c2 < 0 or a2 >= d0 or b2 >= d1 or c2 >= d2:
-                continue
-            t = (a2 * d1 + b2) * d2 + c2
-            if free[t] == 0 or pos[t] == -1:
-                continue
-            ok = True
-            for da in range(min(0, moves[m, 0]), max(0, moves[m, 0]) + 1):
-                for db in range(min(0, moves[m, 1]), max(0, moves[m, 1]) + 1):
-                    for dc in range(min(0, moves[m, 2]), max(0, moves[m, 2]) + 1):
-                        if free[((a + da) * d1 + b + db) * d2 + cc + dc] == 0:
-                            ok = False
-            if not ok:
-                continue
-            gt = g[x] + mcost[m]
-            if gt < g[t]:
-                g[t] = gt
-                x0, x1, x2 = abs(ga - a2), abs(gb - b2), abs(gc - c2)
-                lo = min(x0, min(x1, x2))
-                hi = max(x0, max(x1, x2))
-                f = gt + (r3 - r2) * lo + (r2 - 1.0) * (x0 + x1 + x2 - lo - hi) + hi
-                i = hn if pos[t] == -2 else pos[t]
-                if pos[t] == -2:
-                    hn += 1
-                while i > 0:
-                    p = (i - 1) >> 1
-                    if not f < hf[p]:
-                        break
-                    heap[i], hf[i] = heap[p], hf[p]
-                    pos[heap[i]] = i
-                    i = p
-                heap[i], hf[i] = t, f
-                pos[t] = i
-    return exp, np.inf
+def anchor_batch(world: World, queries: np.ndarray) -> dict | None:
+    """The C++ anchor (:mod:`cpp_anchor`, cubic-26, MovingAI rule) on the same world and
+    queries: its expansions and search seconds (grid loading outside its clock). None when
+    no compiler is present. Costs are checked against ours by the caller."""
+    import cpp_anchor
+
+    if not cpp_anchor.available():
+        return None
+    occ = world.occupancy
+    if occ.mode != 0:
+        return None
+    free = occ.grid.reshape(tuple(occ.dims)) != 0
+    cells = queries[:, :6].astype(np.int64) - np.tile(occ.lo, 2)
+    res = cpp_anchor.run(free, cells)
+    step = 2.0 * world.lattice.packing_radius  # the anchor counts cells; ours are metres
+    cost = np.where(res[:, 0] < 0, res[:, 0], res[:, 0] * step)
+    return dict(exp=int(res[:, 1].sum()), sec=float(res[:, 2].sum()), cost=cost)
 
 
-def minimal_batch(world: World, queries: np.ndarray) -> float:
-    """Expansions/s of :func:`_minimal_astar` on the queries (array resets not timed)."""
-    lo = np.round(world.bounds[0]).astype(np.int64)
-    dims = np.round(world.bounds[1] - world.bounds[0]).astype(np.int64) + 1
-    free = np.ones(int(dims.prod()), np.uint8)
-    b = world.blocked - lo
-    free[(b[:, 0] * dims[1] + b[:, 1]) * dims[2] + b[:, 2]] = 0
-    n = free.shape[0]
-    g, pos, heap, hf = np.empty(n), np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n)
-    mv = np.array([(i, j, k) for i in (-1, 0, 1) for j in (-1, 0, 1) for k in (-1, 0, 1)
-                   if (i, j, k) != (0, 0, 0)], np.int64)
-    mc = np.linalg.norm(mv, axis=1)
-
-    def flat(p):
-        p = p.astype(np.int64) - lo
-        return (p[0] * dims[1] + p[1]) * dims[2] + p[2]
-
-    exp, secs = 0, 0.0
-    for k, q in enumerate(queries):
-        g[:] = np.inf
-        pos[:] = -2
-        t = time.perf_counter()
-        e, c = _minimal_astar(free, dims[1], dims[2], flat(q[:3]), flat(q[3:6]), mv, mc, g, pos,
-                              heap, hf)
-        if k:  # the first call may compile
-            secs += time.perf_counter() - t
-            exp += e
-        if len(q) > 6:
-            assert abs(c - q[6]) <= 1e-6 * q[6], (q, c)
-    return exp / secs if secs else math.nan
+def anchor_row(name: str, r: dict, qs: np.ndarray, world: World) -> str:
+    """Ours vs the anchor on the same queries: expansions/s of each and their ratio."""
+    ours = r["exp"] / r["ksec"]
+    an = anchor_batch(world, qs)
+    if an is None:
+        return f"{name:10s} {r['n']:7d} {ours:11.3g}  (C++ anchor skipped: no g++ / c++ on PATH)"
+    ok = np.isclose(an["cost"], r["costs"], rtol=1e-9, atol=1e-9) | (
+        (an["cost"] < 0) & ~np.isfinite(r["costs"]))
+    aps = an["exp"] / an["sec"]
+    return (f"{name:10s} {r['n']:7d} {ours:11.3g} {aps:11.3g} {ours / aps:7.2f} "
+            f"{r['exp'] / max(an['exp'], 1):9.3f} {int((~ok).sum()):8d}")
 
 
 def compare(world: World, queries: np.ndarray, pad: int, with_nx: bool = True) -> dict:
@@ -264,23 +195,73 @@ def compare(world: World, queries: np.ndarray, pad: int, with_nx: bool = True) -
     return dict(numba=tn, nx=tx, py=tp, exp=exp, skipped=skipped)
 
 
-def geb079(n_queries: int = 20, seed: int = 0) -> tuple[World, np.ndarray] | None:
+def geb079(n_queries: int = 20, seed: int = 0, lattice: str = "cubic"
+           ) -> tuple[World, np.ndarray] | None:
     """The real OctoMap scan geb079.bt on the cubic lattice at its native 0.08 m, with
-    random free start/goal cells at least 8 m apart (None when the data is absent)."""
+    random free start/goal cells at least 10 m apart (None when the data is absent)."""
     from planner.api import build_world
 
     if not GEB079.is_file():
         return None
-    world = build_world(GEB079, "cubic", cell_volume=0.08**3)
+    world = build_world(GEB079, lattice, cell_volume=0.08**3)
     rng = np.random.default_rng(seed)
     lo = np.ceil(world.bounds[0] / 0.08).astype(np.int64)
     hi = np.floor(world.bounds[1] / 0.08).astype(np.int64)
     q = []
     while len(q) < n_queries:
         c = rng.integers(lo, hi + 1, size=(2, 3))
-        if world.is_free(c).all() and np.linalg.norm(c[0] - c[1]) * 0.08 > 8.0:
+        if world.is_free(c).all() and np.linalg.norm(c[0] - c[1]) * 0.08 >= 10.0:
             q.append(np.r_[c[0], c[1]])
     return world, np.array(q, float)
+
+
+def lattice_table(geb: tuple[World, np.ndarray]) -> None:
+    """A* per-expansion cost on each lattice relative to cubic: geb079 at the same cell
+    volume (0.08 m^3), the cubic queries' centres quantized on each lattice."""
+    from planner.lattice import NAMED_LATTICES
+
+    gw, gq = geb
+    pts = gw.lattice.to_world(gq[:, :6].reshape(-1, 3).astype(np.int64)).reshape(-1, 2, 3)
+    print("\nA* per expansion by lattice, geb079 (cell volume 0.08^3 m^3, full neighbours, "
+          "safe rule); ratio = ns per expansion / cubic's (goal <= 1.5)")
+    print(f"{'lattice':8s} {'queries':>7s} {'expansions':>11s} {'ns/exp':>8s} {'vs cubic':>8s}")
+    base = None
+    for name in NAMED_LATTICES:
+        w = gw if name == "cubic" else geb079(0, lattice=name)[0]
+        q = w.lattice.quantize(pts.reshape(-1, 3)).reshape(-1, 6)
+        q = q[w.is_free(q[:, :3]) & w.is_free(q[:, 3:])]
+        S.search(w, q[0, :3], q[0, 3:])
+        r = numba_batch(w, q.astype(float))
+        ns = 1e9 * r["ksec"] / r["exp"]
+        base = ns if base is None else base
+        print(f"{name:8s} {r['n']:7d} {r['exp']:11d} {ns:8.0f} {ns / base:8.2f}")
+
+
+def anyangle_table(geb: tuple[World, np.ndarray] | None, n: int) -> None:
+    """Lazy Theta* vs A* on the same queries: median per-query time ratio (goal <= 2)."""
+    print(f"\nLazy Theta* vs A* (cubic-26, same queries; kernel time); up to {n} per world")
+    print(f"{'world':10s} {'queries':>7s} {'A* med ms':>9s} {'LT* med ms':>10s} "
+          f"{'med ratio':>9s} {'LT*/A* exp':>10s} {'LT* length m':>12s}")
+    cases = [(m, *load_warframe(m)) for m in ("Simple", "DA1")]
+    if geb is not None:
+        cases.append(("geb079", *geb))
+    for name, world, scen in cases:
+        qs = scen[:: max(1, len(scen) // n)][:n]
+        ta, tl, ea, el, length = [], [], 0, 0, 0.0
+        S.search(world, qs[0, :3].astype(np.int64), qs[0, 3:6].astype(np.int64),
+                 method="lazy-theta")
+        for q in qs:
+            s, g = q[:3].astype(np.int64), q[3:6].astype(np.int64)
+            ra = S.search(world, s, g)
+            rl = S.search(world, s, g, method="lazy-theta")
+            ta.append(ra.seconds)
+            tl.append(rl.seconds)
+            ea += ra.expansions
+            el += rl.expansions
+            length += rl.cost
+        ta, tl = np.array(ta), np.array(tl)
+        print(f"{name:10s} {len(qs):7d} {1e3 * np.median(ta):9.2f} {1e3 * np.median(tl):10.2f} "
+              f"{np.median(tl / ta):9.2f} {el / ea:10.2f} {length:12.4f}")
 
 
 def cold_warm() -> tuple[float, float]:
@@ -311,35 +292,50 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--da1", type=int, default=1000, help="DA1 queries to time (0: skip)")
     ap.add_argument("--no-geb079", dest="geb079", action="store_false",
                     help="skip the geb079.bt OctoMap world")
+    ap.add_argument("--geb-queries", type=int, default=20, help="geb079 queries (>= 10 m)")
+    ap.add_argument("--no-lattices", dest="lattices", action="store_false",
+                    help="skip the per-lattice cost table on geb079")
+    ap.add_argument("--no-anchor", dest="anchor", action="store_false",
+                    help="skip the A* vs C++ anchor table")
+    ap.add_argument("--anyangle", type=int, default=20,
+                    help="queries per world for Lazy Theta* vs A* (0: skip)")
     a = ap.parse_args(argv)
     if not WARFRAME.exists():
         print(f"no Warframe data at {WARFRAME}; skipping")
         return 0
 
     cold, warm = cold_warm()
-    print("minimal exp/s: a dense-array compiled A* (benchmarks/search_speed.py "
-          "_minimal_astar) on 50 of the same queries; ratio = ours / minimal")
     print(f"first call in a fresh process (import + cached-kernel load + tiny search): "
           f"{cold:.2f} s; second call {warm * 1e3:.2f} ms")
 
-    print("\nnumba A*, cubic-26, safe rule (kernel time; per-query Python overhead excluded)")
-    print(f"{'map':10s} {'queries':>7s} {'expansions':>11s} {'exp/s':>11s} {'checks/s':>12s} "
-          f"{'wall s':>7s} {'mismatch':>8s} {'minimal exp/s':>13s} {'ratio':>6s}")
+    print("\nA*, cubic-26, safe rule (= MovingAI no corner cutting), ours vs the C++ anchor "
+          "(benchmarks/cpp_anchor.py, g++ -O3) on the same queries; kernel time only.\n"
+          "ratio = our exp/s / anchor exp/s (goal >= 0.5); exp ratio = our expansions / its")
+    head = (f"{'map':10s} {'queries':>7s} {'ours exp/s':>11s} {'anchor':>11s} {'ratio':>7s} "
+            f"{'exp ratio':>9s} {'cost!=':>8s}")
+    print(head)
     total_bad = []
-    for name in MAPS:
+    for name in MAPS if a.anchor else ():
         world, scen = load_warframe(name)
         S.search(world, scen[0, :3].astype(np.int64), scen[0, 3:6].astype(np.int64))
         qs = scen if a.all_warframe else scen[:: max(1, len(scen) // a.sample)][: a.sample]
         r = numba_batch(world, qs)
         total_bad += [(name, *b) for b in r["bad"]]
-        mini = minimal_batch(world, qs[:: max(1, len(qs) // 50)])
-        print(f"{name:10s} {r['n']:7d} {r['exp']:11d} {r['exp'] / r['ksec']:11.3g} "
-              f"{r['checks'] / r['ksec']:12.3g} {r['wall']:7.2f} {len(r['bad']):8d} "
-              f"{mini:13.3g} {r['exp'] / r['ksec'] / mini:6.2f}")
-    if a.all_warframe:
-        print(f"all Warframe queries: {len(total_bad)} mismatches")
-        for b in total_bad[:20]:
-            print("  ", b)
+        print(anchor_row(name, r, qs, world))
+    geb = geb079(a.geb_queries) if a.geb079 else None
+    if geb is not None and a.anchor:
+        gw, gq = geb
+        S.search(gw, gq[0, :3].astype(np.int64), gq[0, 3:6].astype(np.int64))
+        print(anchor_row("geb079", numba_batch(gw, gq), gq, gw))
+    print(f"Warframe optimal costs: {len(total_bad)} mismatches"
+          + (" (all 30,000 queries)" if a.all_warframe else f" ({a.sample} per map)"))
+    for b in total_bad[:20]:
+        print("  ", b)
+
+    if geb is not None and a.lattices:
+        lattice_table(geb)
+    if a.anyangle:
+        anyangle_table(geb, a.anyangle)
 
     if a.da1:
         world, scen = load_warframe("DA1")
@@ -347,15 +343,16 @@ def main(argv: list[str] | None = None) -> int:
         r = numba_batch(world, scen[: a.da1])
         print(f"\n{a.da1} DA1 queries: {r['wall']:.2f} s wall ({r['ksec']:.2f} s in the kernel), "
               f"{len(r['bad'])} mismatches")
+    if not a.compare:
+        return 1 if total_bad else 0
 
     print(f"\nratios on cropped worlds (start/goal box + {a.pad} cells; same graph for all)")
     print(f"{'case':10s} {'queries':>7s} {'numba s':>9s} {'networkx s':>10s} {'python s':>9s} "
           f"{'nx/numba':>9s} {'py/numba':>9s}")
     cases = [(name, *load_warframe(name)) for name in MAPS]
-    geb = geb079() if a.geb079 else None
     if geb is not None:
         cases.append(("geb079", *geb))
-    for name, world, scen in cases if a.compare else []:
+    for name, world, scen in cases:
         qs = scen[:: max(1, len(scen) // a.compare)][: a.compare]
         r = compare(world, qs, a.pad)
         done = len(qs) - r["skipped"]
@@ -367,14 +364,6 @@ def main(argv: list[str] | None = None) -> int:
               + (f"  ({r['skipped']} skipped: crop over the networkx cap)"
                  if r["skipped"] else ""))
 
-    if geb is not None:
-        gw, gq = geb
-        print(f"\ngeb079.bt full world (cubic 0.08 m, {gw.n_blocked} blocked cells, "
-              f"{gw.storage} storage), numba A*, random free queries > 8 m apart")
-        S.search(gw, gq[0, :3].astype(np.int64), gq[0, 3:6].astype(np.int64))
-        r = numba_batch(gw, gq)
-        print(f"{len(gq)} queries: {r['exp']} expansions, {r['exp'] / r['ksec']:.3g} exp/s, "
-              f"{r['checks'] / r['ksec']:.3g} checks/s, {r['wall']:.2f} s wall")
     return 1 if total_bad else 0
 
 

@@ -55,6 +55,7 @@ class Walk(NamedTuple):
 
 _EMPTY = -1
 _SEG_TOL = 1e-9  # relative slack on each Voronoi half-space: boundary contact counts
+_FWD_SLACK = 1e-6  # cosine below which a full offset counts as backward (walk_on)
 
 
 # -- hashing -------------------------------------------------------------------------------
@@ -219,6 +220,23 @@ def walk_on(occ, walk, a, b, s, check, vis, vgen, gen, queue):
         av[r] = rhs[r] * (1.0 + _SEG_TOL) - x
         y = (b[0] - a[0]) * rel[r, 0] + (b[1] - a[1]) * rel[r, 1] + (b[2] - a[2]) * rel[r, 2]
         dq[r] = 1.0 / y if y != 0.0 else 0.0
+    # Forward offsets only: every touched cell but the start has a touched full neighbour
+    # it is entered from, at an offset f with (b - a) . (G f) >= 0 (the segment crosses
+    # their shared boundary moving away from that neighbour's centre). Backward offsets
+    # (beyond a small angular slack for the boundary tolerance) are skipped: about half
+    # of the candidates, each a hash probe and a clip.
+    nf = full.shape[0]
+    fwd = np.int64(-1)
+    if nf <= 63:
+        fwd = np.int64(0)
+        dn = np.sqrt((b[0] - a[0]) ** 2 + (b[1] - a[1]) ** 2 + (b[2] - a[2]) ** 2)
+        for f in range(nf):
+            x0 = gg[0, 0] * full[f, 0] + gg[0, 1] * full[f, 1] + gg[0, 2] * full[f, 2]
+            x1 = gg[1, 0] * full[f, 0] + gg[1, 1] * full[f, 1] + gg[1, 2] * full[f, 2]
+            x2 = gg[2, 0] * full[f, 0] + gg[2, 1] * full[f, 1] + gg[2, 2] * full[f, 2]
+            dot = (b[0] - a[0]) * x0 + (b[1] - a[1]) * x1 + (b[2] - a[2]) * x2
+            if dot >= -_FWD_SLACK * dn * np.sqrt(x0 * x0 + x1 * x1 + x2 * x2):
+                fwd |= np.int64(1) << f
     size = vis.shape[0]
     mask = size - 1
     qcap = queue.shape[0]
@@ -243,7 +261,9 @@ def walk_on(occ, walk, a, b, s, check, vis, vgen, gen, queue):
         u1 = queue[qh, 1]
         u2 = queue[qh, 2]
         qh += 1
-        for f in range(full.shape[0]):
+        for f in range(nf):
+            if not (fwd >> f) & 1:
+                continue
             v0 = u0 + full[f, 0]
             v1 = u1 + full[f, 1]
             v2 = u2 + full[f, 2]

@@ -114,6 +114,78 @@ def test_segment_cells_contain_sampled_cells(name):
             assert slack <= 1e-2 * lat.packing_radius
 
 
+def _touched_brute(lat, a, b, s):
+    """Every cell in an index box around the segment whose closed Voronoi cell (widened by
+    the walk's tolerance) meets it: the walk's clip test, evaluated for each candidate."""
+    from planner._world_kernels import _SEG_TOL
+
+    g, rel = lat.generator, lat.relevant_vectors
+    rhs = 0.5 * (rel * rel).sum(1)
+    wv = rel @ g
+    c0 = g @ s
+    lim0 = rhs * (1.0 + _SEG_TOL) - (a - c0) @ rel.T
+    dq = (b - a) @ rel.T
+    ginv = np.linalg.inv(g)
+    ends = np.stack([ginv @ a, ginv @ b])
+    lo = np.floor(ends.min(0)).astype(int) - 3
+    hi = np.ceil(ends.max(0)).astype(int) + 3
+    u = np.stack(np.meshgrid(*[np.arange(x, y + 1) for x, y in zip(lo, hi, strict=True)],
+                             indexing="ij"), -1).reshape(-1, 3)
+    lim = lim0 + (u - s) @ wv.T
+    with np.errstate(divide="ignore"):
+        t = lim * np.where(dq != 0, 1.0 / np.where(dq != 0, dq, 1), 0.0)
+    up = np.where(dq > 0, t, np.inf).min(1).clip(max=1.0)
+    dn = np.where(dq < 0, t, -np.inf).max(1).clip(min=0.0)
+    par = np.where(dq == 0, lim < 0, False).any(1)
+    return {tuple(c) for c in u[(dn <= up) & ~par].tolist()}
+
+
+@pytest.mark.parametrize("name", NAMED_LATTICES)
+def test_segment_walk_matches_brute_force(name):
+    """The walk (forward offsets only) finds exactly the cells a brute-force clip over a
+    box finds: random segments, centre-to-centre segments (boundary ties) and axis ones."""
+    lat = Lattice.named(name, 0.3)
+    w = World(lat, np.zeros((0, 3), np.int64), np.array([[-9.0] * 3, [9.0] * 3]))
+    rng = np.random.default_rng(5)
+    moves = lat.neighbors("full+1")
+    for k in range(150):
+        if k % 3 == 0:
+            a, b = rng.uniform(-2, 2, (2, 3))
+        else:  # cell centre to cell centre: the lattice's own ties
+            p = rng.integers(-3, 4, 3)
+            q = p + (moves[rng.integers(len(moves))] * rng.integers(1, 4) if k % 3 == 1
+                     else rng.integers(-6, 7, 3))
+            a, b = lat.to_world(np.stack([p, q]))
+        s = lat.quantize(a[None])[0]
+        got = {tuple(c) for c in w.segment_cells(a, b).tolist()}
+        assert got == _touched_brute(lat, a, b, s), (name, a, b)
+
+
+def test_cubic_sight_blocks_exactly_the_walked_cells():
+    """The cubic line of sight (nested clipping) is blocked by a cell iff the exact walk
+    touches it: each cell on and around random centre-to-centre segments is blocked in
+    turn (lattice ties included: axis, face- and space-diagonal segments)."""
+    from planner.search._los import cubic_sight
+
+    w = _box_world(n=24)
+    occ = w.occupancy
+    def idx(c):
+        return ((c[0] - occ.lo[0]) * occ.dims[1] + c[1] - occ.lo[1]) * occ.dims[2] + (
+            c[2] - occ.lo[2])
+    rng = np.random.default_rng(11)
+    ring = np.array([d for d in itertools.product((-1, 0, 1), repeat=3)])
+    for k in range(60):
+        p = rng.integers(6, 18, 3)
+        q = p + (rng.integers(-5, 6, 3) if k % 2 else rng.integers(-1, 2, 3) * rng.integers(1, 6))
+        walked = {tuple(c) for c in w.segment_cells(*w.lattice.to_world(np.stack([p, q])))}
+        near = {tuple(np.add(c, d)) for c in walked for d in ring}
+        assert cubic_sight(occ, p, q)[0]
+        for c in near:
+            occ.grid[idx(c)] = 0
+            assert cubic_sight(occ, p, q)[0] == (c not in walked), (p, q, c)
+            occ.grid[idx(c)] = 1
+
+
 def test_segment_free_counts_lookups():
     w = _box_world(blocked=[(3, 3, 3)], n=10)
     assert not w.segment_free([1, 1, 1], [5, 5, 5])
@@ -250,6 +322,30 @@ def test_hash_storage_gives_same_results():
     assert a.cost == pytest.approx(b.cost) and a.cell_checks == b.cell_checks
 
 
+@pytest.mark.parametrize("name", NAMED_LATTICES)
+def test_dense_and_paged_node_maps_agree(name, monkeypatch):
+    """The dense cell -> node array (reused and cleared between searches) and the paged map
+    give the same searches, repeated searches on one world included."""
+    from planner.search import _driver
+
+    world, s, g = _random_world(name, 3, n=6)
+    methods = ("astar", "dijkstra", "lazy-theta")
+    dense = [[S.search(world, s, g, method=m) for m in methods] for _ in range(2)]
+    monkeypatch.setattr(_driver, "DENSE_SLOT_BUDGET", 0)
+    paged = [S.search(world, s, g, method=m) for m in methods]
+    for a, b, c in zip(dense[0], dense[1], paged, strict=True):
+        assert a.cost == b.cost == c.cost
+        assert a.expansions == b.expansions == c.expansions
+        assert np.array_equal(a.cells, c.cells)
+
+
+def test_search_time_never_includes_compilation():
+    w = _box_world(n=4)
+    S.search(w, [0, 0, 0], [4, 4, 4])
+    assert S.warm_up() == 0.0  # done once per process, before the first search's clock
+    assert S.search(w, [0, 0, 0], [4, 4, 3]).compile_seconds == 0.0
+
+
 def test_search_counts_checks_in_world():
     world, s, g = _random_world("bcc", 3)
     before = world.cell_checks
@@ -323,5 +419,5 @@ def test_every_lattice_shares_one_compiled_kernel():
             world.segment_free(world.lattice.to_world(s[None])[0], [0.5, 0.5, 0.5])
     # (segment_walk is left out: numba adds a specialisation per literal ``check`` flag
     # when other kernels call it, cheap and independent of the lattice.)
-    for kernel in (_astar.search_run, _astar.search_init, _los.shortcut_kernel, free_many):
+    for kernel in (_astar.search_run, _los.shortcut_kernel, free_many):
         assert len(kernel.signatures) == 1, (kernel, kernel.signatures)

@@ -52,8 +52,8 @@ from planner.search.stencils import (
 )
 from planner.world import World, _cells
 
-__all__ = ["SearchResult", "search", "shortcut", "move_stencils", "move_heuristic", "METHODS",
-           "carries_guarantee", "default_memory_budget", "default_max_expansions"]
+__all__ = ["SearchResult", "search", "shortcut", "warm_up", "move_stencils", "move_heuristic",
+           "METHODS", "carries_guarantee", "default_memory_budget", "default_max_expansions"]
 
 METHODS = ("astar", "dijkstra", "theta", "lazy-theta")
 _ANYANGLE = {"astar": 0, "dijkstra": 0, "theta": 1, "lazy-theta": 2}
@@ -108,6 +108,9 @@ class SearchResult:
     guarantee : bool
         Whether the path carries the radius guarantee
         (:func:`planner.search.stencils.carries_guarantee`).
+    compile_seconds : float
+        Time spent compiling or loading the search kernels before this search (its first
+        in the process; 0 after), never part of ``seconds`` (:func:`warm_up`).
     """
 
     found: bool
@@ -122,6 +125,35 @@ class SearchResult:
     extra: dict = field(default_factory=dict)
     status: str = "found"
     guarantee: bool = True
+    compile_seconds: float = 0.0
+
+
+_WARM: list[float] = []
+
+
+def warm_up() -> float:
+    """Compile (or load from numba's on-disk cache) every search kernel once per process, on
+    a tiny world, so that no search times the JIT. :func:`search` calls it first; callers
+    that report times may call it up front.
+
+    Returns
+    -------
+    float
+        Seconds it took (0.0 once done in this process).
+    """
+    if _WARM:
+        return 0.0
+    _WARM.append(0.0)  # before the searches below, which call warm_up again
+    t0 = time.perf_counter()
+    from planner.lattice import Lattice
+    from planner.search._nodes import new_slots, rehash
+
+    w = World(Lattice.named("cubic", 1.0), np.array([[1, 1, 1]]), [[0, 0, 0], [3, 3, 3]])
+    for method in ("astar", "lazy-theta"):
+        search(w, [0, 0, 0], [3, 3, 2], method=method)
+    rehash(new_slots(1), 0)  # the driver's slot-map growth
+    _WARM[0] = time.perf_counter() - t0
+    return _WARM[0]
 
 
 def _limit(value, name: str) -> int:
@@ -181,6 +213,7 @@ def search(
         raise PlanError(f"unknown method {method!r}; expected one of {', '.join(METHODS)}")
     if backend not in ("numba", "networkx"):
         raise PlanError(f"unknown backend {backend!r}; expected numba or networkx")
+    compile_s = warm_up()
     max_nodes = _limit(max_nodes, "max_nodes")
     budget_nodes = default_max_expansions(_limit(memory_budget, "memory_budget") or None)
     max_exp = _limit(max_expansions, "max_expansions") or budget_nodes
@@ -210,7 +243,7 @@ def search(
     checks = look + 2  # and the two endpoint checks
     if status == _astar.RUN_FOUND:
         return SearchResult(True, unpack(keys, 3), cost, checks, exp, gen, secs, peak,
-                            guarantee=guarantee)
+                            guarantee=guarantee, compile_seconds=compile_s)
     if status == _astar.RUN_EXHAUSTED:
         why, kind = f"goal unreachable: explored {gen} cells", "unreachable"
     elif status == _astar.RUN_LIMIT and max_nodes and gen >= max_nodes:
@@ -218,7 +251,7 @@ def search(
     else:
         why, kind = f"search budget exhausted after {exp} expansions ({peak} bytes)", "budget"
     return SearchResult(False, np.zeros((0, 3), np.int64), math.inf, checks, exp, gen, secs,
-                        peak, why, status=kind, guarantee=guarantee)
+                        peak, why, status=kind, guarantee=guarantee, compile_seconds=compile_s)
 
 
 def _span(world: World) -> float:

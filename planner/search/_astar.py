@@ -22,11 +22,12 @@ from planner.search._nodes import (
     ST_N,
     ST_NP,
     block_key,
+    dense_index,
     local,
     new_page,
 )
 from planner.search._theta import euclid, lazy_set_vertex, theta_parent
-from planner.search.stencils import H_EUCLID, H_GAUGE, move_allowed
+from planner.search.stencils import H_EUCLID, H_GAUGE, MAX_BITS, move_allowed
 
 _EMPTY = -1
 RUN_EXHAUSTED, RUN_FOUND, RUN_LIMIT, RUN_GROW, RUN_BUDGET = 0, 1, 2, 3, 4
@@ -40,11 +41,27 @@ class SearchParams(NamedTuple):
     max_expansions: int  # stop (RUN_BUDGET) after this many expansions; <= 0 no limit
 
 
+_R3M2 = np.sqrt(3.0) - np.sqrt(2.0)
+_R2M1 = np.sqrt(2.0) - 1.0
+
+
+@njit_cached(inline="always")
+def octile(s, e0, e1, e2):  # pragma: no cover - compiled
+    """Octile distance of index difference e on the cubic lattice of cell size s (m): the
+    cubic-26 gauge in closed form (sqrt 3 per diagonal, sqrt 2 per face diagonal)."""
+    a, b, c = abs(e0), abs(e1), abs(e2)
+    lo = min(a, min(b, c))
+    hi = max(a, max(b, c))
+    return s * (_R3M2 * lo + _R2M1 * (a + b + c - lo - hi) + hi)
+
+
 @njit_cached(inline="always")
 def heuristic(ms, g, e0, e1, e2):  # pragma: no cover - compiled
     """h of the index difference e = goal - w (module docstring of ``stencils``)."""
     hv = 0.0
-    if ms.hkind == H_GAUGE:
+    if ms.octile > 0.0:
+        hv = octile(ms.octile, e0, e1, e2)
+    elif ms.hkind == H_GAUGE:
         hmat = ms.hmat
         for f in range(hmat.shape[0]):
             x = hmat[f, 0] * e0 + hmat[f, 1] * e1 + hmat[f, 2] * e2
@@ -66,14 +83,17 @@ def search_init(start, goal, ms, g, nodes, heap, slots, st):  # pragma: no cover
     nodes.par[0] = 0
     st[ST_NP] = 0
     st[ST_HN] = _heap.push(heap, nodes.pos, 0, 0, nodes.f[0], 0.0)
-    bk = block_key(start[0], start[1], start[2])
-    q = new_page(slots, st, bk, mix64(bk) & bmask)
-    slots.pages[q * PAGE + local(start[0], start[1], start[2])] = 0
+    if slots.dense.shape[0] > 1:
+        slots.dense[dense_index(slots, start[0], start[1], start[2])] = 1  # slot 0, + 1
+    else:
+        bk = block_key(start[0], start[1], start[2])
+        q = new_page(slots, st, bk, mix64(bk) & bmask)
+        slots.pages[q * PAGE + local(start[0], start[1], start[2])] = 0
     st[ST_N] = 1
 
 
 @njit_cached
-def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st):
+def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st):
     # pragma: no cover - compiled
     """A* / Dijkstra / Theta* / Lazy Theta* over lattice cells, resumable.
 
@@ -96,7 +116,9 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st):
     ufree : (U,) bool
         Scratch for the union stencil lookups of one expansion.
     params : SearchParams
-    goal : (3,) int64
+    ends : (2, 3) int64
+        Start and goal cells. The first call (``st[ST_N] == 0``) puts the start in the
+        empty structs (:func:`search_init`): one kernel call per search instead of two.
     st : (ST_SIZE,) int64
         State (``planner.search._nodes.ST_*``): node count, heap size, expansions, lookups,
         goal slot, page count, walk generation.
@@ -106,12 +128,16 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st):
     int
         RUN_FOUND, RUN_EXHAUSTED, RUN_LIMIT, RUN_BUDGET or RUN_GROW.
     """
+    goal = ends[1]
+    if st[ST_N] == 0:
+        search_init(ends[0], goal, ms, walk.g, nodes, heap, slots, st)
     mode, grid, lo, dims, otable, otmask, gg, blo, bhi = occ
     lo0, lo1, lo2 = lo[0], lo[1], lo[2]
     d0, d1, d2 = dims[0], dims[1], dims[2]
-    moves, mcost, ust, mptr, midx, hmat, hkind = ms
+    moves, mcost, ust, mptr, midx, hmat, hkind, need, oct_s = ms
     nkey, ng, nf, nh, npar, npos = nodes
-    pages, btab, bkeys = slots
+    pages, btab, bkeys, dsl, _, _ = slots
+    dense = dsl.shape[0] > 1 and mode == 0  # the dense slot box is the grid's box
     anyangle, max_nodes, max_exp = params
     g = walk.g
     gl0, gl1, gl2 = goal[0], goal[1], goal[2]
@@ -127,6 +153,7 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st):
     last_pg = np.int64(0)
     nu = ust.shape[0]
     nm = moves.shape[0]
+    bits = nu <= MAX_BITS  # one mask test per move instead of its CSR list
     gk = pack3(goal[0], goal[1], goal[2])
     fq = 1e-9 * mcost.min()
     fq_inv = 1.0 / fq
@@ -159,6 +186,11 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st):
             for j in range(nu):
                 ufree[j] = _free(mode, grid, lo, dims, otable, otmask, gg, blo, bhi,
                                  u0 + ust[j, 0], u1 + ust[j, 1], u2 + ust[j, 2])
+        blocked = np.int64(0)
+        if bits:
+            for j in range(nu):
+                if not ufree[j]:
+                    blocked |= np.int64(1) << j
         lookups += nu
         if anyangle == 2:
             lookups += lazy_set_vertex(occ, walk, ms, nodes, slots, sc, st, ufree, s, u0, u1,
@@ -179,36 +211,49 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st):
             v0 = u0 + moves[m, 0]
             v1 = u1 + moves[m, 1]
             v2 = u2 + moves[m, 2]
-            bk = block_key(v0, v1, v2)
-            if bk != last_bk:
-                p = mix64(bk) & bmask
-                while True:
-                    q = btab[p]
-                    if q == _EMPTY or bkeys[q] == bk:
-                        break
-                    p = (p + 1) & bmask
-                if q == _EMPTY:
-                    q = new_page(slots, st, bk, p)
-                last_bk = bk
-                last_pg = q
-            loc = last_pg * PAGE + local(v0, v1, v2)
-            t = np.int64(pages[loc])
+            # Safe rule first: with the bitmask it is one test, and an allowed move's target
+            # is free, hence inside the dense box.
+            if bits:
+                if need[m] & blocked:
+                    continue
+            elif not move_allowed(ufree, mptr, midx, m):
+                continue
+            if dense:
+                loc = ((v0 - lo0) * d1 + (v1 - lo1)) * d2 + (v2 - lo2)
+                t = np.int64(dsl[loc]) - 1  # stored as slot + 1, 0 none
+            else:
+                bk = block_key(v0, v1, v2)
+                if bk != last_bk:
+                    p = mix64(bk) & bmask
+                    while True:
+                        q = btab[p]
+                        if q == _EMPTY or bkeys[q] == bk:
+                            break
+                        p = (p + 1) & bmask
+                    if q == _EMPTY:
+                        q = new_page(slots, st, bk, p)
+                    last_bk = bk
+                    last_pg = q
+                loc = last_pg * PAGE + local(v0, v1, v2)
+                t = np.int64(pages[loc])
             if t != _EMPTY and npos[t] == -1:
                 continue  # closed: a consistent heuristic never improves it
-            # Safe rule after the closed test: most neighbours of an expanded cell are closed.
-            if not move_allowed(ufree, mptr, midx, m):
-                continue
             if t == _EMPTY:
                 t = n
                 n += 1
-                pages[loc] = t
+                if dense:
+                    dsl[loc] = t + 1
+                else:
+                    pages[loc] = t
                 nkey[t] = pack3(v0, v1, v2)
                 ng[t] = np.inf
                 e0 = gl0 - v0
                 e1 = gl1 - v1
                 e2 = gl2 - v2
                 hv = 0.0
-                if hkind == H_GAUGE:  # written out for the same reason as the lookups
+                if oct_s > 0.0:
+                    hv = octile(oct_s, e0, e1, e2)
+                elif hkind == H_GAUGE:  # written out for the same reason as the lookups
                     for f in range(nfac):
                         x = hmat[f, 0] * e0 + hmat[f, 1] * e1 + hmat[f, 2] * e2
                         if x > hv:

@@ -4,9 +4,12 @@ kernel asks, and traces the path."""
 from __future__ import annotations
 
 import math
+import threading
+import weakref
 
 import numpy as np
 
+from planner.lattice import Lattice
 from planner.search import _astar
 from planner.search._heap import Heap, new_heap
 from planner.search._los import new_scratch
@@ -19,17 +22,70 @@ from planner.search._nodes import (
     ST_SIZE,
     NodeTable,
     SlotMap,
+    clear_dense,
     new_nodes,
     new_slots,
     rehash,
     trace_path,
 )
+from planner.world import _walk
 
 
 def _grown(a: np.ndarray, size: int, keep: int) -> np.ndarray:
     b = np.empty(size, a.dtype)
     b[:keep] = a[:keep]
     return b
+
+
+#: largest dense cell -> slot array (bytes, int32 per grid cell); bigger grids use pages.
+DENSE_SLOT_BUDGET = 512 * 2**20
+
+# One dense slot array per dense occupancy grid, reused across searches (cleared after each
+# search at the cells it touched, so a search never pays for the whole box). Taken out of
+# the pool while a search uses it: concurrent searches on one world get their own.
+_POOL: dict[int, np.ndarray] = {}
+_LOCK = threading.Lock()
+
+
+_NO_SIGHT: list = []
+
+
+def _no_sight():
+    """A tiny sight scratch for lattice A* / Dijkstra (they never walk): allocated once."""
+    if not _NO_SIGHT:
+        _NO_SIGHT.append(new_scratch(0.0, _walk(Lattice.named("cubic", 1.0))))
+    return _NO_SIGHT[0]
+
+
+def _take_dense(occ) -> np.ndarray | None:
+    if occ.mode != 0 or 4 * occ.grid.size > DENSE_SLOT_BUDGET:
+        return None
+    key = id(occ.grid)
+    with _LOCK:
+        a = _POOL.pop(key, None)
+    if a is None:
+        a = np.zeros(occ.grid.size, np.int32)  # pages zeroed lazily by the OS
+    return a
+
+
+def _forget(key: int) -> None:
+    with _LOCK:
+        _POOL.pop(key, None)
+        _WATCHED.discard(key)
+
+
+_WATCHED: set[int] = set()
+
+
+def _give_dense(occ, a: np.ndarray) -> None:
+    """Return a cleared dense slot array to the pool (dropped when the grid is freed)."""
+    key = id(occ.grid)
+    with _LOCK:
+        _POOL[key] = a
+        new = key not in _WATCHED
+        _WATCHED.add(key)
+    if new:
+        weakref.finalize(occ.grid, _forget, key)
 
 
 def run(occ, walk, ms, start, goal, params, span: float, cap: int = 4096):
@@ -51,14 +107,37 @@ def run(occ, walk, ms, start, goal, params, span: float, cap: int = 4096):
     nodes = new_nodes(cap)
     heap = new_heap(cap)
     pcap = 64  # pages of the cell -> node slot map
-    slots = new_slots(pcap)
+    dense = _take_dense(occ)
+    slots = new_slots(pcap) if dense is None else new_slots(pcap, dense, occ.lo, occ.dims)
     st = np.zeros(ST_SIZE, np.int64)
-    sc = new_scratch(span, walk)
+    # The walk scratch serves the generic line of sight; cubic sight lines need none.
+    cubic = bool(np.array_equal(walk.g, walk.g[0, 0] * np.eye(3)))
+    sc = new_scratch(span, walk) if span > 0 and not cubic else _no_sight()
     ufree = np.empty(len(ms.union), np.bool_)
+    ends = np.empty((2, 3), np.int64)
+    ends[0], ends[1] = start, goal
+    nodes, heap, slots, status = _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params,
+                                       ends, st, cap, pcap)
+    peak = sum(a.nbytes for part in (nodes, heap, slots, sc) for a in part) + ufree.nbytes
+    peak += st.nbytes
+    path = None
+    if status == _astar.RUN_FOUND:
+        gs = int(st[ST_GOAL])
+        path, cost = trace_path(nodes, gs), float(nodes.g[gs])
+    if dense is not None:  # every touched cell holds a node: clear those, reuse the array
+        clear_dense(slots, nodes.key, int(st[ST_N]))
+        _give_dense(occ, dense)
+    if path is None:
+        return status, None, math.inf, st, peak
+    return status, path, cost, st, peak
+
+
+def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st, cap, pcap):
+    """Call the kernel until it stops asking for room; returns the final structs and
+    status."""
     nm = len(ms.moves)
-    _astar.search_init(start, goal, ms, walk.g, nodes, heap, slots, st)
     while True:
-        status = _astar.search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal,
+        status = _astar.search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends,
                                    st)
         if status != _astar.RUN_GROW:
             break
@@ -70,14 +149,10 @@ def run(occ, walk, ms, start, goal, params, span: float, cap: int = 4096):
         if npg + nm > pcap or 2 * (npg + nm) > len(slots.btab):
             pcap *= 2
             slots = SlotMap(_grown(slots.pages, pcap * PAGE, npg * PAGE),
-                            np.full(2 * pcap, -1, np.int64), _grown(slots.bkeys, pcap, npg))
+                            np.full(2 * pcap, -1, np.int64), _grown(slots.bkeys, pcap, npg),
+                            *slots[3:])
             rehash(slots, npg)
-    peak = sum(a.nbytes for part in (nodes, heap, slots, sc) for a in part) + ufree.nbytes
-    peak += st.nbytes
-    if status != _astar.RUN_FOUND:
-        return status, None, math.inf, st, peak
-    gs = int(st[ST_GOAL])
-    return status, trace_path(nodes, gs), float(nodes.g[gs]), st, peak
+    return nodes, heap, slots, status
 
 
 __all__ = ["run", "ST_EXP"]

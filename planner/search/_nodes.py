@@ -19,7 +19,7 @@ import numpy as np
 
 from planner._jit import njit_cached
 from planner._world_kernels import mix64
-from planner.keys import pack3
+from planner.keys import pack3, unpack3
 
 _EMPTY = -1
 
@@ -48,11 +48,16 @@ class NodeTable(NamedTuple):
 
 
 class SlotMap(NamedTuple):
-    """Cell -> node slot map (module docstring)."""
+    """Cell -> node slot map (module docstring). With a dense occupancy grid that fits the
+    slot budget, ``dense`` holds one slot per grid cell instead (same box ``lo``, ``dims``
+    as the grid) and the pages stay unused: one load per lookup."""
 
     pages: np.ndarray  # (P * PAGE,) int32 node slot per cell of each page, -1 none
     btab: np.ndarray  # (T,) int64 open-addressing table block key -> page, -1 empty
     bkeys: np.ndarray  # (P,) int64 block key of each page
+    dense: np.ndarray  # (prod(dims),) int32 slot + 1 per cell, 0 none; (1,) when paged
+    lo: np.ndarray  # (3,) int64 lowest index of the dense box
+    dims: np.ndarray  # (3,) int64 dense box size
 
 
 def new_nodes(cap: int) -> NodeTable:
@@ -61,9 +66,33 @@ def new_nodes(cap: int) -> NodeTable:
                      np.empty(cap, f8), np.empty(cap, i8), np.empty(cap, i8))
 
 
-def new_slots(pcap: int) -> SlotMap:
+_NO_DENSE = np.zeros(1, np.int32)
+_ZERO3 = np.zeros(3, np.int64)
+
+
+def new_slots(pcap: int, dense: np.ndarray | None = None, lo: np.ndarray | None = None,
+              dims: np.ndarray | None = None) -> SlotMap:
+    """Paged slot map with ``pcap`` pages, or dense over the box ``lo``, ``dims`` when
+    ``dense`` (all 0: it stores slot + 1, so a fresh array is ``np.zeros``, whose pages the
+    OS supplies zeroed on first touch instead of a fill of the whole box) is given."""
+    if dense is None:
+        dense, lo, dims = _NO_DENSE, _ZERO3, _ZERO3
     return SlotMap(np.empty(pcap * PAGE, np.int32), np.full(2 * pcap, _EMPTY, np.int64),
-                   np.empty(pcap, np.int64))
+                   np.empty(pcap, np.int64), dense, lo, dims)
+
+
+@njit_cached(inline="always")
+def dense_index(sm, v0, v1, v2):  # pragma: no cover - compiled
+    """Index of cell v in the dense slot array (the caller knows v is in the box)."""
+    return ((v0 - sm.lo[0]) * sm.dims[1] + (v1 - sm.lo[1])) * sm.dims[2] + (v2 - sm.lo[2])
+
+
+@njit_cached
+def clear_dense(sm, key, n):  # pragma: no cover - compiled
+    """Reset the dense slots of the first ``n`` nodes (packed cells ``key``) to none (0)."""
+    for i in range(n):
+        v0, v1, v2 = unpack3(key[i])
+        sm.dense[dense_index(sm, v0, v1, v2)] = 0
 
 
 @njit_cached(inline="always")
@@ -80,6 +109,11 @@ def block_key(v0, v1, v2):  # pragma: no cover - compiled
 @njit_cached
 def find_slot(sm, v0, v1, v2):  # pragma: no cover - compiled
     """Node slot of cell (v0, v1, v2), or -1 when the search has not generated it."""
+    if sm.dense.shape[0] > 1:
+        a, b, c = v0 - sm.lo[0], v1 - sm.lo[1], v2 - sm.lo[2]
+        if a < 0 or b < 0 or c < 0 or a >= sm.dims[0] or b >= sm.dims[1] or c >= sm.dims[2]:
+            return _EMPTY
+        return np.int64(sm.dense[(a * sm.dims[1] + b) * sm.dims[2] + c]) - 1
     btab, bkeys = sm.btab, sm.bkeys
     bmask = btab.shape[0] - 1
     bk = block_key(v0, v1, v2)

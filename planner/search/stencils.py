@@ -52,6 +52,8 @@ class MoveSet(NamedTuple):
     idx: np.ndarray  # (nnz,) int64
     hmat: np.ndarray  # (F, 3) float64 heuristic facets in index coordinates
     hkind: int  # H_ZERO (Dijkstra), H_GAUGE (A*) or H_EUCLID (any-angle)
+    need: np.ndarray  # (M,) int64 bit u set iff move m needs union[u] free (U <= 63)
+    octile: float  # > 0: H_GAUGE in closed form, the octile distance of this cell size (m)
 
 
 @njit_cached(inline="always")
@@ -158,6 +160,29 @@ def move_heuristic(lattice: Lattice, neighbors: str = "full") -> np.ndarray:
 
 
 _NO_FACETS = np.zeros((1, 3))
+MAX_BITS = 63  # union stencils up to this size get one bitmask test per move
+
+
+def _need_bits(ptr: np.ndarray, idx: np.ndarray, nu: int) -> np.ndarray:
+    """Per move, the bitmask of the union cells it needs (zeros when U > MAX_BITS: the
+    kernel then tests the CSR lists)."""
+    need = np.zeros(len(ptr) - 1, dtype=np.int64)
+    if nu <= MAX_BITS:
+        for m in range(len(need)):
+            for u in idx[ptr[m]:ptr[m + 1]]:
+                need[m] |= 1 << int(u)
+    return need
+
+
+def _octile_step(lat: Lattice, moves: np.ndarray) -> float:
+    """Cell size when the move-set gauge is the octile distance (cubic, 26 neighbours):
+    the kernel then evaluates it in closed form instead of the facet maximum."""
+    g = lat.generator
+    s = float(g[0, 0])
+    cube = {(i, j, k) for i in (-1, 0, 1) for j in (-1, 0, 1) for k in (-1, 0, 1)} - {(0, 0, 0)}
+    if np.array_equal(g, s * np.eye(3)) and {tuple(m) for m in moves.tolist()} == cube:
+        return s
+    return 0.0
 
 
 @lru_cache(maxsize=256)
@@ -165,7 +190,9 @@ def _move_set_cached(gen: bytes, neighbors: str, corner_cutting: bool, hkind: in
                      lat: Lattice) -> MoveSet:
     moves, cost, union, ptr, idx, _ = _stencils_cached(gen, neighbors, corner_cutting, lat)
     hmat = _facets_cached(gen, neighbors, lat) if hkind == H_GAUGE else _NO_FACETS
-    return MoveSet(moves, cost, union, ptr, idx, hmat, hkind)
+    octile = _octile_step(lat, moves) if hkind == H_GAUGE else 0.0
+    return MoveSet(moves, cost, union, ptr, idx, hmat, hkind, _need_bits(ptr, idx, len(union)),
+                   octile)
 
 
 def move_set(lattice: Lattice, neighbors: str, corner_cutting: bool, hkind: int) -> MoveSet:
