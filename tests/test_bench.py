@@ -319,3 +319,20 @@ def test_failed_queries_count_in_success_not_in_ratios():
     c = paired.compare_to_cubic(rows, "fcc", "full", "astar")
     assert c["success"]["cubic_only"] == 4 and c["success"]["x_only"] == 0
     assert c["cell_checks"].n == 26
+
+
+def test_operating_points_compare_lattices_on_the_queries_all_solved():
+    from planner.bench.figures import operating_points
+
+    rows = _rows(0.5, n=10)
+    for r in rows:
+        r["cell_volume"] = 1.0
+        if r["query"] < 3:
+            r["cell_checks"] = 1e9  # hard queries
+            if r["lattice"] == "cubic":
+                r.update(found=False, length=None, length_smoothed=None)
+    summary.add_ratios(rows)
+    pts = {p["lattice"]: p for p in operating_points(rows)}
+    assert pts["cubic"]["success"] == 0.7 and pts["fcc"]["success"] == 1.0
+    assert pts["fcc"]["common_queries"] == pts["cubic"]["common_queries"] == 7
+    assert pts["fcc"]["cell_checks"] < pts["cubic"]["cell_checks"] < 1e9

@@ -7,8 +7,8 @@
   smaller covering radius at the same volume sits further left).
 - ``time_vs_length.png``: median search time against median smoothed length ratio.
 
-Colours are the project's one colour per lattice; markers tell the method, line styles the
-neighbour set.
+Colours are the project's one colour per lattice; markers tell the method; line styles
+(and hollow markers in ``pareto.png``) the neighbour set.
 """
 
 from __future__ import annotations
@@ -31,9 +31,12 @@ def operating_points(rows: list[dict]) -> list[dict]:
     """One record per map x lattice x neighbours x method x cell volume (lattice methods).
 
     Needs rows with ``length_ratio`` / ``raw_length_ratio`` (:func:`summary.add_ratios`).
-    Fields: medians of cell checks, time, raw and smoothed length ratio over solved queries,
-    success rate, and the lattice's covering radius at that cell volume (m).
+    Fields: success rate over all queries; medians of cell checks, time, raw and smoothed
+    length ratio over the queries that *every* configuration of that map and cell volume
+    solved (medians over each one's own solved queries would favour a configuration that
+    fails the hard ones); the lattice's covering radius at that cell volume (m).
     """
+    from planner.bench.paired import query_key
     from planner.lattice import Lattice
 
     groups: dict = defaultdict(list)
@@ -41,16 +44,21 @@ def operating_points(rows: list[dict]) -> list[dict]:
         if not str(r["method"]).startswith("ompl:"):
             groups[(r["map"], r["lattice"], r["neighbors"], r["method"],
                     r["cell_volume"])].append(r)
+    solved: dict = {}
+    for (m, _, _, _, cv), rs in groups.items():
+        keys = {query_key(r) for r in rs if r.get("found")}
+        solved[(m, cv)] = keys if (m, cv) not in solved else solved[(m, cv)] & keys
     out = []
     for (m, lat, nb, meth, cv), rs in groups.items():
-        ok = [r for r in rs if r.get("found")]
+        ok = [r for r in rs if r.get("found") and query_key(r) in solved[(m, cv)]]
 
         def med(key, ok=ok):
             v = [r[key] for r in ok if r.get(key) is not None]
             return float(np.median(v)) if v else np.nan
 
         out.append({"map": m, "lattice": lat, "neighbors": nb, "method": meth,
-                    "cell_volume": cv, "success": len(ok) / len(rs),
+                    "cell_volume": cv, "success": sum(bool(r.get("found")) for r in rs) / len(rs),
+                    "common_queries": len(ok),
                     "covering_radius": Lattice.named(lat, cell_volume=cv).covering_radius,
                     "cell_checks": med("cell_checks"), "seconds": med("seconds"),
                     "raw_length_ratio": med("raw_length_ratio"),
@@ -90,9 +98,10 @@ def _legend(ax, pts: list[dict]) -> None:
     meths = sorted({p["method"] for p in pts})
     nbs = sorted({p["neighbors"] for p in pts})
     h = [Line2D([], [], color=_colour(lat), marker="o", ls="", label=lat) for lat in lats]
-    h += [Line2D([], [], color="grey", marker=_MARKERS.get(m, "x"), ls="", label=m)
-          for m in meths]
-    h += [Line2D([], [], color="grey", ls=_STYLES.get(n, ":"), label=f"{n} nbrs") for n in nbs]
+    h += [Line2D([], [], color="black", markerfacecolor="white", marker=_MARKERS.get(m, "x"),
+                 ls="", label=m) for m in meths]
+    h += [Line2D([], [], color="black", ls=_STYLES.get(n, ":"), label=f"{n} nbrs"
+                 + (" (hollow)" if n == "face" else "")) for n in nbs]
     ax.legend(handles=h, fontsize=7, loc="best")
 
 
@@ -119,20 +128,26 @@ def plot_tradeoffs(rows: list[dict], out_dir: Path) -> list[Path]:
             y = np.array([p["cell_checks"] for p in mp])
             front = pareto_front(x, y)
             for p, xi, yi, f in zip(mp, x, y, front, strict=True):
-                ax.scatter(xi, yi, color=_colour(p["lattice"]),
-                           marker=_MARKERS.get(p["method"], "x"), s=60 if f else 28,
-                           edgecolors="black" if f else "none", linewidths=1.2, zorder=3)
+                c = _colour(p["lattice"])
+                ax.scatter(xi, yi, facecolors=c if p["neighbors"] != "face" else "white",
+                           marker=_MARKERS.get(p["method"], "x"), s=40, edgecolors=c,
+                           linewidths=1.4, zorder=3)
+                if f:  # a black ring around the front's points
+                    ax.scatter(xi, yi, facecolors="none", edgecolors="black", s=160,
+                               marker=_MARKERS.get(p["method"], "x"), linewidths=1.0,
+                               zorder=4)
             order = np.argsort(x[front])
             ax.step(x[front][order], y[front][order], where="post", color="black", lw=0.8,
                     alpha=0.6, zorder=2)
             ax.set_yscale("log")
             ax.set_xlabel(f"median {name} path length / best on the query")
             ax.set_ylabel("median cell checks per query")
-            ax.set_title(f"{Path(m).name}: checks vs {name} length (outlined: Pareto front)",
-                         fontsize=9)
+            ax.set_title(f"{Path(m).name}: checks vs {name} length", fontsize=9)
             ax.grid(alpha=0.3)
             if i == 0 and j == 0:
                 _legend(ax, mp)
+    fig.suptitle("Ringed and joined: the Pareto front. Medians over the queries every "
+                 "configuration of the map and cell volume solved.", fontsize=9)
     fig.tight_layout()
     files.append(_save(fig, out_dir / "pareto.png"))
     plt.close(fig)

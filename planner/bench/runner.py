@@ -40,26 +40,18 @@ def _frame(map_path: str):
     return _FRAMES[map_path]
 
 
-def _world(map_path: str, lattice: str, cell_volume: float, radius: float,
-           quaternion: tuple | None = None):
-    """Per-process cache: a worker builds each world once for all its queries.
+def _world(task: dict):
+    """Per-process cache: a worker builds (or loads, see
+    :func:`planner.bench.worlds.cached_world`) each world once for all its queries."""
+    from planner.bench.worlds import cached_world
 
-    ``quaternion`` None: :func:`planner.build_world` (an unrotated suite); else the map
-    turned by it (:func:`planner.bench.worlds.rotated_world`, identity included).
-    """
-    from planner.api import build_world
-    from planner.bench.worlds import rotated_world
-
-    key = (map_path, lattice, cell_volume, radius, quaternion)
+    quat = tuple(task.get("quaternion", (1.0, 0.0, 0.0, 0.0)))
+    key = (task["map"], task["lattice"], task["cell_volume"], task["radius"], quat,
+           bool(task.get("rotated")))
     if key not in _WORLDS:
         if len(_WORLDS) > 12:
             _WORLDS.clear()
-        if quaternion is None:
-            _WORLDS[key] = build_world(map_path, lattice, cell_volume=cell_volume,
-                                       radius=radius)
-        else:
-            _WORLDS[key] = rotated_world(_frame(map_path), lattice, cell_volume, radius,
-                                         quaternion)
+        _WORLDS[key] = cached_world(task.get("world_cache"), _frame(task["map"]), *key)
     return _WORLDS[key]
 
 
@@ -91,8 +83,7 @@ def run_task(task: dict) -> list[dict]:
     from planner import api, search
     from planner.bench.rotations import quaternion_matrix
 
-    quat = tuple(task["quaternion"]) if task.get("rotated") else None
-    world = _world(task["map"], task["lattice"], task["cell_volume"], task["radius"], quat)
+    world = _world(task)
     clear = _clearance(task["map"])
     R = quaternion_matrix(task.get("quaternion", (1.0, 0.0, 0.0, 0.0)))
     centre = _frame(task["map"]).centre
@@ -146,17 +137,21 @@ def run_task(task: dict) -> list[dict]:
     return rows
 
 
-def plan_tasks(suite: Suite, log=print, saved: dict | None = None) -> tuple[list[dict], dict]:
-    """Expand a suite into tasks; sample the queries once per map x volume x radius group.
+def plan_tasks(suite: Suite, log=print, saved: dict | None = None,
+               world_cache: str | None = None) -> tuple[list[dict], dict]:
+    """Expand a suite into tasks; sample the queries once per map x volume x radius x
+    rotation group.
+
+    ``world_cache``: a folder where the worlds built for sampling are kept for the workers
+    (:func:`planner.bench.worlds.cached_world`); None builds them again in every process.
 
     ``saved`` is a record returned earlier (kept in ``queries.json`` beside the results):
     its groups' queries are reused as they are, so ``--resume`` does not sample again.
 
     Returns the tasks and, per group, the query record (kept, dropped by reason, queries).
     """
-    from planner.api import build_world
     from planner.bench.rotations import quaternion_matrix, sample_rotations
-    from planner.bench.worlds import map_frame, rotated_world
+    from planner.bench.worlds import cached_world, map_frame
 
     rotated = suite.rotation != "none"
     quats = sample_rotations(suite.rotation, suite.rotations, seed=suite.seed)
@@ -170,7 +165,7 @@ def plan_tasks(suite: Suite, log=print, saved: dict | None = None) -> tuple[list
                         f" rotation {ri}" if rotated else "")
                     common = {"suite": suite.name, "map": m.path, "cell_volume": cv,
                               "radius": radius, "rotation": ri, "quaternion": quat.tolist(),
-                              "rotated": rotated}
+                              "rotated": rotated, "world_cache": world_cache}
                     n = m.queries or suite.queries
                     old = (saved or {}).get(group)
                     if old and old.get("wanted") == n and "queries" in old:
@@ -186,9 +181,8 @@ def plan_tasks(suite: Suite, log=print, saved: dict | None = None) -> tuple[list
                     else:
                         log(f"sampling {n} queries for {group} ...")
                         R = quaternion_matrix(quat)
-                        worlds = {lat: (rotated_world(frame, lat, cv, radius, quat) if rotated
-                                        else build_world(m.path, lat, cell_volume=cv,
-                                                         radius=radius))
+                        worlds = {lat: cached_world(world_cache, frame, m.path, lat, cv,
+                                                    radius, tuple(quat.tolist()), rotated)
                                   for lat in suite.lattices}
                         free = frame.free.contains if frame.free is not None else None
                         s, g, dropped = sample_queries(worlds, frame.bounds, n, suite.seed,

@@ -175,3 +175,51 @@ def rotated_world(frame: MapFrame, lattice: str, cell_volume: float, radius: flo
     cells = unpack(np.unique(np.concatenate(keys)), 3)
     return World(lat, cells, box, source=o.source, radius=float(radius), obstacles=rot,
                  build_seconds=time.perf_counter() - t0)
+
+
+def cached_world(cache_dir: str | None, frame: MapFrame, map_path: str, lattice: str,
+                 cell_volume: float, radius: float, quaternion, rotated: bool):
+    """The World of one configuration, built once per suite run and shared through files.
+
+    The query sampler and every worker need the same worlds; building them is the dominant
+    cost of a rotated suite, so the blocked cells and bounds are kept in ``cache_dir``
+    (``.npz``, written atomically) and reloaded.  ``rotated`` False builds with
+    :func:`planner.build_world` (an unrotated suite), else :func:`rotated_world`.
+    """
+    import hashlib
+
+    from planner.api import build_world
+    from planner.fsutil import atomic_path
+    from planner.keys import pack, unpack
+    from planner.lattice import Lattice
+    from planner.world import World
+
+    def build():
+        if rotated:
+            return rotated_world(frame, lattice, cell_volume, radius, quaternion)
+        return build_world(map_path, lattice, cell_volume=cell_volume, radius=radius)
+
+    if cache_dir is None:
+        return build()
+    from pathlib import Path
+
+    tag = repr((map_path, lattice, float(cell_volume), float(radius),
+                [round(float(v), 15) for v in quaternion], bool(rotated)))
+    f = Path(cache_dir) / (hashlib.sha1(tag.encode()).hexdigest()[:20] + ".npz")
+    if f.is_file():
+        try:
+            with np.load(f) as z:
+                lat = Lattice.named(lattice, cell_volume=cell_volume)
+                obst = frame.obstacles
+                if rotated:
+                    obst = obst.rotated(quaternion_matrix(quaternion), frame.centre)[0]
+                return World(lat, unpack(z["keys"], 3), z["bounds"], source=frame.obstacles.source,
+                             radius=float(radius), obstacles=obst,
+                             build_seconds=float(z["build_seconds"]))
+        except (OSError, ValueError, KeyError):
+            pass  # a damaged file: build again
+    w = build()
+    f.parent.mkdir(parents=True, exist_ok=True)
+    with atomic_path(f) as tmp, open(tmp, "wb") as fh:
+        np.savez(fh, keys=pack(w.blocked), bounds=w.bounds, build_seconds=w.build_seconds or 0.0)
+    return w
