@@ -194,3 +194,145 @@ def test_saved_queries_are_reused(tiny_suite):
     tasks, again = runner.plan_tasks(tiny_suite, log=sampled.append, saved=record)
     assert again == record and not sampled
     assert {q["id"] for t in tasks for q in t["queries"]} == {0, 1, 2}
+
+
+# -- rotations: the paper's fairness rule ---------------------------------------------------
+ROTATED = SUITE.replace('min_distance = 0.2', 'min_distance = 0.2\nrotation = "yaw"\nrotations = 2')
+
+
+def test_rotating_by_the_identity_gives_the_unrotated_world():
+    from planner import build_world
+    from planner.bench.worlds import map_frame, rotated_world
+
+    p = str(map_path("office"))
+    for lat in ("cubic", "fcc"):
+        plain = build_world(p, lat, cell_volume=0.03, radius=0.2)
+        turned = rotated_world(map_frame(p), lat, 0.03, 0.2, [1.0, 0.0, 0.0, 0.0])
+        assert np.allclose(plain.bounds, turned.bounds)
+        assert {tuple(c) for c in plain.blocked} == {tuple(c) for c in turned.blocked}
+
+
+def test_a_rotated_world_keeps_the_robot_inside_the_rotated_map_box():
+    from planner.bench.rotations import quaternion_matrix
+    from planner.bench.worlds import map_frame, rotated_world
+
+    p = str(map_path("office"))
+    frame = map_frame(p)
+    q = [np.cos(np.pi / 8), 0.0, 0.0, np.sin(np.pi / 8)]  # 45 degrees about z
+    w = rotated_world(frame, "bcc", 0.03, 0.2, q)
+    lo, hi = w.bounds
+    corner = np.array([[lo[0] + 0.3, lo[1] + 0.3, 1.5]])  # in the bounds, outside the map box
+    assert not w.points_free(corner)[0]
+    R = quaternion_matrix(q)
+    free_in_map = np.array([[10.0, 6.0, 1.5]])  # the corridor
+    moved = (free_in_map - frame.centre) @ R.T + frame.centre
+    assert w.points_free(moved)[0]
+
+
+def test_rotated_suites_share_one_rotation_sample_and_record_it(tmp_path):
+    from planner.bench.rotations import quaternion_matrix
+
+    p = tmp_path / "rot.toml"
+    p.write_text(ROTATED.format(map=map_path("office").as_posix()))
+    suite = load_suite(str(p))
+    assert (suite.rotation, suite.rotations) == ("yaw", 2)
+    tasks, record = runner.plan_tasks(suite, log=lambda m: None)
+    assert len(record) == 2
+    quats = {t["rotation"]: tuple(t["quaternion"]) for t in tasks}
+    assert sorted(quats) == [0, 1] and quats[0] != quats[1]
+    for t in tasks:  # every lattice and method of a rotation sees the same rotation
+        assert tuple(t["quaternion"]) == quats[t["rotation"]]
+    from planner.bench.worlds import map_frame
+
+    frame = map_frame(str(map_path("office")))
+    for rec in record.values():  # queries turned back lie in the map's own box
+        R = quaternion_matrix(rec["quaternion"])
+        pts = np.array([q["start"] for q in rec["queries"]] + [q["goal"] for q in rec["queries"]])
+        back = (pts - frame.centre) @ R + frame.centre
+        assert np.all(back >= frame.bounds[0] - 1e-9) and np.all(back <= frame.bounds[1] + 1e-9)
+    rows = runner.run(tasks, tmp_path / "results.jsonl", progress=False)
+    assert {r["rotation"] for r in rows} == {0, 1}
+    assert all(len(r["quaternion"]) == 4 for r in rows)
+    assert len({runner.row_key(r) for r in rows}) == len(rows)
+    for r in rows:
+        if r["found"]:
+            assert r["collision_free"], r
+
+
+def test_bad_rotation_keys_are_one_line_errors(tmp_path):
+    p = tmp_path / "bad.toml"
+    p.write_text(ROTATED.format(map=map_path("office").as_posix()).replace('"yaw"', '"roll"'))
+    with pytest.raises(SuiteError, match="rotation must be one of"):
+        load_suite(str(p))
+
+
+def test_queries_are_sampled_in_observed_free_space_only():
+    from planner import build_world
+    from planner.bench.queries import sample_queries
+
+    p = str(map_path("office"))
+    w = build_world(p, "cubic", cell_volume=0.03, radius=0.2)
+    s, g, dropped = sample_queries({"cubic": w}, w.bounds, 5, seed=0, min_distance=0.1,
+                                   free=lambda x: x[:, 0] < 10.0)
+    assert len(s) == 5
+    assert np.all(s[:, 0] < 10.0) and np.all(g[:, 0] < 10.0)
+    assert dropped["start in unknown space"] > 0
+
+
+def _rows(ratio_fcc: float, n: int = 30, seed: int = 0) -> list[dict]:
+    rng = np.random.default_rng(seed)
+    rows = []
+    for q in range(n):
+        c = float(rng.uniform(1000, 2000))
+        for lat, k in (("cubic", 1.0), ("fcc", ratio_fcc * rng.uniform(0.9, 1.1))):
+            rows.append({"map": "m", "cell_volume": 1.0, "radius": 0.0, "rotation": q % 3,
+                         "query": q, "lattice": lat, "neighbors": "full", "method": "astar",
+                         "seed": 0, "found": True, "cell_checks": c * k, "length": 10.0,
+                         "length_smoothed": 9.0, "seconds": 0.01})
+    return rows
+
+
+def test_the_report_prose_comes_from_the_paired_statistics():
+    from planner.bench import paired
+
+    table, prose = paired.paired_table(_rows(0.6))
+    assert "fcc" in table and "cubic" not in table.split("\n")[2]
+    assert prose[0].startswith("- **fcc full astar** vs cubic full astar")
+    import re
+
+    assert re.search(r"fewer checks \(median 0\.[56]\d*, 95% CI [\d.]+-[\d.]+, p < 0\.001",
+                     prose[0]), prose[0]
+    assert "no significant difference in raw length" in prose[0]
+    _, prose = paired.paired_table(_rows(1.0))
+    assert "no significant difference in checks" in prose[0]
+    spread = paired.rotation_spread(_rows(0.6))
+    assert "| m | fcc | full | astar | 3 |" in spread
+
+
+def test_failed_queries_count_in_success_not_in_ratios():
+    from planner.bench import paired
+
+    rows = _rows(0.5)
+    for r in rows:
+        if r["lattice"] == "fcc" and r["query"] < 4:
+            r.update(found=False, length=None, length_smoothed=None)
+    c = paired.compare_to_cubic(rows, "fcc", "full", "astar")
+    assert c["success"]["cubic_only"] == 4 and c["success"]["x_only"] == 0
+    assert c["cell_checks"].n == 26
+
+
+def test_operating_points_compare_lattices_on_the_queries_all_solved():
+    from planner.bench.figures import operating_points
+
+    rows = _rows(0.5, n=10)
+    for r in rows:
+        r["cell_volume"] = 1.0
+        if r["query"] < 3:
+            r["cell_checks"] = 1e9  # hard queries
+            if r["lattice"] == "cubic":
+                r.update(found=False, length=None, length_smoothed=None)
+    summary.add_ratios(rows)
+    pts = {p["lattice"]: p for p in operating_points(rows)}
+    assert pts["cubic"]["success"] == 0.7 and pts["fcc"]["success"] == 1.0
+    assert pts["fcc"]["common_queries"] == pts["cubic"]["common_queries"] == 7
+    assert pts["fcc"]["cell_checks"] < pts["cubic"]["cell_checks"] < 1e9

@@ -3,6 +3,7 @@
 import math
 
 import numpy as np
+import pytest
 
 from planner.analysis.stats import describe, paired_ratio
 
@@ -64,3 +65,22 @@ def test_rotation_samples_are_uniform_and_shared():
     assert np.all(np.abs(z.var(axis=0) - 1 / 3) < 0.03)
     yaw = np.array([quaternion_matrix(q) for q in sample_rotations("yaw", 50, seed=2)])
     assert np.allclose(yaw[:, 2], [0, 0, 1]) and np.allclose(yaw[:, :, 2], [0, 0, 1])
+
+
+def test_the_readme_results_are_spliced_from_the_run(tmp_path):
+    from planner.analysis.readme_results import END, START, update_readme
+    from planner.errors import PlannerError
+
+    run = tmp_path / "results" / "full"
+    run.mkdir(parents=True)
+    (run / "results_section.md").write_text("fewer checks (median 0.59)\n\n![pareto](pareto.png)\n")
+    readme = tmp_path / "README.md"
+    readme.write_text(f"# title\n\n{START}\nstale numbers\n{END}\n\nmore\n")
+    update_readme(run, readme)
+    text = readme.read_text()
+    assert "stale" not in text and "fewer checks (median 0.59)" in text
+    assert "![pareto](results/full/pareto.png)" in text
+    assert text.startswith("# title") and text.endswith("more\n")
+    readme.write_text("no markers")
+    with pytest.raises(PlannerError, match="markers"):
+        update_readme(run, readme)

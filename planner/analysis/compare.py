@@ -148,6 +148,7 @@ def compare(
                 print("\r" + " " * 40 + "\r", end="", file=sys.stderr, flush=True)
         results[name] = per[0]
         found = [r for r in per if r.found]
+        smoothed = [_smoothed_length(world, r) for r in found]
         rows.append({
             "lattice": name,
             "cell_volume": world.lattice.cell_volume,
@@ -157,6 +158,7 @@ def compare(
             "found": len(found) == len(per),
             "n_found": len(found),
             "length": float(sum(r.length for r in found)) if found else math.inf,
+            "length_smoothed": float(sum(smoothed)) if found else math.inf,
             "cell_checks": int(sum(r.cell_checks for r in per)),
             "expansions": int(sum(r.expansions for r in per)),
             "seconds": float(sum(r.seconds for r in per)),
@@ -169,21 +171,40 @@ def compare(
     return rows
 
 
+def _smoothed_length(world, res) -> float:
+    """Length (m) after line-of-sight shortcutting (A*/Dijkstra cell paths); any-angle and
+    OMPL paths are their own smoothed path."""
+    from planner import search
+    from planner.paths import path_length
+
+    if res.method not in ("astar", "dijkstra") or len(res.cells) < 3:
+        return float(res.length)
+    cells = search.shortcut(world, res.cells)
+    pts = np.concatenate([res.path[:1], world.lattice.to_world(cells), res.path[-1:]])
+    return float(path_length(pts))
+
+
 def format_rows(rows: list[dict], markdown: bool = False) -> str:
-    """Table of :func:`compare` rows, with ratios to cubic where present."""
+    """Table of :func:`compare` rows, with ratios to cubic where present.
+
+    Raw length: the path as searched; smoothed: after line-of-sight shortcutting (what
+    ``planner plan --shortcut`` returns).  Both are sums over the queries solved.
+    """
     base = next((r for r in rows if r["lattice"] == "cubic"), rows[0] if rows else None)
-    head = ["lattice", "found", "length m", "vs cubic", "cell checks", "vs cubic",
+    head = ["lattice", "found", "raw length m", "vs cubic", "smoothed length m", "vs cubic",
+            "cell checks", "vs cubic",
             "expansions", "search s", "build s", "compile s", "blocked cells"]
     keys = [f"c{i}" for i in range(len(head))]  # titles repeat ("vs cubic")
     out = []
     for r in rows:
         def ratio(key, r=r):
-            b = base[key]
-            return f"{r[key] / b:.3f}" if b and math.isfinite(b) and math.isfinite(r[key]) else "-"
+            b, v = base.get(key, math.nan), r.get(key, math.nan)
+            return f"{v / b:.3f}" if b and math.isfinite(b) and math.isfinite(v) else "-"
 
         out.append(dict(zip(keys, [
             r["lattice"], f"{r['n_found']}/{r['queries']}", f"{r['length']:.3f}",
-            ratio("length"), f"{r['cell_checks']:,}", ratio("cell_checks"),
+            ratio("length"), f"{r.get('length_smoothed', math.nan):.3f}",
+            ratio("length_smoothed"), f"{r['cell_checks']:,}", ratio("cell_checks"),
             f"{r['expansions']:,}", f"{r['seconds']:.3f}", f"{r['build_seconds']:.2f}",
             f"{r.get('compile_seconds', 0.0):.2f}", f"{r['blocked_cells']:,}",
         ], strict=True)))

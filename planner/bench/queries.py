@@ -14,8 +14,16 @@ def sample_queries(
     seed: int,
     min_distance: float = 0.3,
     max_tries: int = 200,
+    *,
+    rotation: np.ndarray | None = None,
+    centre: np.ndarray | None = None,
+    free=None,
 ) -> tuple[np.ndarray, np.ndarray, dict]:
     """Sample ``n`` start/goal pairs in continuous space, kept only if valid everywhere.
+
+    Candidates are drawn uniformly in the map's own box ``bounds`` and then turned with
+    the map (``rotation`` about ``centre``), so that every rotation of a map sees the same
+    stream of candidates and a rotated query never lies outside the rotated map.
 
     Parameters
     ----------
@@ -23,12 +31,18 @@ def sample_queries(
         Every lattice world of the group; a pair is kept only if both points are free
         in all of them.
     bounds : ndarray, shape (2, 3)
-        World box (m) to sample in.
+        The map's own world box (m) to sample in (before rotation).
     n : int
         Pairs wanted.
     min_distance : float
         Minimum start-goal distance as a fraction of the box diagonal (trivial queries
         measure nothing).
+    rotation : ndarray, shape (3, 3), optional
+        The map's rotation (default: none); ``centre`` (3,) its fixed point (m).
+    free : callable, optional
+        ``free(points (N, 3)) -> (N,) bool`` in the map's own frame: observed free space.
+        When given, a start or goal outside it is dropped ("in unknown space"): a map with
+        free-space information is queried only where it was observed.
 
     Returns
     -------
@@ -52,11 +66,20 @@ def sample_queries(
         short = np.linalg.norm(g - s, axis=1) < min_distance * diag
         dropped["start and goal too close"] += int(np.sum(short & ok))
         ok &= ~short
+        if free is not None:
+            for what, pts in (("start", s), ("goal", g)):
+                seen = free(pts)
+                dropped[f"{what} in unknown space"] += int(np.sum(ok & ~seen))
+                ok &= seen
+        if rotation is not None:
+            c = np.asarray(centre, dtype=float)
+            R = np.asarray(rotation, dtype=float)
+            s, g = (s - c) @ R.T + c, (g - c) @ R.T + c
         for name, w in worlds.items():
             for what, pts in (("start", s), ("goal", g)):
-                free = w.points_free(pts)
-                dropped[f"{what} blocked in {name}"] += int(np.sum(ok & ~free))
-                ok &= free
+                valid = w.points_free(pts)
+                dropped[f"{what} blocked in {name}"] += int(np.sum(ok & ~valid))
+                ok &= valid
         for i in np.flatnonzero(ok):
             if len(starts) < n:
                 starts.append(s[i])

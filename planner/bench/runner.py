@@ -27,33 +27,52 @@ from planner.paths import path_length
 
 _WORLDS: dict = {}
 _CLEARANCE: dict = {}
+_FRAMES: dict = {}
 LATTICE_METHODS = ("astar", "dijkstra", "theta", "lazy-theta")
 
 
-def _world(map_path: str, lattice: str, cell_volume: float, radius: float):
-    """Per-process cache: a worker builds each world once for all its queries."""
-    from planner.api import build_world
+def _frame(map_path: str):
+    from planner.bench.worlds import map_frame
 
-    key = (map_path, lattice, cell_volume, radius)
+    if map_path not in _FRAMES:
+        _FRAMES.clear()
+        _FRAMES[map_path] = map_frame(map_path)
+    return _FRAMES[map_path]
+
+
+def _world(task: dict):
+    """Per-process cache: a worker builds (or loads, see
+    :func:`planner.bench.worlds.cached_world`) each world once for all its queries."""
+    from planner.bench.worlds import cached_world
+
+    quat = tuple(task.get("quaternion", (1.0, 0.0, 0.0, 0.0)))
+    key = (task["map"], task["lattice"], task["cell_volume"], task["radius"], quat,
+           bool(task.get("rotated")))
     if key not in _WORLDS:
         if len(_WORLDS) > 12:
             _WORLDS.clear()
-        _WORLDS[key] = build_world(map_path, lattice, cell_volume=cell_volume, radius=radius)
+        _WORLDS[key] = cached_world(task.get("world_cache"), _frame(task["map"]), *key)
     return _WORLDS[key]
 
 
-def _clearance(map_path: str, obstacles):
+def _clearance(map_path: str):
+    """Clearance against the map's own (unrotated) obstacles: distances do not change under
+    a rigid motion, so a rotated path is turned back instead of rotating the boxes."""
     from planner.bench.metrics import Clearance
 
     if map_path not in _CLEARANCE:
         _CLEARANCE.clear()
-        _CLEARANCE[map_path] = Clearance(obstacles.points, obstacles.boxes, obstacles.box_size)
+        o = _frame(map_path).obstacles
+        _CLEARANCE[map_path] = Clearance(o.points, o.boxes, o.box_size)
     return _CLEARANCE[map_path]
 
 
 def row_key(r: dict) -> str:
-    return "|".join(str(r[k]) for k in ("map", "cell_volume", "radius", "lattice",
-                                        "neighbors", "method", "seed", "query"))
+    """One run: map, resolution, radius, rotation (0 for rows of unrotated suites), lattice,
+    neighbours, method, seed and query."""
+    return "|".join(str(r.get(k, 0)) if k == "rotation" else str(r[k])
+                    for k in ("map", "cell_volume", "radius", "rotation", "lattice",
+                              "neighbors", "method", "seed", "query"))
 
 
 def run_task(task: dict) -> list[dict]:
@@ -62,14 +81,23 @@ def run_task(task: dict) -> list[dict]:
     A plain function of plain data so that it pickles to processes and Dask workers.
     """
     from planner import api, search
+    from planner.bench.rotations import quaternion_matrix
 
-    world = _world(task["map"], task["lattice"], task["cell_volume"], task["radius"])
-    clear = _clearance(task["map"], world.obstacles)
+    world = _world(task)
+    clear = _clearance(task["map"])
+    R = quaternion_matrix(task.get("quaternion", (1.0, 0.0, 0.0, 0.0)))
+    centre = _frame(task["map"]).centre
+
+    def back(path: np.ndarray) -> np.ndarray:  # into the map's own frame
+        return (np.asarray(path, dtype=float) - centre) @ R + centre
+
     step = 0.25 * world.lattice.packing_radius
     rows = []
     for q in task["queries"]:
         base = {k: task[k] for k in ("suite", "map", "cell_volume", "radius", "lattice",
                                      "neighbors", "method", "seed")}
+        base.update(rotation=task.get("rotation", 0),
+                    quaternion=list(task.get("quaternion", (1.0, 0.0, 0.0, 0.0))))
         base.update(query=q["id"], start=q["start"], goal=q["goal"],
                     optimal_cost=q.get("optimal_cost"))
         t0 = time.perf_counter()
@@ -98,8 +126,8 @@ def run_task(task: dict) -> list[dict]:
                 smooth = np.concatenate([raw[:1], world.lattice.to_world(cells), raw[-1:]])
             else:
                 smooth = raw
-            c_raw = clear.of_path(raw, step)
-            c_smooth = clear.of_path(smooth, step)
+            c_raw = clear.of_path(back(raw), step)
+            c_smooth = clear.of_path(back(smooth), step)
             tol = 1e-9 * max(1.0, world.lattice.covering_radius)
             row.update(length=path_length(raw), length_smoothed=path_length(smooth),
                        clearance=min(c_raw, c_smooth),
@@ -109,47 +137,66 @@ def run_task(task: dict) -> list[dict]:
     return rows
 
 
-def plan_tasks(suite: Suite, log=print, saved: dict | None = None) -> tuple[list[dict], dict]:
-    """Expand a suite into tasks; sample the queries once per map x volume x radius group.
+def plan_tasks(suite: Suite, log=print, saved: dict | None = None,
+               world_cache: str | None = None) -> tuple[list[dict], dict]:
+    """Expand a suite into tasks; sample the queries once per map x volume x radius x
+    rotation group.
+
+    ``world_cache``: a folder where the worlds built for sampling are kept for the workers
+    (:func:`planner.bench.worlds.cached_world`); None builds them again in every process.
 
     ``saved`` is a record returned earlier (kept in ``queries.json`` beside the results):
     its groups' queries are reused as they are, so ``--resume`` does not sample again.
 
     Returns the tasks and, per group, the query record (kept, dropped by reason, queries).
     """
-    from planner.api import build_world
+    from planner.bench.rotations import quaternion_matrix, sample_rotations
+    from planner.bench.worlds import cached_world, map_frame
 
+    rotated = suite.rotation != "none"
+    quats = sample_rotations(suite.rotation, suite.rotations, seed=suite.seed)
     tasks, record = [], {}
     for m in suite.maps:
+        frame = map_frame(m.path) if not m.scenarios else None
         for cv in m.cell_volumes:
             for radius in m.radii:
-                group = f"{Path(m.path).name} cell {cv:g} m^3 radius {radius:g} m"
-                n = m.queries or suite.queries
-                old = (saved or {}).get(group)
-                if old and old.get("wanted") == n and "queries" in old:
-                    record[group] = old
-                    tasks += _group_tasks(suite, {"suite": suite.name, "map": m.path,
-                                                  "cell_volume": cv, "radius": radius},
-                                          old["queries"])
-                    continue
-                if m.scenarios:
-                    s, g, costs = scenario_queries(m.scenarios, n, suite.seed)
-                    dropped = {}
-                else:
-                    log(f"sampling {n} queries for {group} ...")
-                    worlds = {lat: build_world(m.path, lat, cell_volume=cv, radius=radius)
-                              for lat in suite.lattices}
-                    bounds = next(iter(worlds.values())).bounds
-                    s, g, dropped = sample_queries(worlds, bounds, n, suite.seed,
-                                                   suite.min_distance)
-                    costs = [None] * len(s)
-                queries = [{"id": i, "start": s[i].tolist(), "goal": g[i].tolist(),
-                            "optimal_cost": None if costs[i] is None else float(costs[i])}
-                           for i in range(len(s))]
-                record[group] = {"kept": len(s), "wanted": n, "dropped": dropped,
-                                 "queries": queries}
-                tasks += _group_tasks(suite, {"suite": suite.name, "map": m.path,
-                                              "cell_volume": cv, "radius": radius}, queries)
+                for ri, quat in enumerate(quats):
+                    group = f"{Path(m.path).name} cell {cv:g} m^3 radius {radius:g} m" + (
+                        f" rotation {ri}" if rotated else "")
+                    common = {"suite": suite.name, "map": m.path, "cell_volume": cv,
+                              "radius": radius, "rotation": ri, "quaternion": quat.tolist(),
+                              "rotated": rotated, "world_cache": world_cache}
+                    n = m.queries or suite.queries
+                    old = (saved or {}).get(group)
+                    if old and old.get("wanted") == n and "queries" in old:
+                        record[group] = old
+                        tasks += _group_tasks(suite, common, old["queries"])
+                        continue
+                    if m.scenarios:
+                        if rotated:
+                            raise PlannerError(f"{m.scenarios}: scenario queries cannot be "
+                                               f"rotated; use rotation = \"none\"")
+                        s, g, costs = scenario_queries(m.scenarios, n, suite.seed)
+                        dropped = {}
+                    else:
+                        log(f"sampling {n} queries for {group} ...")
+                        R = quaternion_matrix(quat)
+                        worlds = {lat: cached_world(world_cache, frame, m.path, lat, cv,
+                                                    radius, tuple(quat.tolist()), rotated)
+                                  for lat in suite.lattices}
+                        free = frame.free.contains if frame.free is not None else None
+                        s, g, dropped = sample_queries(worlds, frame.bounds, n, suite.seed,
+                                                       suite.min_distance, rotation=R,
+                                                       centre=frame.centre, free=free)
+                        costs = [None] * len(s)
+                    queries = [{"id": i, "start": s[i].tolist(), "goal": g[i].tolist(),
+                                "optimal_cost": None if costs[i] is None else float(costs[i])}
+                               for i in range(len(s))]
+                    record[group] = {"kept": len(s), "wanted": n, "dropped": dropped,
+                                     "queries": queries, "map": m.path, "cell_volume": cv,
+                                     "radius": radius, "rotation": ri,
+                                     "quaternion": quat.tolist()}
+                    tasks += _group_tasks(suite, common, queries)
     return tasks, record
 
 

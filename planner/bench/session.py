@@ -89,7 +89,8 @@ def run_suite(name: str, *, out: str | None = None, jobs: int = 1,
                 saved = json.loads(saved_path.read_text())
             except ValueError:
                 saved = None  # a damaged record: sample again
-        tasks, record = runner.plan_tasks(suite, log=log, saved=saved)
+        tasks, record = runner.plan_tasks(suite, log=log, saved=saved,
+                                          world_cache=str(folder / "worlds"))
         write_text_atomic(saved_path, json.dumps(record, indent=1))
         results = folder / "results.jsonl"
         interrupted = None
@@ -119,6 +120,10 @@ def run_suite(name: str, *, out: str | None = None, jobs: int = 1,
                        f"`{cmd} --resume` completes it")
         rep = summary.write_report(folder, suite, rows, summ, record, figs, cmd,
                                    partial=partial, jobs=jobs)
+    if not partial:  # the worlds are only kept for --resume
+        import shutil
+
+        shutil.rmtree(folder / "worlds", ignore_errors=True)
     if interrupted is not None:
         print(f"\nplanner bench: {partial}; partial report: {rep}", file=sys.stderr)
         return interrupted.exit_code

@@ -9,6 +9,8 @@ Example::
     neighbors = ["face", "full"]
     methods = ["astar", "theta"]     # lattice methods
     min_distance = 0.3               # start-goal distance, fraction of the box diagonal
+    rotation = "yaw"                 # "none" | "yaw" (about z) | "so3": the map and its
+    rotations = 8                    # queries turn together; same sample for every lattice
 
     [ompl]                           # optional continuous baseline
     planners = ["rrtconnect"]
@@ -64,6 +66,8 @@ class Suite:
     ompl_time: float = 1.0
     ompl_seeds: tuple[int, ...] = (0,)
     ompl_lattice: str = "cubic"
+    rotation: str = "none"
+    rotations: int = 1
     kind: str = "planning"
     paper: dict = field(default_factory=dict)
     source: str = ""
@@ -149,6 +153,8 @@ def load_suite(name_or_path: str) -> Suite:
             ompl_time=float(ompl.get("time", 1.0)),
             ompl_seeds=tuple(int(s) for s in ompl.get("seeds", (0,))),
             ompl_lattice=str(ompl.get("lattice", "cubic")),
+            rotation=str(raw.get("rotation", "none")),
+            rotations=int(raw.get("rotations", 1)),
             kind=str(raw.get("kind", "planning")),
             paper=dict(raw.get("paper", {})),
             source=str(path),
@@ -160,6 +166,13 @@ def load_suite(name_or_path: str) -> Suite:
         if lat not in NAMED_LATTICES:
             raise SuiteError(f"{path}: unknown lattice {lat!r}")
     _check_methods(path, suite.methods, suite.ompl_planners)
+    from planner.bench.rotations import ROTATION_KINDS
+
+    if suite.rotation not in ROTATION_KINDS:
+        raise SuiteError(f"{path}: rotation must be one of {', '.join(ROTATION_KINDS)}, "
+                         f"got {suite.rotation!r}")
+    if suite.rotations < 1:
+        raise SuiteError(f"{path}: rotations must be >= 1, got {suite.rotations}")
     unknown = set(suite.paper) - {"rotations", "volumes", "samples", "seed", "quick"}
     if unknown:
         raise SuiteError(f"{path}: unknown [paper] keys {sorted(unknown)}")

@@ -21,12 +21,13 @@ LATTICE_ORDER = NAMED_LATTICES
 
 
 def _group_key(r: dict) -> tuple:
-    return (r["map"], r["cell_volume"], r["radius"], r["query"])
+    return (r["map"], r["cell_volume"], r["radius"], r.get("rotation", 0), r["query"])
 
 
 def add_ratios(rows: list[dict]) -> list[dict]:
     """Set ``length_ratio``: smoothed length over the best length any run found on the
-    same query (same map, cell volume and radius); and ``checks_vs_cubic``: cell checks over
+    same query (same map, cell volume, radius and rotation); ``raw_length_ratio``: the raw
+    (unsmoothed) length over that same best; and ``checks_vs_cubic``: cell checks over
     those of the cubic lattice with the same neighbours and method on the same query (the
     per-query pairing of the paper's Fig. 6, which does not mix maps of different sizes)."""
     cubic = {(*_group_key(r), r["neighbors"], r["method"]): r["cell_checks"] for r in rows
@@ -94,15 +95,22 @@ def summarize(rows: list[dict]) -> list[dict]:
 
 
 def format_summary(summary: list[dict], markdown: bool = False) -> str:
-    """Table of :func:`summarize` rows (plain text, or Markdown for the report)."""
-    head = ["lattice", "nbrs", "method", "runs", "success", "len ratio (IQR)", "vs cubic",
-            "cell checks (IQR)", "checks/cubic", "time ms", "clear-ok"]
+    """Table of :func:`summarize` rows (plain text, or Markdown for the report).
+
+    Length ratios: the path's length over the shortest path any run found on the query, raw
+    (as searched) and smoothed (line-of-sight shortcut for A*/Dijkstra, OMPL's simplified
+    path; any-angle paths are their own smoothed path). ``checks/cubic``: median of the
+    per-query ratios (see the paired table of the report for intervals).
+    """
+    head = ["lattice", "nbrs", "method", "runs", "success", "raw len ratio (IQR)",
+            "smoothed len ratio (IQR)", "cell checks (IQR)", "checks/cubic", "time ms",
+            "clear-ok"]
     lines = []
     for s in summary:
         lines.append(dict(zip(head, [
             s["lattice"], s["neighbors"], s["method"], str(s["runs"]), f"{s['success']:.0%}",
+            f"{s['raw_length_ratio_median']:.3f} ({s['raw_length_ratio_iqr']:.3f})",
             f"{s['length_ratio_median']:.3f} ({s['length_ratio_iqr']:.3f})",
-            _f(s["length_ratio_vs_cubic"]),
             f"{s['cell_checks_median']:,.0f} ({s['cell_checks_iqr']:,.0f})",
             _f(s["checks_vs_cubic_median"]), f"{1e3 * s['seconds_median']:.1f}",
             "yes" if s["collision_free"] else "NO",
@@ -136,7 +144,10 @@ def plot(rows: list[dict], out_dir: Path) -> list[Path]:
         LATTICE_ORDER.index(s.split()[0]) if s.split()[0] in LATTICE_ORDER else 9))
     colours = LATTICE_COLORS
     files = []
-    metrics = [("length_ratio", "path length / best length on the query", False, "length_ratio"),
+    metrics = [("raw_length_ratio", "raw path length / best length on the query", False,
+                "raw_length_ratio"),
+               ("length_ratio", "smoothed path length / best length on the query", False,
+                "length_ratio"),
                ("checks_vs_cubic", "cell checks / cubic's on the same query", True,
                 "checks_vs_cubic"),
                ("cell_checks", "cell checks per query", True, "cell_checks"),
@@ -178,7 +189,9 @@ def plot(rows: list[dict], out_dir: Path) -> list[Path]:
         fig.savefig(tmp, dpi=110, format="png")
     plt.close(fig)
     files.append(p)
-    return files
+    from planner.bench.figures import plot_tradeoffs
+
+    return files + plot_tradeoffs(rows, out_dir)
 
 
 def write_report(out_dir: Path, suite, rows: list[dict], summary: list[dict], record: dict,
@@ -200,12 +213,18 @@ def write_report(out_dir: Path, suite, rows: list[dict], summary: list[dict], re
              f"{len(unsafe)} paths violated the robot clearance against the raw obstacles.", ""]
     if suite.skipped:
         lines += [f"Skipped (files absent): {', '.join(suite.skipped)}", ""]
-    lines += ["## Queries", ""]
-    for group, rec in record.items():
-        drop = ", ".join(f"{k}: {v}" for k, v in sorted(rec["dropped"].items())) or "none"
-        lines.append(f"- {group}: {rec['kept']}/{rec['wanted']} queries kept; "
-                     f"candidates dropped: {drop}")
-    lines += ["", "## Summary (medians; ratios relative to cubic with the same neighbours "
+    from planner.bench import paired
+
+    rot = getattr(suite, "rotation", "none")
+    lines += [f"Rotations: `{rot}`, {len({r.get('rotation', 0) for r in rows})} per map "
+              "(the map and its queries turned together about the map centre; the same "
+              "sample for every lattice, neighbour set and method).", ""]
+    lines += ["## Queries", ""] + _query_lines(record)
+    lines += ["", "## Lattice vs cubic (paired per query, 95% bootstrap CI, Wilcoxon p)", "",
+              paired.headline(rows), "",
+              "## How much the answer moves with rotation", "",
+              paired.rotation_spread(rows), "",
+              "## Summary (medians; ratios relative to cubic with the same neighbours "
               "and method)", "", format_summary(summary, markdown=True), ""]
     maps = sorted({r["map"] for r in rows})
     if len(maps) > 1:  # the pooled medians above mix maps of very different sizes
@@ -213,11 +232,49 @@ def write_report(out_dir: Path, suite, rows: list[dict], summary: list[dict], re
             lines += [f"### {Path(m).name}", "",
                       format_summary(summarize([r for r in rows if r["map"] == m]),
                                      markdown=True), ""]
-    lines += ["Length ratio: smoothed path length over the shortest path any run found on "
+    lines += ["Length ratios: raw (as searched) and smoothed (shortcut A*/Dijkstra paths; "
+              "any-angle paths unchanged) path length over the shortest path any run found on "
               "that query. Cell checks: occupancy lookups. Clearance is measured against "
               "the raw obstacle points, not the voxels.", ""]
     for f in figures:
         lines += [f"![{f.stem}]({f.name})", ""]
     p = out_dir / "report.md"
     write_text_atomic(p, "\n".join(lines))
+    write_text_atomic(out_dir / "results_section.md", results_section(
+        suite, rows, record, figures, command, partial=partial))
     return p
+
+
+def _query_lines(record: dict) -> list[str]:
+    """One line per query group (kept / wanted, candidates dropped by reason), and totals."""
+    out, total = [], defaultdict(int)
+    for group, rec in record.items():
+        drop = ", ".join(f"{k}: {v}" for k, v in sorted(rec["dropped"].items())) or "none"
+        out.append(f"- {group}: {rec['kept']}/{rec['wanted']} queries kept; "
+                   f"candidates dropped: {drop}")
+        for k, v in rec["dropped"].items():
+            total[k] += v
+    if total:
+        out.append("- all groups, candidates dropped: " + ", ".join(
+            f"{k}: {v}" for k, v in sorted(total.items())))
+    return out
+
+
+def results_section(suite, rows: list[dict], record: dict, figures: list[Path], command: str,
+                    *, partial: str | None = None, fig_prefix: str = "") -> str:
+    """The README's results block, generated from the rows (see
+    :mod:`planner.analysis.readme_results`): the paired headline table and its sentences,
+    the rotation spread, the dropped queries, and the trade-off figures."""
+    from planner.analysis.metadata import run_metadata
+    from planner.bench import paired
+
+    meta = run_metadata(1)
+    stamp = ", ".join(f"{k} {meta[k]}" for k in ("commit", "date") if k in meta)
+    lines = [f"Suite `{suite.name}`" + (" (PARTIAL)" if partial else "")
+             + f", regenerated by `{command}` ({stamp}).", "", paired.headline(rows), "",
+             "How much the answer moves with the map's rotation:", "",
+             paired.rotation_spread(rows), "", "Queries:", "", *_query_lines(record), ""]
+    for f in figures:
+        if f.stem in ("pareto", "success_vs_resolution", "time_vs_length", "checks_vs_cubic"):
+            lines += [f"![{f.stem}]({fig_prefix}{f.name})", ""]
+    return "\n".join(lines)

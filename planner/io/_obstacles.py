@@ -118,6 +118,48 @@ class Obstacles:
         """True when the file says which space was observed free (free boxes or origins)."""
         return len(self.free_boxes) > 0 or self.origins is not None
 
+    def rotated(self, rotation, centre) -> tuple[Obstacles, np.ndarray]:
+        """The map turned rigidly by ``rotation`` about ``centre`` (the benchmark's fairness rule).
+
+        Points, sensor origins and box centres (occupied and free) are rotated.  The boxes
+        themselves become *oriented* solids, which this type cannot store: their edges stay
+        in ``box_sizes`` / ``free_box_sizes`` and the caller must treat box k as
+        ``{R @ x + t : |x - boxes_unrotated[k]| <= size / 2}``, e.g. with
+        ``exact_box_inflation(lo, hi, lattice, radius, rotation=R, translation=t)``.
+        ``bounds`` becomes None (an axis-aligned box no longer describes the map).
+
+        Parameters
+        ----------
+        rotation : array_like, shape (d, d)
+            Proper rotation matrix R.
+        centre : array_like, shape (d,)
+            Fixed point of the rotation, metres.
+
+        Returns
+        -------
+        obstacles : Obstacles
+            The rotated map (``source`` unchanged).
+        translation : ndarray, shape (d,)
+            ``t = c - R c``: the map's rigid motion is ``x -> R x + t``.
+        """
+        R = np.asarray(rotation, dtype=np.float64)
+        c = np.asarray(centre, dtype=np.float64).reshape(-1)
+        d = self.dim
+        if R.shape != (d, d) or not np.allclose(R @ R.T, np.eye(d), atol=1e-9) \
+                or np.linalg.det(R) <= 0 or c.shape != (d,):
+            raise MapError(f"{self.source}: rotated() needs a proper ({d}, {d}) rotation and "
+                           f"a ({d},) centre")
+        t = c - R @ c
+
+        def move(a: np.ndarray | None) -> np.ndarray | None:
+            return None if a is None else a @ R.T + t
+
+        from dataclasses import replace
+
+        return replace(self, points=move(self.points), boxes=move(self.boxes),
+                       free_boxes=move(self.free_boxes), origins=move(self.origins),
+                       bounds=None, unknown_default=self.unknown_default), t
+
     def box_centre_points(self) -> np.ndarray:
         """Occupied boxes as points: each box filled with a grid of cubes of edge
         ``resolution`` (else the smallest box edge): an OctoMap leaf of 2^k voxels per side
