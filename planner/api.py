@@ -118,14 +118,12 @@ def as_obstacles(source, format: str | None = None):
 
 
 def _sidecar(source) -> dict:
-    """Bundled maps carry a JSON sidecar with bounds and suggested resolution."""
-    if isinstance(source, str | Path):
-        side = Path(source).with_suffix(".json")
-        if side.is_file():
-            try:
-                return json.loads(side.read_text())
-            except (OSError, ValueError):
-                return {}
+    """Bundled maps carry a JSON sidecar with bounds and suggested resolution (checked: a
+    malformed one is a one-line MapError, as in the CLI)."""
+    if isinstance(source, str | Path) and Path(source).suffix.lower() != ".json":
+        from planner.io import load_sidecar
+
+        return load_sidecar(source)
     return {}
 
 

@@ -27,6 +27,8 @@ METHODS = "astar, dijkstra, theta, lazy-theta, ompl:<planner>"
 PLOT_SUFFIXES = (".png", ".pdf", ".svg")
 # options whose values may start with "-" (negative coordinates)
 _VECTOR_OPTIONS = ("--start", "--goal", "--bounds", "--generator")
+# options of every command, accepted before or after the command name
+_GLOBAL_OPTIONS = ("--memory-budget", "--max-expansions")
 _NUMBERISH = re.compile(r"^-[0-9.]")
 
 
@@ -91,6 +93,15 @@ def _int_range(lo: int, hi: int | None = None):
             raise argparse.ArgumentTypeError(f"expected an integer {span}, got {text!r}")
         return v
     return parse
+
+
+def _size(text: str) -> int:
+    from planner.budget import parse_size
+
+    try:
+        return parse_size(text)
+    except PlannerError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
 
 
 def _map(text: str) -> str:
@@ -205,6 +216,15 @@ def _add_world_args(p: argparse.ArgumentParser, *, lattice: bool = True) -> None
 
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="planner", description=__doc__.splitlines()[0])
+    parser.add_argument("--memory-budget", type=_size, default=None,
+                        help="bytes one step (inflation, grid, search) may use, e.g. 4G or "
+                             "512M; refused in one line above it (None: "
+                             "$PLANNER_MEMORY_BUDGET or a quarter of the physical memory); "
+                             "any command")
+    parser.add_argument("--max-expansions", type=_int_range(1), default=None,
+                        help="give up a search after this many expansions (exit 1, status "
+                             "'budget'; None: as many as the memory budget holds); any "
+                             "command")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
     p = sub.add_parser("lattices", help="table of lattice properties (the paper's measurements)")
@@ -310,6 +330,25 @@ def _join_negative_values(argv: list[str]) -> list[str]:
     return out
 
 
+def _hoist_global_options(argv: list[str]) -> list[str]:
+    """Move :data:`_GLOBAL_OPTIONS` (with their values) in front of the command name, so
+    ``planner plan map --memory-budget 2G`` works as ``planner --memory-budget 2G plan``."""
+    head, rest, i = [], [], 0
+    while i < len(argv):
+        a = argv[i]
+        if a == "--":
+            rest += argv[i:]
+            break
+        if a.split("=", 1)[0] in _GLOBAL_OPTIONS:
+            take = 1 if "=" in a or i + 1 == len(argv) else 2
+            head += argv[i:i + take]
+            i += take
+            continue
+        rest.append(a)
+        i += 1
+    return head + rest
+
+
 # -- commands ------------------------------------------------------------------------------
 def _cmd_lattices(a) -> int:
     from planner.analysis import measure
@@ -349,14 +388,28 @@ def _build(a):
     return world, (a.generator.name if a.generator is not None else world.lattice.name)
 
 
+def _check_neighbors(lattices, neighbors: str, method: str) -> None:
+    """Refuse a bad or oversized move set before the world is built (index-space moves
+    do not depend on the cell volume)."""
+    from planner.lattice import Lattice
+
+    if method.startswith("ompl"):
+        return
+    for lat in lattices:
+        (lat if isinstance(lat, Lattice) else Lattice.named(lat)).neighbors(neighbors)
+
+
 def _cmd_plan(a) -> int:
     from planner import api
     from planner.analysis import compare
 
+    _check_neighbors([a.generator if a.generator is not None else a.lattice], a.neighbors,
+                     a.method)
     world, label = _build(a)
     res = api.plan(
         world, a.start, a.goal, method=a.method, neighbors=a.neighbors,
         corner_cutting=a.corner_cutting, shortcut=a.shortcut, time_limit=a.time, seed=a.seed,
+        max_expansions=a.max_expansions,
     )
     if a.out:
         from planner._pathfile import write_path
@@ -378,10 +431,12 @@ def _cmd_compare(a) -> int:
         saved = load_world(a.map)
         lattices = [saved.lattice]
         radius = saved.radius if radius is None else radius
+    _check_neighbors(lattices, a.neighbors, a.method)
     rows = compare.compare(
         a.map, lattices=lattices, cell_volume=a.cell_volume, radius=radius, bounds=a.bounds,
         start=a.start, goal=a.goal, method=a.method, neighbors=a.neighbors, plot=a.plot,
         progress=not a.json and sys.stderr.isatty(), format=a.format,
+        max_expansions=a.max_expansions,
     )
     print(json.dumps(rows) if a.json else compare.format_rows(rows))
     return 0 if all(r["found"] for r in rows) else 1
@@ -436,7 +491,11 @@ _COMMANDS = {"lattices": _cmd_lattices, "stats": _cmd_stats, "plan": _cmd_plan,
 
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
-    a = build_parser().parse_args(_join_negative_values(argv))
+    a = build_parser().parse_args(_hoist_global_options(_join_negative_values(argv)))
+    if a.memory_budget is not None:  # the one budget model reads it (and so do workers)
+        from planner.budget import ENV
+
+        os.environ[ENV] = str(a.memory_budget)
     # numpy warnings are shown only when the command succeeds: an error is one line
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", RuntimeWarning)

@@ -477,10 +477,10 @@ def test_dense_and_key_backends_agree():
 def test_over_budget_radius_raises():
     lat = Lattice.named("fcc", 1.0)
     occ = OccupiedVoxelList.from_points(np.zeros((1, 3)), lat)
-    with pytest.raises(MapError, match=r"radius 5000 m needs ~.* GB for inflation, over the "
-                                       r"budget"):
+    with pytest.raises(MapError, match=r"inflation for radius 5000 m needs ~.* GB, over the "
+                                       r"memory budget"):
         occ.inflate(5000.0)
-    with pytest.raises(MapError, match="raise memory_budget"):
+    with pytest.raises(MapError, match=r"\(--memory-budget / memory_budget\)"):
         occ.inflate(30.0, memory_budget=10**5)
     with pytest.raises(MapError, match="budget"):
         exact_inflation(np.zeros((1, 3)), lat, 30.0, memory_budget=10**5)

@@ -105,6 +105,7 @@ def compare(
     plot: str | None = None,
     progress: bool = True,
     format: str | None = None,
+    max_expansions: int | None = None,
 ) -> list[dict]:
     """Plan the same queries on every lattice and return one summary row per lattice.
 
@@ -113,6 +114,7 @@ def compare(
 
     Queries are ``start``/``goal`` when given, else the map's default queries (bundled
     maps' JSON sidecar). Radius and cell volume default to the sidecar's suggestions.
+    ``max_expansions`` bounds each search (None: the memory budget's default).
     """
     from planner import api
 
@@ -142,7 +144,8 @@ def compare(
                 if progress:
                     print(f"\r{name}: query {i + 1}/{len(queries)}", end="", file=sys.stderr,
                           flush=True)
-                per.append(api.plan(world, s, g, method=method, neighbors=neighbors))
+                per.append(api.plan(world, s, g, method=method, neighbors=neighbors,
+                                    max_expansions=max_expansions))
         finally:  # clear the progress line, also before an error message
             if progress:
                 print("\r" + " " * 40 + "\r", end="", file=sys.stderr, flush=True)

@@ -28,12 +28,13 @@ Example::
 
 from __future__ import annotations
 
+import math
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from planner.errors import PlannerError
-from planner.lattice import NAMED_LATTICES
+from planner.lattice import NAMED_LATTICES, Lattice
 
 SUITES = Path(__file__).resolve().parent / "suites"
 """Bundled suites (package data): ``planner bench quick`` reads ``SUITES / "quick.toml"``."""
@@ -114,9 +115,10 @@ def load_suite(name_or_path: str) -> Suite:
         known = ", ".join(sorted(p.stem for p in SUITES.glob("*.toml")))
         raise SuiteError(f"{name_or_path}: no such suite (bundled: {known})")
     try:
-        raw = tomllib.loads(path.read_text())
-    except (OSError, tomllib.TOMLDecodeError) as exc:
+        raw = tomllib.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
         raise SuiteError(f"{path}: not a valid TOML suite: {exc}") from None
+    _check_raw(path, raw)
     base = path.parent
     maps, skipped = [], []
     try:
@@ -177,6 +179,75 @@ def load_suite(name_or_path: str) -> Suite:
     if unknown:
         raise SuiteError(f"{path}: unknown [paper] keys {sorted(unknown)}")
     for m in suite.maps:
-        if any(v is None or v <= 0 for v in m.cell_volumes):
+        if any(v is None or not 0 < v < math.inf for v in m.cell_volumes):
             raise SuiteError(f"{path}: map {m.path} needs positive cell_volumes")
+        if not all(0 <= r < math.inf for r in m.radii):
+            raise SuiteError(f"{path}: map {m.path} needs finite radii >= 0")
+    for kind in suite.neighbors:
+        for lat in suite.lattices:
+            try:
+                Lattice.named(lat).neighbors(kind)
+            except PlannerError as exc:
+                raise SuiteError(f"{path}: neighbors {kind!r}: {exc}") from None
     return suite
+
+
+_KEYS = {"": {"name", "seed", "queries", "lattices", "neighbors", "methods", "min_distance",
+              "ompl", "maps", "kind", "paper"},
+         "maps": {"path", "cell_volumes", "cell_volume", "radii", "radius", "scenarios",
+                  "queries"},
+         "ompl": {"planners", "time", "seeds", "lattice"}}
+_LISTS = ("lattices", "neighbors", "methods")
+
+
+def _check_raw(path: Path, raw: dict) -> None:
+    """Refuse unknown keys and values of the wrong type or range, naming the key (a typo
+    must not silently fall back to a default)."""
+    def bad(key: str, want: str) -> SuiteError:
+        return SuiteError(f"{path}: {key!r} must be {want}")
+
+    def unknown(table: dict, where: str) -> None:
+        extra = sorted(set(table) - _KEYS[where])
+        if extra:
+            at = f" in [{where}]" if where else ""
+            raise SuiteError(f"{path}: unknown key {extra[0]!r}{at} (known: "
+                             f"{', '.join(sorted(_KEYS[where]))})")
+
+    unknown(raw, "")
+    for key, lo, hi in (("queries", 1, 10**6), ("seed", 0, 2**32 - 1)):
+        v = raw.get(key, lo)
+        if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
+            raise bad(key, f"an integer in {lo}..{hi}")
+    d = raw.get("min_distance", 0.3)
+    if isinstance(d, bool) or not isinstance(d, int | float) or not 0 <= d < math.inf:
+        raise bad("min_distance", "a finite number >= 0")
+    for key in _LISTS:
+        v = raw.get(key, ["x"])
+        if not isinstance(v, list) or not v or not all(isinstance(x, str) for x in v):
+            raise bad(key, "a non-empty list of names")
+    if not isinstance(raw.get("name", ""), str):
+        raise bad("name", "a string")
+    if not isinstance(raw.get("kind", "planning"), str) or raw.get("kind") not in (
+            None, "planning", "paper"):
+        raise bad("kind", '"planning" or "paper"')
+    if not isinstance(raw.get("maps", []), list) or not all(
+            isinstance(m, dict) for m in raw.get("maps", [])):
+        raise bad("maps", "a list of [[maps]] tables")
+    for m in raw.get("maps", []):
+        unknown(m, "maps")
+        if not isinstance(m.get("path"), str):
+            raise bad("maps.path", "a string")
+        q = m.get("queries", 1)
+        if isinstance(q, bool) or not isinstance(q, int) or not 1 <= q <= 10**6:
+            raise bad("maps.queries", "an integer in 1..1000000")
+    ompl = raw.get("ompl", {})
+    if not isinstance(ompl, dict):
+        raise bad("ompl", "an [ompl] table")
+    unknown(ompl, "ompl")
+    t = ompl.get("time", 1.0)
+    if isinstance(t, bool) or not isinstance(t, int | float) or not 0 < t < math.inf:
+        raise bad("ompl.time", "a positive number of seconds")
+    seeds = ompl.get("seeds", [0])
+    if not isinstance(seeds, list) or not all(
+            isinstance(x, int) and not isinstance(x, bool) and 0 <= x < 2**32 for x in seeds):
+        raise bad("ompl.seeds", "a list of integers in 0..4294967295")

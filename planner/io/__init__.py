@@ -92,8 +92,8 @@ def load_obstacles(path: PathLike, format: str | None = None, *,
         ``movingai``, ``yaml``, ``rosbag``, ``laz``).  Default: from the file extension
         (case-insensitive; text files may end in ``.gz`` / ``.bz2`` / ``.xz``).
     max_decompressed : int, optional
-        Byte budget for inflating a compressed text file (default
-        :data:`DECOMPRESSED_BUDGET`); inflation stops and fails once past it.
+        Byte budget for inflating a compressed text file (default: a quarter of the memory
+        budget of :mod:`planner.budget`); inflation stops and fails once past it.
     **options
         Format options: for bags ``topic``, ``fixed_frame``, ``max_clouds``.
 

@@ -12,11 +12,14 @@ from pathlib import Path
 
 import numpy as np
 
+from planner.budget import memory_budget
 from planner.errors import MapError
 
-# Largest decompressed size a compressed text file may inflate to.  Inflation is streamed in
-# chunks and stopped at the budget, so a small "zip bomb" never fills memory.
-DECOMPRESSED_BUDGET = 1 << 30
+# Largest decompressed size a compressed text file may inflate to (None: a quarter of the
+# memory budget of planner.budget, as the text and the parsed table follow the bytes).
+# Inflation is streamed in chunks and stopped at the budget, so a small "zip bomb" never
+# fills memory.
+DECOMPRESSED_BUDGET = None
 _CHUNK = 1 << 20
 _BOM = b"\xef\xbb\xbf"
 
@@ -46,7 +49,8 @@ def decompress(p: Path, compression: str, budget: int | None = None) -> bytes:
         :data:`DECOMPRESSED_BUDGET`) bytes once inflated.
     """
     check_file(p)
-    limit = DECOMPRESSED_BUDGET if budget is None else int(budget)
+    limit = budget if budget is not None else DECOMPRESSED_BUDGET
+    limit = memory_budget() // 4 if limit is None else int(limit)
     opener = {".gz": gzip.open, ".bz2": bz2.open, ".xz": lzma.open}[compression]
     out = bytearray()
     try:
@@ -58,7 +62,8 @@ def decompress(p: Path, compression: str, budget: int | None = None) -> bytes:
                 out += chunk
                 if len(out) > limit:
                     raise MapError(f"{p.name}: decompresses to more than {limit} bytes (the "
-                                   f"decompression budget); refusing to inflate it")
+                                   "decompression budget, by default a quarter of the memory "
+                                   "budget: --memory-budget); refusing to inflate it")
     except MapError:
         raise
     except (OSError, EOFError, ValueError, zlib.error, lzma.LZMAError) as exc:

@@ -26,7 +26,7 @@ TOL = 1e-9
 # Most lattice vectors the geometry may enumerate (cubic needs 125; an aspect ratio of ~500
 # between reduced basis vectors reaches it). Beyond it, deriving the cell takes minutes.
 ENUM_LIMIT = 20_000
-DEFAULT_BUDGET = 2**30  # bytes an offsets_within enumeration may use
+DEFAULT_BUDGET = None  # bytes an offsets_within enumeration may use: planner.budget's
 
 
 def _lll(basis: np.ndarray, delta: float = 0.99) -> tuple[np.ndarray, np.ndarray]:
@@ -169,7 +169,8 @@ class VoronoiCell:
         """How many coefficient vectors :meth:`offsets_within` examines for ``radius``."""
         return box_count(self.reduced, radius)
 
-    def offsets_within(self, radius: float, budget: float = DEFAULT_BUDGET) -> np.ndarray:
+    def offsets_within(self, radius: float, budget: float | None = DEFAULT_BUDGET
+                       ) -> np.ndarray:
         """Index offsets ``w`` whose cell centre ``G w`` lies within ``radius`` (m) of 0.
 
         Enumerated over a box in the LLL-reduced basis (tight for skewed generators).
@@ -181,8 +182,13 @@ class VoronoiCell:
         Raises
         ------
         LatticeError
-            When the enumeration would take more than ``budget`` bytes.
+            When the enumeration would take more than ``budget`` bytes (default: the
+            memory budget of :mod:`planner.budget`).
         """
+        if budget is None:
+            from planner.budget import memory_budget
+
+            budget = memory_budget()
         need = self.count_within(radius) * self.dim * 8 * 3
         if need > budget:
             raise LatticeError(f"offsets within {radius:.6g} m need ~{need / 2**30:.3g} GB, over "

@@ -29,12 +29,12 @@ Examples
 from __future__ import annotations
 
 import math
-import os
 import time
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from planner import budget as _budget
 from planner.errors import PlanError
 from planner.keys import unpack
 from planner.search import _astar, _driver
@@ -58,17 +58,14 @@ __all__ = ["SearchResult", "search", "shortcut", "warm_up", "move_stencils", "mo
 METHODS = ("astar", "dijkstra", "theta", "lazy-theta")
 _ANYANGLE = {"astar": 0, "dijkstra": 0, "theta": 1, "lazy-theta": 2}
 _HKIND = {"astar": H_GAUGE, "dijkstra": H_ZERO, "theta": H_EUCLID, "lazy-theta": H_EUCLID}
-MEMORY_SHARE = 0.25  # of physical memory, the default search memory budget
+MEMORY_SHARE = _budget.MEMORY_SHARE  # of physical memory, the default memory budget
 
 
 def default_memory_budget() -> int:
-    """Bytes a search may use by default: a quarter of the physical memory (4 GiB where
-    the platform does not say)."""
-    try:
-        total = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
-    except (ValueError, OSError, AttributeError):  # pragma: no cover - non-POSIX
-        total = 16 * 2**30
-    return int(MEMORY_SHARE * total)
+    """Bytes a search may use by default: the one memory budget of :mod:`planner.budget`
+    (``PLANNER_MEMORY_BUDGET`` / ``--memory-budget``, else a quarter of the physical
+    memory)."""
+    return _budget.memory_budget()
 
 
 def default_max_expansions(memory_budget: int | None = None) -> int:
@@ -255,8 +252,14 @@ def search(
 
 
 def _span(world: World) -> float:
-    """Longest line of sight inside the world (m): sizes the any-angle walk scratch."""
-    return float(np.linalg.norm(world.bounds[1] - world.bounds[0]))
+    """Longest line of sight inside the world (m): sizes the any-angle walk scratch. Capped
+    so the scratch (~72 bytes per cell a sight line may touch) stays within 1/16 of the
+    memory budget: a huge box must not allocate by its size; longer sight lines walk on
+    fresh arrays."""
+    walk = world.checker.walk
+    step = math.sqrt(2.0 * float(walk.rhs.min()))
+    steps = _budget.memory_budget() / 16 / 72 / (len(walk.full) + 1)
+    return min(float(np.linalg.norm(world.bounds[1] - world.bounds[0])), steps * step)
 
 
 def shortcut(world: World, cells: np.ndarray) -> np.ndarray:

@@ -6,11 +6,12 @@ import math
 
 import numpy as np
 
+from planner.budget import memory_budget
 from planner.errors import LatticeError, MapError
 from planner.keys import BITS, index_limit
 from planner.lattice import Lattice
 
-DEFAULT_BUDGET = 2**30  # bytes of scratch + result an inflation may use
+DEFAULT_BUDGET = None  # bytes of scratch + result an inflation may use: planner.budget's
 REL_TOL = 1e-9  # geometric tolerance, relative to the cell diameter
 
 
@@ -98,9 +99,15 @@ def check_range(lo: np.ndarray, hi: np.ndarray, dim: int) -> None:
         raise MapError(f"lattice indices exceed +-{lim} cells per axis; use a larger cell volume")
 
 
+def resolve_budget(budget: float | None) -> float:
+    """Bytes allowed: ``budget``, or the one memory budget (:mod:`planner.budget`)."""
+    return float(memory_budget() if budget is None else budget)
+
+
 def over_budget(radius: float, need: float, budget: float) -> MapError:
-    return MapError(f"radius {radius:.6g} m needs ~{gb(need)} for inflation, over the budget "
-                    f"of {gb(budget)}; use a larger cell volume or raise memory_budget")
+    return MapError(f"building the inflation for radius {radius:.6g} m needs ~{gb(need)}, over "
+                    f"the memory budget of {gb(budget)} (--memory-budget / memory_budget); "
+                    "use a larger cell volume")
 
 
 def grid_strides(dims: np.ndarray) -> np.ndarray:
@@ -113,7 +120,9 @@ def grid_strides(dims: np.ndarray) -> np.ndarray:
 
 def offsets_within(lat: Lattice, radius: float, budget: float, asked: float) -> np.ndarray:
     """``lat.voronoi.offsets_within(radius)``, refused as a MapError naming the caller's
-    radius ``asked`` when the enumeration alone would exceed ``budget`` bytes."""
+    radius ``asked`` when the enumeration alone would exceed ``budget`` bytes (None: the
+    memory budget)."""
+    budget = resolve_budget(budget)
     try:
         return lat.voronoi.offsets_within(radius, budget)
     except LatticeError:

@@ -226,7 +226,8 @@ class OccupiedVoxelList:
                 f"{self.nbytes} bytes)")
 
     # -- inflation ----------------------------------------------------------------------------
-    def inflate(self, radius: float, memory_budget: int = DEFAULT_BUDGET) -> OccupiedVoxelList:
+    def inflate(self, radius: float, memory_budget: int | None = DEFAULT_BUDGET
+                ) -> OccupiedVoxelList:
         """The cells a robot centre of radius ``radius`` (m) must not enter.
 
         Returns the occupied cells plus every cell ``c + delta`` (``c`` occupied, ``delta``
@@ -244,7 +245,8 @@ class OccupiedVoxelList:
         radius : float
             Robot radius, metres, >= 0.
         memory_budget : int
-            Bytes the scratch grid plus the result may take (default 1 GiB).
+            Bytes the scratch grid plus the result may take (default: the memory
+            budget of :mod:`planner.budget`).
 
         Raises
         ------
@@ -256,7 +258,7 @@ class OccupiedVoxelList:
         r = check_radius(radius)
         if r == 0 or not len(self._keys):
             return OccupiedVoxelList._from_keys(self._lattice, self._keys.copy())
-        keys = inflate.stencil_inflation(self._keys, self._lattice, r, float(memory_budget))
+        keys = inflate.stencil_inflation(self._keys, self._lattice, r, memory_budget)
         return OccupiedVoxelList._from_keys(self._lattice, keys)
 
     # -- files --------------------------------------------------------------------------------

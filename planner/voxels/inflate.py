@@ -16,6 +16,7 @@ import math
 
 import numpy as np
 
+from planner.budget import require
 from planner.errors import MapError
 from planner.keys import BITS, index_limit, pack, unpack
 from planner.lattice import Lattice
@@ -33,6 +34,7 @@ from planner.voxels._checks import (
     key_offsets,
     offsets_within,
     over_budget,
+    resolve_budget,
     unique_keys,
 )
 from planner.voxels._list import OccupiedVoxelList
@@ -44,7 +46,7 @@ _BOX_CHUNK_KEYS = 1 << 24  # candidate keys per box chunk (128 MB of int64)
 
 
 # -- stencil inflation --------------------------------------------------------------------------
-def inflation_stencil(lat: Lattice, radius: float, memory_budget: float = DEFAULT_BUDGET
+def inflation_stencil(lat: Lattice, radius: float, memory_budget: float | None = DEFAULT_BUDGET
                       ) -> np.ndarray:
     """Offsets ``delta`` whose closed Voronoi cell comes closer than ``radius`` to V(0).
 
@@ -77,10 +79,12 @@ def inflation_stencil(lat: Lattice, radius: float, memory_budget: float = DEFAUL
     order = np.argsort(np.linalg.norm(sel @ lat.generator.T, axis=1), kind="stable")
     return np.concatenate([zero, sel[order]])
 
-def stencil_inflation(keys: np.ndarray, lat: Lattice, r: float, budget: float) -> np.ndarray:
+def stencil_inflation(keys: np.ndarray, lat: Lattice, r: float, budget: float | None
+                      ) -> np.ndarray:
     """Keys of :meth:`OccupiedVoxelList.inflate`: sorted unique ``keys`` (M,) dilated by
     :func:`inflation_stencil` (``r`` > 0 metres), on a dense grid when it fits ``budget``
-    bytes, else by key arithmetic in chunks."""
+    bytes (None: the memory budget), else by key arithmetic in chunks."""
+    budget = resolve_budget(budget)
     stencil = inflation_stencil(lat, r, budget)
     full = lat.neighbors("full")
     w = unpack(keys, lat.dim)
@@ -138,7 +142,7 @@ def _dilate_keys(keys: np.ndarray, stencil: np.ndarray, full: np.ndarray, budget
 
 # -- exact inflation ------------------------------------------------------------------------------
 def exact_inflation(points: np.ndarray, lattice: Lattice, radius: float,
-                    memory_budget: int = DEFAULT_BUDGET) -> OccupiedVoxelList:
+                    memory_budget: int | None = DEFAULT_BUDGET) -> OccupiedVoxelList:
     """The exact set of cells whose closed Voronoi cell is closer than ``radius`` to a point.
 
     Tight reference for :meth:`OccupiedVoxelList.inflate` (which is a superset when built
@@ -153,7 +157,8 @@ def exact_inflation(points: np.ndarray, lattice: Lattice, radius: float,
     radius : float
         Metres, >= 0 (0 gives the cells containing the points).
     memory_budget : int
-        Bytes for the dense scratch grid over the result's index box.
+        Bytes for the dense scratch grid over the result's index box (default: the
+        memory budget of :mod:`planner.budget`).
 
     Returns
     -------
@@ -167,6 +172,7 @@ def exact_inflation(points: np.ndarray, lattice: Lattice, radius: float,
     base = lat.quantize(x)
     if r == 0:
         return OccupiedVoxelList._from_keys(lat, unique_keys(pack(base)))
+    memory_budget = resolve_budget(memory_budget)
     cand = offsets_within(lat, r + 2 * lat.covering_radius, memory_budget, r)
     ext = np.abs(cand).max(axis=0)
     lo, hi = base.min(axis=0) - ext, base.max(axis=0) + ext
@@ -229,12 +235,16 @@ def _overlap_keys(centres: np.ndarray, half: np.ndarray, rot: np.ndarray, lat: L
     base_keys = pack(base)
     if not half.any():
         return unique_keys(base_keys)
+    # Each box overlaps at least its volume in cells (per chunk, before the merge): refuse a
+    # box set whose key lists alone exceed the budget before enumerating anything.
+    need = 8.0 * float(np.prod(2 * half, axis=1).sum()) / lat.cell_volume
+    require(need, f"the cells of {len(centres)} boxes")
     cell = lat.voronoi
     tol = REL_TOL * max(cell_diameter(lat), 2 * float(half.max()))
     axes = cell.separating_axes(rot)
     support_v = np.abs(cell.vertices @ axes.T).max(axis=0)
     reach = float(np.linalg.norm(half, axis=1).max()) + 2 * cell.covering_radius + tol
-    offs = offsets_within(lat, reach, DEFAULT_BUDGET, reach)
+    offs = offsets_within(lat, reach, None, reach)
     ext = np.abs(offs).max(axis=0)
     check_range(base.min(axis=0) - ext, base.max(axis=0) + ext, d)
     base_world = lat.to_world(base)
@@ -303,7 +313,7 @@ def _split_boxes(centres: np.ndarray, half: np.ndarray, rot: np.ndarray, max_hal
 def exact_box_inflation(lo: np.ndarray, hi: np.ndarray, lattice: Lattice, radius: float, *,
                         rotation: np.ndarray | None = None,
                         translation: np.ndarray | None = None,
-                        memory_budget: int = DEFAULT_BUDGET) -> OccupiedVoxelList:
+                        memory_budget: int | None = DEFAULT_BUDGET) -> OccupiedVoxelList:
     """The exact set of cells whose closed Voronoi cell is closer than ``radius`` to a box.
 
     Box k is the solid ``{R @ x + t : lo[k] <= x <= hi[k]}`` (R, t shared by all boxes: how
@@ -326,7 +336,8 @@ def exact_box_inflation(lo: np.ndarray, hi: np.ndarray, lattice: Lattice, radius
     translation : array_like, shape (d,), optional
         Translation t (m, default 0).
     memory_budget : int
-        Bytes for the dense scratch grid over the result's index box (radius > 0).
+        Bytes for the dense scratch grid over the result's index box (radius > 0;
+        default: the memory budget of :mod:`planner.budget`).
 
     Returns
     -------
@@ -351,6 +362,7 @@ def exact_box_inflation(lo: np.ndarray, hi: np.ndarray, lattice: Lattice, radius
         return OccupiedVoxelList._from_keys(lat, _overlap_keys(centres, half, rot, lat))
     if d != 3:
         raise MapError(f"box inflation with a radius needs a 3D lattice, got {d}D")
+    memory_budget = resolve_budget(memory_budget)
     cell = lat.voronoi
     tol = REL_TOL * cell_diameter(lat)
     centres, half = _split_boxes(centres, half, rot, max(r, 2 * cell_diameter(lat)))

@@ -297,10 +297,125 @@ def _bag_seed(path: Path) -> bytes:
     return path.read_bytes()
 
 
+# -- benchmark suites and saved voxel lists -------------------------------------------------------
+SUITE = """name = "fuzz"
+seed = 1
+queries = 1
+lattices = ["cubic"]
+neighbors = ["face"]
+methods = ["astar"]
+min_distance = 0.3
+
+[[maps]]
+path = "suite_map.xyz"
+cell_volumes = [0.5]
+radii = [0.1]
+"""
+
+
+def suite_variants() -> list[str]:
+    """Suites with wrong types, unknown keys and absurd values, each one edit of SUITE."""
+    edits = [("queries = 1", v) for v in ('queries = "x"', "queries = -5", "queries = 0",
+                                          "queries = 1e300", "queries = [1]")]
+    edits += [("seed = 1", v) for v in ('seed = "a"', "seed = -1", "seed = 1.5",
+                                        "seed = 9223372036854775807")]
+    edits += [("min_distance = 0.3", v) for v in ('min_distance = "far"', "min_distance = nan",
+                                                  "min_distance = -1", "min_distance = inf")]
+    edits += [('lattices = ["cubic"]', v) for v in ('lattices = "fcc"', "lattices = [1]",
+                                                     "lattices = []", 'lattices = ["fcc2"]')]
+    edits += [('neighbors = ["face"]', v) for v in ('neighbors = ["face+1000"]',
+                                                     'neighbors = ["edge"]', "neighbors = 5")]
+    edits += [('methods = ["astar"]', v) for v in ('methods = ["astra"]', 'methods = "astar"',
+                                                   "methods = [[]]")]
+    edits += [("cell_volumes = [0.5]", v) for v in ("cell_volumes = [0]", 'cell_volumes = ["a"]',
+                                                    "cell_volumes = [1e-12]",
+                                                    "cell_volumes = [nan]", "cell_volumes = 0.5",
+                                                    "cell_volumes = [inf]")]
+    edits += [("radii = [0.1]", v) for v in ("radii = [-1]", 'radii = ["x"]', "radii = [1e300]",
+                                             "radii = [nan]", "radii = [100]")]
+    edits += [('path = "suite_map.xyz"', v) for v in ('path = "missing.xyz"', "path = 5",
+                                                       'path = "suite_bad.xyz"',
+                                                       'path = "/proc"')]
+    edits += [('name = "fuzz"', v) for v in ("querys = 4", "name = [1]", 'kind = "other"',
+                                             "kind = 5", "maps = 5", "[paper]\nbad = 1")]
+    edits += [("[[maps]]", v) for v in ("[ompl]\nplanners = [\"nope\"]\n[[maps]]",
+                                        "[ompl]\nplanners = [\"rrtconnect\"]\ntime = -1\n"
+                                        "[[maps]]",
+                                        "[ompl]\nplanners = [\"rrtconnect\"]\nseeds = [-5]\n"
+                                        "[[maps]]",
+                                        "[ompl]\nlattice = \"bogus\"\n[[maps]]")]
+    edits += [("radii = [0.1]", "radii = [0.1]\nradious = [0.2]"),
+              ("radii = [0.1]", "radii = [0.1]\nqueries = \"all\""),
+              ("radii = [0.1]", "radii = [0.1]\nscenarios = \"missing.3dscen\"")]
+    out = [SUITE.replace(old, new, 1) for old, new in edits]
+    assert all(v != SUITE for v in out)
+    raw = SUITE.encode()
+    out += [t.decode("latin-1") for t in truncations(raw, 6)[1:]]
+    out += [t.decode("latin-1") for t in flips(raw, 6, 29)]
+    out += ["", "[[maps]]\n", "maps = []\n", '= "x"\n', "\x00" * 10]
+    return out
+
+
+def voxel_list_seed(path: Path) -> bytes:
+    """A valid saved voxel list (OccupiedVoxelList.save) of PTS on FCC."""
+    from planner import Lattice, OccupiedVoxelList
+
+    OccupiedVoxelList.from_points(PTS, Lattice.named("fcc", 0.5)).save(path)
+    return path.read_bytes()
+
+
+def npz(**fields) -> bytes:
+    import io
+
+    buf = io.BytesIO()
+    np.savez(buf, **fields)
+    return buf.getvalue()
+
+
+def voxel_list_variants(seed: bytes) -> list[bytes]:
+    """Corrupt and lying saved voxel lists."""
+    import io
+
+    with np.load(io.BytesIO(seed), allow_pickle=False) as z:
+        good = {k: z[k] for k in z.files}
+    lies = [dict(good, version=np.array(99)), dict(good, format=np.array("other")),
+            dict(good, dim=np.array(7)), dict(good, keys=good["keys"][::-1].copy()),
+            dict(good, keys=good["keys"].astype(np.float64)),
+            dict(good, generator=np.full((3, 3), np.nan)),
+            dict(good, generator=np.zeros((3, 3))), dict(good, generator=np.eye(2)),
+            dict(good, generator=np.diag([1.0, 1.0, 1e-300])),
+            dict(good, lattice=np.array("nonsense")), dict(good, version=np.array("x")),
+            {k: v for k, v in good.items() if k != "keys"},
+            dict(good, keys=np.array([[1, 2]], dtype=np.int64))]
+    return (truncations(seed, 8) + flips(seed, 8, 31) + [npz(**f) for f in lies]
+            + [npz(**dict(good, keys=np.array([None], dtype=object))), b"PK\x03\x04",
+               ply_binary(), b""])
+
+
+def make_entry_corpus(folder: str | Path) -> list[Case]:
+    """Suites (``planner bench``) and saved voxel lists (``OccupiedVoxelList.load``) under
+    ``folder``: reader ``suite`` (loader ``suite``) and ``voxels`` (loader ``voxels``)."""
+    root = Path(folder)
+    root.mkdir(parents=True, exist_ok=True)
+    (root / "suite_map.xyz").write_bytes(xyz_text())
+    (root / "suite_bad.xyz").write_bytes(b"nan nan nan\n")
+    cases = []
+    for i, text in enumerate(suite_variants()):
+        path = root / f"s{i:03d}_suite.toml"
+        path.write_bytes(text.encode("latin-1"))
+        cases.append(Case(path, "suite", loader="suite"))
+    for i, data in enumerate(voxel_list_variants(voxel_list_seed(root / "seed_voxels.npz"))):
+        path = root / f"v{i:03d}_voxels.npz"
+        path.write_bytes(data)
+        cases.append(Case(path, "voxels", loader="voxels"))
+    return cases
+
+
 if __name__ == "__main__":
     from collections import Counter
 
-    corpus = make_corpus(sys.argv[1] if len(sys.argv) > 1 else "fuzz_corpus")
+    out = sys.argv[1] if len(sys.argv) > 1 else "fuzz_corpus"
+    corpus = make_corpus(out) + make_entry_corpus(Path(out) / "entry")
     for reader, n in sorted(Counter(c.reader for c in corpus).items()):
         print(f"{reader:10s} {n}")
     print(f"{'total':10s} {len(corpus)}")
