@@ -462,12 +462,14 @@ def explore(
 def _warm_up(lat: Lattice, neighbors: str, dstar, search) -> None:
     """Compile (or load) the D* Lite and A* kernels on a tiny world of the same lattice, so
     that no replan's time includes JIT compilation."""
-    tiny = World(lat, np.zeros((0, 3), np.int64), lat.to_world(np.array([[-3, -3, -3],
-                                                                          [3, 3, 3]])))
-    a, b = np.zeros(3, np.int64), np.ones(3, np.int64)
+    r = lat.covering_radius
+    tiny = World(lat, np.zeros((0, 3), np.int64), [[-4 * r] * 3, [4 * r] * 3])
+    a = lat.quantize(np.zeros((1, 3)))[0]
+    b = lat.quantize(np.array([[2.5 * r, 0.0, 0.0]]))[0]
+    mid = lat.quantize(np.array([[1.2 * r, 0.0, 0.0]]))
     dl = dstar(tiny, a, b, neighbors=neighbors)
     dl.plan()
-    dl.update(tiny.set_cells(np.array([[0, 0, 1]]), True), blocked=True)
+    dl.update(tiny.set_cells(mid, True), blocked=True)
     dl.plan()
     _scratch_astar(search, tiny, a, b, neighbors)
 
