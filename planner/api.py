@@ -139,7 +139,10 @@ def default_cell_volume(obst, bounds: np.ndarray | None = None) -> float:
     if obst.resolution:
         return float(obst.resolution) ** obst.dim
     b = _obstacle_bounds(obst) if bounds is None else np.asarray(bounds, dtype=float)
-    vol = float(np.prod(np.maximum(b[1] - b[0], 1e-3)))
+    ext = b[1] - b[0]
+    # A flat or linear cloud (one scan line, a floor) has no thickness: size its cells by its
+    # largest extent instead, so that the default does not ask for millimetre cells.
+    vol = float(np.prod(np.maximum(ext, max(1e-3, 0.01 * float(ext.max())))))
     return vol / _DEFAULT_CELLS
 
 

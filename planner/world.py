@@ -526,12 +526,20 @@ def as_point(p, what: str = "point", dim: int = 3) -> np.ndarray:
     try:
         a = np.asarray(p, dtype=float).reshape(-1)
     except (TypeError, ValueError):
-        raise PlanError(f"{what} must be three numbers x, y, z, got {p!r}") from None
+        raise PlanError(f"{what} must be three numbers x, y, z, got {_show(p)}") from None
     if dim == 2 and a.shape == (2,) and np.isfinite(a).all():
         a = np.append(a, 0.0)
     if a.shape != (3,) or not np.isfinite(a).all():
-        raise PlanError(f"{what} must be three finite numbers x, y, z, got {p!r}")
+        raise PlanError(f"{what} must be three finite numbers x, y, z, got {_show(p)}")
     return a
+
+
+def _show(p) -> str:
+    """A value on one line for an error message (no ``array(...)`` wrapping)."""
+    try:
+        return ",".join(f"{v:g}" for v in np.asarray(p, dtype=float).reshape(-1).tolist())
+    except (TypeError, ValueError):
+        return " ".join(repr(p).split())
 
 
 def _fmt(p: np.ndarray) -> str:
