@@ -69,8 +69,9 @@ def save_world(world, path: str | os.PathLike) -> None:
 
     src = world.source or ""
     digest = getattr(world, "source_sha256", "") or ""
-    if not digest and src and Path(src).is_file():
-        digest = sha256(src)
+    path_of_source = getattr(world, "source_file", "") or src
+    if not digest and path_of_source and Path(path_of_source).is_file():
+        digest = sha256(path_of_source)
     from planner.keys import unpack
 
     blocked = unpack(unique_keys(pack(world.blocked)), 3)

@@ -272,6 +272,7 @@ def test_cli_world_round_trip_and_path_file(tmp_path, capsys):
                  str(path), "--shortcut"]) == 0
     rec = json.loads(path.read_text())
     assert rec["map"] == "room.yaml" and rec["frame"] == "map" and rec["lattice"] == "square"
+    assert rec["map_sha256"] == planner._world_file.sha256(yaml)
     assert rec["radius"] == 0.05 and rec["cell_volume"] == 0.0009 and rec["dim"] == 2
     assert rec["start"] == [-0.7, 0.0] and rec["goal"] == [0.3, 0.3]
     assert rec["unknown_cells"] == 0 and rec["unknown_policy"] == "blocked"
