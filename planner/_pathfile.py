@@ -48,10 +48,16 @@ def path_record(res, world, start, goal) -> dict:
     smooth = res.extra.get("smoothed_length")
     path = np.asarray(res.path, dtype=float)
     yaw = headings(path)
+    digest = getattr(world, "source_sha256", "") or ""
+    src_file = getattr(world, "source_file", "")
+    if not digest and src_file and Path(src_file).is_file():
+        from planner._world_file import sha256
+
+        digest = sha256(src_file)
     pts = path[:, :2] if world.dim == 2 else path
     return {
         "map": Path(src).name if src else None,
-        "map_sha256": getattr(world, "source_sha256", "") or None,
+        "map_sha256": digest or None,
         "frame": getattr(world.obstacles, "frame", None) or "map",
         "dim": world.dim,
         "lattice": res.lattice, "cell_volume": _r(res.cell_volume),

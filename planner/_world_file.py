@@ -4,11 +4,12 @@ File format (numpy ``.npz``, uncompressed for a fast load; written atomically):
 
 * ``format`` = ``"planner.World"``, ``version`` = 1;
 * ``generator`` (3, 3) float64 (m) and ``lattice`` (its name, ``""`` for a custom one);
-* ``blocked`` (M, 3) int32: the distinct blocked cells (inflated for ``radius``; under the
-  ``"blocked"`` policy unknown space too), and ``unknown`` (U,) int64: sorted packed keys
-  (:func:`planner.keys.pack`) of the cells meeting unknown space. Free cells are the
-  in-bounds cells in neither list (not stored: they are the bulk of the box). Both are
-  stored as the world uses them, so loading does no conversion work;
+* ``blocked`` (M, 3) int16 or int32 (the smallest that holds them): the distinct in-bounds
+  blocked cells (inflated for ``radius``; under the ``"blocked"`` policy unknown space too),
+  and ``unknown`` (U,) int64: sorted packed keys (:func:`planner.keys.pack`) of the in-bounds
+  cells meeting unknown space. Free cells are the in-bounds cells in neither list (not
+  stored: they are the bulk of the box). Cells out of bounds are never free, so a path
+  touches none of them and leaving them out changes no plan and no count;
 * ``bounds`` (2, 3) float64 (m), ``radius`` (m), ``unknown_policy``;
 * ``source`` (the map file name) and ``source_sha256`` (hex digest of its bytes, ``""`` for
   in-memory data); ``dim`` (2 for a 2D map planned on a prism of its 2D lattice).
@@ -68,16 +69,22 @@ def save_world(world, path: str | os.PathLike) -> None:
 
     src = world.source or ""
     digest = getattr(world, "source_sha256", "") or ""
-    if not digest and src and Path(src).is_file():
-        digest = sha256(src)
+    path_of_source = getattr(world, "source_file", "") or src
+    if not digest and path_of_source and Path(path_of_source).is_file():
+        digest = sha256(path_of_source)
     from planner.keys import unpack
 
-    blocked = unpack(unique_keys(pack(world.blocked)), 3).astype(np.int32)
+    blocked = unpack(unique_keys(pack(world.blocked)), 3)
+    blocked = blocked[world.in_bounds(blocked)]
+    small = np.int16 if not len(blocked) or np.abs(blocked).max() < 2**15 else np.int32
+    blocked = blocked.astype(small)
+    unknown = world.unknown
+    unknown = pack(unknown[world.in_bounds(unknown)])
     arrays = {
         "format": np.array(FORMAT), "version": np.array(VERSION, dtype=np.int64),
         "generator": np.asarray(world.lattice.generator, dtype=np.float64),
         "lattice": np.array(world.lattice.name or ""),
-        "blocked": blocked, "unknown": world._unknown_keys,
+        "blocked": blocked, "unknown": unknown,
         "bounds": world.bounds, "radius": np.array(world.radius),
         "unknown_policy": np.array(world.unknown_policy),
         "source": np.array(Path(src).name if src else ""),

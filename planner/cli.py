@@ -399,6 +399,16 @@ def _check_neighbors(lattices, neighbors: str, method: str) -> None:
         (lat if isinstance(lat, Lattice) else Lattice.named(lat)).neighbors(neighbors)
 
 
+def _check_dim(world, a) -> None:
+    """x,y points only on a 2D map: the parser cannot know the map's dimension."""
+    for opt in ("start", "goal"):
+        v = getattr(a, opt, None)
+        if v is not None and len(v) != (3 if world.dim == 3 else len(v)):
+            text = ",".join(f"{x:g}" for x in v)
+            raise PlannerError(f"argument --{opt}: expected three finite numbers x,y,z, got "
+                               f"{text!r} (x,y only on a 2D map)")
+
+
 def _cmd_plan(a) -> int:
     from planner import api
     from planner.analysis import compare
@@ -406,6 +416,7 @@ def _cmd_plan(a) -> int:
     _check_neighbors([a.generator if a.generator is not None else a.lattice], a.neighbors,
                      a.method)
     world, label = _build(a)
+    _check_dim(world, a)
     res = api.plan(
         world, a.start, a.goal, method=a.method, neighbors=a.neighbors,
         corner_cutting=a.corner_cutting, shortcut=a.shortcut, time_limit=a.time, seed=a.seed,

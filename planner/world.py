@@ -32,6 +32,7 @@ from planner.keys import pack
 from planner.lattice import Lattice
 from planner.lattice._quantize import Quantizer
 from planner.voxels._checks import unique_keys
+from planner.world_unknown import UnknownSpace
 
 __all__ = ["World", "DENSE_BUDGET", "Occupancy", "ValidityChecker", "Walk", "as_point"]
 
@@ -110,7 +111,7 @@ class ValidityChecker:
         return out
 
 
-class World:
+class World(UnknownSpace):
     """Lattice + blocked cells + bounds, built complete.
 
     Parameters
@@ -264,43 +265,6 @@ class World:
         """``"dense"`` or ``"hash"`` (module docstring)."""
         return "dense" if self.occupancy.mode == 0 else "hash"
 
-    @property
-    def unknown(self) -> np.ndarray:
-        """(U, 3) int64 cells whose closed Voronoi cell meets unknown space (empty when the
-        map says nothing is unknown: a plain cloud, where everything not occupied is free)."""
-        from planner.keys import unpack
-
-        return unpack(self._unknown_keys, 3)
-
-    @property
-    def n_unknown(self) -> int:
-        """Number of cells meeting unknown space."""
-        return len(self._unknown_keys)
-
-    def is_unknown(self, indices: np.ndarray) -> np.ndarray:
-        """(N,) bool: the cell meets unknown space (no lookup counted).
-
-        Each cell's state is one of: *blocked* (not :meth:`is_free`: out of bounds, within
-        the radius of an obstacle, or, under ``unknown_policy == "blocked"``, within the
-        radius of unknown space), *unknown* (free to plan through only under the ``"free"``
-        policy; this test) or *free* (observed free, or a plain cloud's non-occupied space).
-        """
-        w = _cells(indices)
-        if not len(self._unknown_keys) or not len(w):
-            return np.zeros(len(w), dtype=bool)
-        k = pack(w)
-        pos = np.minimum(np.searchsorted(self._unknown_keys, k), len(self._unknown_keys) - 1)
-        return self._unknown_keys[pos] == k
-
-    @property
-    def unknown_note(self) -> str:
-        """One line saying how unknown space is treated, for results and reports."""
-        if self.unknown_policy == "blocked":
-            return "unknown space blocked (with the robot radius)"
-        if not len(self._unknown_keys):
-            return "no free-space information: everything in bounds not occupied is free"
-        return "unknown space planned through as free"
-
     def blocked_centres(self) -> np.ndarray:
         """(M, 3) centres of the blocked cells (m)."""
         return self._lattice.to_world(self._blocked)
@@ -443,15 +407,6 @@ class World:
         hint = "; no free cell nearby" if near is None else (
             f"; nearest free cell centre: {_fmt(self._lattice.to_world(near[None])[0])}")
         raise PlanError(f"{label} is {where}{hint}")
-
-    def _near_unknown(self, cell: np.ndarray) -> bool:
-        """Unknown space is blocked and the cell is unknown or within the radius of it."""
-        if self.unknown_policy != "blocked" or not len(self._unknown_keys):
-            return False
-        from planner.voxels import inflation_stencil
-
-        near = cell[None] + inflation_stencil(self._lattice, self.radius)
-        return bool(self.is_unknown(near).any())
 
     def nearest_free(self, cell: np.ndarray, max_radius: float | None = None) -> np.ndarray | None:
         """Nearest free cell to ``cell`` by centre distance, searching outward in growing

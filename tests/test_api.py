@@ -152,7 +152,7 @@ def test_cli_exit_status_and_one_line_errors(wall_file, tmp_path, capsys):
     # x,y is a 2D map's point: on a 3D map the world refuses it in one line
     assert main(["plan", str(wall_file), *common, "--start", "1,2", "--goal", "8,3,1.5"]) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "start must be three finite numbers" in err
+    assert err.count("\n") == 1 and "--start: expected three finite numbers" in err
     assert main(["plan", str(tmp_path / "missing.ply"), "--start", "2,3,1.5",
                  "--goal", "8,3,1.5"]) == 2
     err = capsys.readouterr().err

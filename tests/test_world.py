@@ -36,14 +36,28 @@ def _room(res: float = 0.1) -> Obstacles:
                      resolution=res, source="room")
 
 
-def _unknown_voxels(obst: Obstacles, res: float, pad: float) -> tuple[np.ndarray, np.ndarray]:
-    lo, hi = obst.bounds[0] - pad, obst.bounds[1] + pad
-    ax = [np.arange(a, b, res) + res / 2 for a, b in zip(lo, hi, strict=True)]
-    c = np.stack(np.meshgrid(*ax, indexing="ij"), -1).reshape(-1, 3)
-    known = np.concatenate([obst.boxes, obst.free_boxes])
-    d = np.abs(c[:, None] - known[None]).max(axis=2).min(axis=1)
-    u = c[d > res / 4]
-    return u - res / 2, u + res / 2
+def _unknown_voxels(obst: Obstacles, res: float, pad: float):
+    """Unknown space of a grid map over its bounds padded by ``pad``: a lookup of the unknown
+    voxels and the boundary ones (a known voxel among their 26 neighbours) as boxes."""
+    lo = obst.bounds[0] - pad
+    n = np.ceil((obst.bounds[1] + pad - lo) / res).astype(int)
+    known = np.zeros(n, dtype=bool)
+    for c in np.concatenate([obst.boxes, obst.free_boxes]):
+        known[tuple(np.floor((c - lo) / res).astype(int))] = True
+    p = np.pad(known, 1)
+    near = np.zeros_like(known)
+    for o in np.ndindex(3, 3, 3):
+        near |= p[o[0]: o[0] + n[0], o[1]: o[1] + n[1], o[2]: o[2] + n[2]]
+    edge = lo + np.argwhere(~known & near) * res
+
+    def inside(pts: np.ndarray) -> np.ndarray:
+        v = np.floor((pts - lo) / res).astype(int)
+        ok = np.all((v >= 0) & (v < n), axis=1)
+        out = ~ok  # beyond the padded grid: unknown
+        out[ok] = ~known[tuple(v[ok].T)]
+        return out
+
+    return inside, edge, edge + res
 
 
 def test_octomap_leaves_are_inflated_once_exactly():
@@ -78,7 +92,7 @@ def test_no_usable_cell_comes_closer_than_the_radius_to_unknown_space(name):
     obst, r = _room(), 0.15
     w = planner.build_world(obst, name, cell_volume=0.08**3, radius=r)
     assert w.unknown_policy == "blocked" and w.n_unknown > 0
-    lo, hi = _unknown_voxels(obst, 0.1, 0.6)
+    inside, lo, hi = _unknown_voxels(obst, 0.1, 0.6)
     cells = w.lattice.quantize(np.stack(np.meshgrid(
         *[np.arange(0, 2.001, 0.04)] * 2, np.arange(0, 1.001, 0.04), indexing="ij"),
         -1).reshape(-1, 3))
@@ -88,7 +102,8 @@ def test_no_usable_cell_comes_closer_than_the_radius_to_unknown_space(name):
     verts = w.lattice.voronoi.vertices
     pts = (w.lattice.to_world(usable)[:, None] + verts[None]).reshape(-1, 3)
     pts = np.concatenate([pts, w.lattice.to_world(usable)])
-    for i in range(0, len(pts), 2000):
+    assert not inside(pts).any()
+    for i in range(0, len(pts), 2000):  # the nearest unknown point is on a boundary voxel
         assert _box_dist(pts[i: i + 2000], lo, hi).min() >= r - 1e-9
     # and the robot also keeps r from the wall
     wl, wh = obst.boxes - 0.05, obst.boxes + 0.05
@@ -136,6 +151,11 @@ def test_posed_scan_rays_mark_free_space():
     assert w.is_free(q).tolist() == [True, False, False]
 
 
+def _in_bounds_count(world, cells: np.ndarray) -> int:
+    cells = np.unique(cells, axis=0)
+    return int(world.in_bounds(cells).sum())
+
+
 def test_saved_world_round_trip_and_mismatches(tmp_path):
     obst = _room()
     w = planner.build_world(obst, "bcc", cell_volume=0.04**3, radius=0.03)
@@ -143,7 +163,9 @@ def test_saved_world_round_trip_and_mismatches(tmp_path):
     planner._world_file.save_world(w, out)
     back = planner.build_world(out)
     assert back.lattice == w.lattice and back.lattice.name == "bcc"
-    assert back.n_blocked == w.n_blocked and back.n_unknown == w.n_unknown
+    # out-of-bounds cells are never free, so the file keeps the in-bounds ones only
+    assert back.n_blocked == _in_bounds_count(w, w.blocked)
+    assert back.n_unknown == _in_bounds_count(w, w.unknown) > 0
     assert back.radius == 0.03 and back.unknown_policy == "blocked"
     assert np.array_equal(back.bounds, w.bounds)
     a = planner.plan(w, (0.5, 0.5, 0.5), (1.5, 0.5, 0.5))
@@ -213,7 +235,8 @@ def test_saved_2d_world_keeps_planar_moves(tmp_path):
     planner._world_file.save_world(w, out)
     back = planner.build_world(out)
     assert back.dim == 2 and back.lattice.neighbors("full").shape == (6, 3)
-    assert back.n_blocked == w.n_blocked and back.n_unknown == w.n_unknown
+    assert back.n_blocked == _in_bounds_count(w, w.blocked)
+    assert back.n_unknown == _in_bounds_count(w, w.unknown) > 0
     a = planner.plan(w, (-0.7, 0.0), (0.3, 0.3))
     b = planner.plan(back, (-0.7, 0.0), (0.3, 0.3))
     assert a.found and np.allclose(a.path, b.path)
@@ -249,6 +272,7 @@ def test_cli_world_round_trip_and_path_file(tmp_path, capsys):
                  str(path), "--shortcut"]) == 0
     rec = json.loads(path.read_text())
     assert rec["map"] == "room.yaml" and rec["frame"] == "map" and rec["lattice"] == "square"
+    assert rec["map_sha256"] == planner._world_file.sha256(yaml)
     assert rec["radius"] == 0.05 and rec["cell_volume"] == 0.0009 and rec["dim"] == 2
     assert rec["start"] == [-0.7, 0.0] and rec["goal"] == [0.3, 0.3]
     assert rec["unknown_cells"] == 0 and rec["unknown_policy"] == "blocked"
