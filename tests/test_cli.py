@@ -136,7 +136,7 @@ def test_missing_output_folders_are_created_alike(tmp_path):
     (["compare", "office", "--lattices", "fcc,diamond"], "diamond"),
     (["lattices", "--points", "0"], "--points"),
     (["lattices", "--points", "-1"], "--points"),
-    (["plan", "office", "--start", "1,2", "--goal", "2,2,1"], "start must be three"),
+    (["plan", "office", "--start", "1,2", "--goal", "2,2,1"], "--start"),
     (["plan", "office", "--start", "2,2,1", "--goal", "18,10,1", "--seed", "-5"], "--seed"),
     (["plan", "office", "--start", "2,2,1", "--goal", "18,10,1", "--seed", str(2**70)],
      "--seed"),
