@@ -336,3 +336,16 @@ def test_operating_points_compare_lattices_on_the_queries_all_solved():
     assert pts["cubic"]["success"] == 0.7 and pts["fcc"]["success"] == 1.0
     assert pts["fcc"]["common_queries"] == pts["cubic"]["common_queries"] == 7
     assert pts["fcc"]["cell_checks"] < pts["cubic"]["cell_checks"] < 1e9
+
+
+def test_a_cached_world_is_the_world_it_was_built_as(tmp_path):
+    from planner.bench.worlds import cached_world, map_frame
+
+    p = str(map_path("office"))
+    frame = map_frame(p)
+    q = (np.cos(0.3), 0.0, 0.0, np.sin(0.3))
+    built = cached_world(str(tmp_path), frame, p, "fcc", 0.03, 0.2, q, True)
+    loaded = cached_world(str(tmp_path), frame, p, "fcc", 0.03, 0.2, q, True)
+    assert loaded is not built and len(list(tmp_path.iterdir())) == 1
+    assert {tuple(c) for c in built.blocked} == {tuple(c) for c in loaded.blocked}
+    assert np.allclose(built.bounds, loaded.bounds)
