@@ -349,3 +349,14 @@ def test_a_cached_world_is_the_world_it_was_built_as(tmp_path):
     assert loaded is not built and len(list(tmp_path.iterdir())) == 1
     assert {tuple(c) for c in built.blocked} == {tuple(c) for c in loaded.blocked}
     assert np.allclose(built.bounds, loaded.bounds)
+
+
+def test_worlds_built_in_parallel_give_the_same_queries(tmp_path):
+    p = tmp_path / "rot.toml"
+    p.write_text(ROTATED.format(map=map_path("office").as_posix()))
+    suite = load_suite(str(p))
+    _, serial = runner.plan_tasks(suite, log=lambda m: None)
+    _, parallel = runner.plan_tasks(suite, log=lambda m: None, jobs=2,
+                                    world_cache=str(tmp_path / "worlds"))
+    assert len(list((tmp_path / "worlds").iterdir())) == 2 * len(suite.lattices)
+    assert json.dumps(serial, sort_keys=True) == json.dumps(parallel, sort_keys=True)

@@ -90,7 +90,8 @@ def run_suite(name: str, *, out: str | None = None, jobs: int = 1,
             except ValueError:
                 saved = None  # a damaged record: sample again
         tasks, record = runner.plan_tasks(suite, log=log, saved=saved,
-                                          world_cache=str(folder / "worlds"))
+                                          world_cache=str(folder / "worlds"),
+                                          jobs=1 if scheduler else jobs)
         write_text_atomic(saved_path, json.dumps(record, indent=1))
         results = folder / "results.jsonl"
         interrupted = None
