@@ -146,11 +146,22 @@ def _build_cached(spec: tuple) -> None:
 
 
 def _prebuild(specs: list[tuple], jobs: int) -> None:
-    """Build the worlds the query sampler needs in ``jobs`` processes, into the cache."""
-    with ProcessPoolExecutor(max_workers=jobs, mp_context=get_context("spawn"),
-                             initializer=_worker_init) as ex:
-        for fut in as_completed([ex.submit(_build_cached, s) for s in specs]):
-            fut.result()
+    """Build the worlds the query sampler needs in ``jobs`` processes, into the cache.
+
+    SIGINT / SIGTERM raise :class:`Interrupted` and stop the builders at once (finished
+    worlds stay in the cache for ``--resume``).
+    """
+    ex = ProcessPoolExecutor(max_workers=jobs, mp_context=get_context("spawn"),
+                             initializer=_worker_init)
+    try:
+        with _signals_raise():
+            for fut in as_completed([ex.submit(_build_cached, s) for s in specs]):
+                fut.result()
+    except Interrupted as exc:
+        ex.shutdown(wait=False, cancel_futures=True)
+        _stop(exc.processes)
+        raise
+    ex.shutdown()
 
 
 def plan_tasks(suite: Suite, log=print, saved: dict | None = None,
