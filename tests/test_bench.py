@@ -336,3 +336,27 @@ def test_operating_points_compare_lattices_on_the_queries_all_solved():
     assert pts["cubic"]["success"] == 0.7 and pts["fcc"]["success"] == 1.0
     assert pts["fcc"]["common_queries"] == pts["cubic"]["common_queries"] == 7
     assert pts["fcc"]["cell_checks"] < pts["cubic"]["cell_checks"] < 1e9
+
+
+def test_a_cached_world_is_the_world_it_was_built_as(tmp_path):
+    from planner.bench.worlds import cached_world, map_frame
+
+    p = str(map_path("office"))
+    frame = map_frame(p)
+    q = (np.cos(0.3), 0.0, 0.0, np.sin(0.3))
+    built = cached_world(str(tmp_path), frame, p, "fcc", 0.03, 0.2, q, True)
+    loaded = cached_world(str(tmp_path), frame, p, "fcc", 0.03, 0.2, q, True)
+    assert loaded is not built and len(list(tmp_path.iterdir())) == 1
+    assert {tuple(c) for c in built.blocked} == {tuple(c) for c in loaded.blocked}
+    assert np.allclose(built.bounds, loaded.bounds)
+
+
+def test_worlds_built_in_parallel_give_the_same_queries(tmp_path):
+    p = tmp_path / "rot.toml"
+    p.write_text(ROTATED.format(map=map_path("office").as_posix()))
+    suite = load_suite(str(p))
+    _, serial = runner.plan_tasks(suite, log=lambda m: None)
+    _, parallel = runner.plan_tasks(suite, log=lambda m: None, jobs=2,
+                                    world_cache=str(tmp_path / "worlds"))
+    assert len(list((tmp_path / "worlds").iterdir())) == 2 * len(suite.lattices)
+    assert json.dumps(serial, sort_keys=True) == json.dumps(parallel, sort_keys=True)

@@ -87,6 +87,13 @@ def _save(fig, path: Path) -> Path:
     return path
 
 
+def _log_y(ax, y) -> None:
+    """Log scale when there is something positive to show (no query solved by all: none)."""
+    y = np.asarray(y, dtype=float)
+    if np.any(np.isfinite(y) & (y > 0)):
+        ax.set_yscale("log")
+
+
 def _colour(lat: str) -> str:
     return LATTICE_COLORS.get(lat, OTHER_COLOR)
 
@@ -139,7 +146,7 @@ def plot_tradeoffs(rows: list[dict], out_dir: Path) -> list[Path]:
             order = np.argsort(x[front])
             ax.step(x[front][order], y[front][order], where="post", color="black", lw=0.8,
                     alpha=0.6, zorder=2)
-            ax.set_yscale("log")
+            _log_y(ax, y)
             ax.set_xlabel(f"median {name} path length / best on the query")
             ax.set_ylabel("median cell checks per query")
             ax.set_title(f"{Path(m).name}: checks vs {name} length", fontsize=9)
@@ -185,7 +192,7 @@ def plot_tradeoffs(rows: list[dict], out_dir: Path) -> list[Path]:
         for p in mp:
             ax.scatter(p["length_ratio"], p["seconds"], color=_colour(p["lattice"]),
                        marker=_MARKERS.get(p["method"], "x"), s=30)
-        ax.set_yscale("log")
+        _log_y(ax, [p["seconds"] for p in mp])
         ax.set_xlabel("median smoothed length / best on the query")
         ax.set_ylabel("median search time (s)")
         ax.set_title(f"{Path(m).name}: time vs length", fontsize=9)

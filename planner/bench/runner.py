@@ -137,13 +137,41 @@ def run_task(task: dict) -> list[dict]:
     return rows
 
 
+def _build_cached(spec: tuple) -> None:
+    """Build one world into the cache (a pool task: the world stays in its file)."""
+    from planner.bench.worlds import cached_world
+
+    cache, path, *rest = spec
+    cached_world(cache, _frame(path), path, *rest)
+
+
+def _prebuild(specs: list[tuple], jobs: int) -> None:
+    """Build the worlds the query sampler needs in ``jobs`` processes, into the cache.
+
+    SIGINT / SIGTERM raise :class:`Interrupted` and stop the builders at once (finished
+    worlds stay in the cache for ``--resume``).
+    """
+    ex = ProcessPoolExecutor(max_workers=jobs, mp_context=get_context("spawn"),
+                             initializer=_worker_init)
+    try:
+        with _signals_raise():
+            for fut in as_completed([ex.submit(_build_cached, s) for s in specs]):
+                fut.result()
+    except Interrupted as exc:
+        ex.shutdown(wait=False, cancel_futures=True)
+        _stop(exc.processes)
+        raise
+    ex.shutdown()
+
+
 def plan_tasks(suite: Suite, log=print, saved: dict | None = None,
-               world_cache: str | None = None) -> tuple[list[dict], dict]:
+               world_cache: str | None = None, jobs: int = 1) -> tuple[list[dict], dict]:
     """Expand a suite into tasks; sample the queries once per map x volume x radius x
     rotation group.
 
     ``world_cache``: a folder where the worlds built for sampling are kept for the workers
     (:func:`planner.bench.worlds.cached_world`); None builds them again in every process.
+    With it and ``jobs`` > 1 the sampler's worlds are built in ``jobs`` processes first.
 
     ``saved`` is a record returned earlier (kept in ``queries.json`` beside the results):
     its groups' queries are reused as they are, so ``--resume`` does not sample again.
@@ -156,13 +184,28 @@ def plan_tasks(suite: Suite, log=print, saved: dict | None = None,
     rotated = suite.rotation != "none"
     quats = sample_rotations(suite.rotation, suite.rotations, seed=suite.seed)
     tasks, record = [], {}
+    def group_name(m, cv, radius, ri):
+        return f"{Path(m.path).name} cell {cv:g} m^3 radius {radius:g} m" + (
+            f" rotation {ri}" if rotated else "")
+
+    n_wanted = {m.path: m.queries or suite.queries for m in suite.maps}
     for m in suite.maps:
         frame = map_frame(m.path) if not m.scenarios else None
+        if world_cache and jobs > 1 and not m.scenarios:
+            specs = [(world_cache, m.path, lat, cv, radius, tuple(q.tolist()), rotated)
+                     for cv in m.cell_volumes for radius in m.radii
+                     for ri, q in enumerate(quats)
+                     if (saved or {}).get(group_name(m, cv, radius, ri), {}).get("wanted")
+                     != n_wanted[m.path]
+                     for lat in suite.lattices]
+            if specs:
+                log(f"building {len(specs)} worlds of {Path(m.path).name} in {jobs} "
+                    f"processes ...")
+                _prebuild(specs, jobs)
         for cv in m.cell_volumes:
             for radius in m.radii:
                 for ri, quat in enumerate(quats):
-                    group = f"{Path(m.path).name} cell {cv:g} m^3 radius {radius:g} m" + (
-                        f" rotation {ri}" if rotated else "")
+                    group = group_name(m, cv, radius, ri)
                     common = {"suite": suite.name, "map": m.path, "cell_volume": cv,
                               "radius": radius, "rotation": ri, "quaternion": quat.tolist(),
                               "rotated": rotated, "world_cache": world_cache}

@@ -89,8 +89,14 @@ def run_suite(name: str, *, out: str | None = None, jobs: int = 1,
                 saved = json.loads(saved_path.read_text())
             except ValueError:
                 saved = None  # a damaged record: sample again
-        tasks, record = runner.plan_tasks(suite, log=log, saved=saved,
-                                          world_cache=str(folder / "worlds"))
+        try:
+            tasks, record = runner.plan_tasks(suite, log=log, saved=saved,
+                                              world_cache=str(folder / "worlds"),
+                                              jobs=1 if scheduler else jobs)
+        except runner.Interrupted as exc:  # while building worlds: nothing run yet
+            print(f"\nplanner bench: {exc} while building the worlds; built ones are kept "
+                  f"in {folder / 'worlds'} for --resume", file=sys.stderr)
+            return exc.exit_code
         write_text_atomic(saved_path, json.dumps(record, indent=1))
         results = folder / "results.jsonl"
         interrupted = None

@@ -183,8 +183,9 @@ def cached_world(cache_dir: str | None, frame: MapFrame, map_path: str, lattice:
 
     The query sampler and every worker need the same worlds; building them is the dominant
     cost of a rotated suite, so the blocked cells and bounds are kept in ``cache_dir``
-    (``.npz``, written atomically) and reloaded.  ``rotated`` False builds with
-    :func:`planner.build_world` (an unrotated suite), else :func:`rotated_world`.
+    (compressed ``.npz`` of the sorted keys' steps, written atomically) and reloaded.
+    ``rotated`` False builds with :func:`planner.build_world` (an unrotated suite), else
+    :func:`rotated_world`.
     """
     import hashlib
 
@@ -213,7 +214,8 @@ def cached_world(cache_dir: str | None, frame: MapFrame, map_path: str, lattice:
                 obst = frame.obstacles
                 if rotated:
                     obst = obst.rotated(quaternion_matrix(quaternion), frame.centre)[0]
-                return World(lat, unpack(z["keys"], 3), z["bounds"], source=frame.obstacles.source,
+                keys = np.cumsum(z["key_steps"])
+                return World(lat, unpack(keys, 3), z["bounds"], source=frame.obstacles.source,
                              radius=float(radius), obstacles=obst,
                              build_seconds=float(z["build_seconds"]))
         except (OSError, ValueError, KeyError):
@@ -221,5 +223,8 @@ def cached_world(cache_dir: str | None, frame: MapFrame, map_path: str, lattice:
     w = build()
     f.parent.mkdir(parents=True, exist_ok=True)
     with atomic_path(f) as tmp, open(tmp, "wb") as fh:
-        np.savez(fh, keys=pack(w.blocked), bounds=w.bounds, build_seconds=w.build_seconds or 0.0)
+        # sorted keys as steps compress ~100x (a rotated OctoMap blocks millions of unknown cells)
+        keys = np.unique(pack(w.blocked))
+        np.savez_compressed(fh, key_steps=np.diff(keys, prepend=np.int64(0)), bounds=w.bounds,
+                            build_seconds=w.build_seconds or 0.0)
     return w
