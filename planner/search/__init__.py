@@ -10,6 +10,10 @@ table, cell -> slot map), :mod:`~planner.search._astar` (the kernel),
 :mod:`~planner.search._theta` (any-angle parent rules), :mod:`~planner.search._los` (line
 of sight, shortcutting), :mod:`~planner.search.reference` (networkx backend).
 
+Timing: :attr:`SearchResult.seconds` is the kernel time only; the first search in a process
+first compiles or loads the kernels (:func:`warm_up`, reported as
+:attr:`SearchResult.compile_seconds`).
+
 Budget: every search is bounded. ``max_expansions`` (default: the memory budget divided by
 the bytes a node costs, :data:`planner.search._nodes.BYTES_PER_NODE`) stops it with status
 ``"budget"``; the memory budget defaults to a quarter of the physical memory

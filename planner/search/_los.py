@@ -3,7 +3,8 @@ checker (:mod:`planner._world_kernels`) on reusable scratch, and greedy path sho
 
 Two cells see each other iff every cell whose closed Voronoi cell the centre-to-centre
 segment touches is free (the same test as a motion check of :class:`planner.world.
-ValidityChecker`).
+ValidityChecker`). On the cubic lattice (:func:`cubic_sight`) those cells are enumerated
+directly by nested clipping, with no walk search; tests check both give the same cells.
 """
 
 from __future__ import annotations

@@ -7,6 +7,10 @@ keys. Neighbouring cells share a page, so a lookup is usually a cached-page hit 
 nearby load: memory stays proportional to the region the search touches, with near-dense
 locality.
 
+On a dense occupancy grid whose box fits ``planner.search._driver.DENSE_SLOT_BUDGET`` the
+map is instead one int32 per grid cell (``SlotMap.dense``, one load per lookup), reused
+across the searches on that grid and cleared at the touched cells after each.
+
 Both are fixed-size inside the kernels; the driver (:func:`planner.search._driver.run`)
 doubles them when a kernel asks (``RUN_GROW``).
 """
