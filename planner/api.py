@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from planner.errors import MapError, PlanError
+from planner.errors import MapError, PlanError, PlannerError
 from planner.lattice import Lattice
 
 __all__ = [
@@ -177,6 +177,7 @@ def build_world(
     t0 = time.perf_counter()
     side = _sidecar(source)
     obst = as_obstacles(source, format)
+    where = "" if bounds is not None else f"{obst.source}: "  # the map's own bounds
     if bounds is None:
         if obst.bounds is not None:
             bounds = obst.bounds
@@ -186,7 +187,8 @@ def build_world(
             bounds = _obstacle_bounds(obst)
     bounds = np.asarray(bounds, dtype=float)
     if bounds.shape != (2, 3) or not np.isfinite(bounds).all() or np.any(bounds[1] < bounds[0]):
-        raise MapError(f"bounds must be [[xmin, ymin, zmin], [xmax, ymax, zmax]], got {bounds}")
+        raise MapError(f"{where}bounds must be [[xmin, ymin, zmin], [xmax, ymax, zmax]], got "
+                       f"{bounds.tolist()}")
     if (isinstance(radius, bool) or not isinstance(radius, int | float | np.floating)
             or not math.isfinite(radius) or radius < 0):
         raise PlanError(f"radius must be a non-negative number of metres, got {radius!r}")
@@ -199,7 +201,12 @@ def build_world(
         if cell_volume is None:
             cell_volume = side.get("cell_volume") or default_cell_volume(obst, bounds)
         lat = Lattice.named(lattice, cell_volume=cell_volume)
-    cells = inflated_obstacles(obst, lat, radius).indices
+    try:
+        cells = inflated_obstacles(obst, lat, radius).indices
+    except PlannerError as exc:  # name the map, as the readers do
+        if str(obst.source) in str(exc):
+            raise
+        raise type(exc)(f"{obst.source}: {exc}") from None
     return World(lat, cells, bounds, source=obst.source, radius=float(radius), obstacles=obst,
                  build_seconds=time.perf_counter() - t0)
 
@@ -275,7 +282,7 @@ def plan(
         OMPL planning time (s) and RNG seed (an integer in [0, 2**32)).
     max_expansions, memory_budget
         Search budget (:func:`planner.search.search`): status ``"budget"`` when exceeded.
-        Defaults: the nodes that fit in a quarter of the physical memory.
+        Defaults: the nodes that fit in an eighth of the physical memory.
 
     Returns
     -------

@@ -196,7 +196,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--memory-budget", type=_size, default=None,
                         help="bytes one step (inflation, grid, search) may use, e.g. 4G or "
                              "512M; refused in one line above it (None: "
-                             "$PLANNER_MEMORY_BUDGET or a quarter of the physical memory); "
+                             "$PLANNER_MEMORY_BUDGET or an eighth of the physical memory); "
                              "any command")
     parser.add_argument("--max-expansions", type=_int_range(1), default=None,
                         help="give up a search after this many expansions (exit 1, status "

@@ -12,7 +12,7 @@ of sight, shortcutting), :mod:`~planner.search.reference` (networkx backend).
 
 Budget: every search is bounded. ``max_expansions`` (default: the memory budget divided by
 the bytes a node costs, :data:`planner.search._nodes.BYTES_PER_NODE`) stops it with status
-``"budget"``; the memory budget defaults to a quarter of the physical memory
+``"budget"``; the memory budget defaults to an eighth of the physical memory
 (:func:`default_memory_budget`).
 
 Examples
@@ -63,7 +63,7 @@ MEMORY_SHARE = _budget.MEMORY_SHARE  # of physical memory, the default memory bu
 
 def default_memory_budget() -> int:
     """Bytes a search may use by default: the one memory budget of :mod:`planner.budget`
-    (``PLANNER_MEMORY_BUDGET`` / ``--memory-budget``, else a quarter of the physical
+    (``PLANNER_MEMORY_BUDGET`` / ``--memory-budget``, else an eighth of the physical
     memory)."""
     return _budget.memory_budget()
 
