@@ -342,7 +342,7 @@ def _check_neighbors(lattices, neighbors: str, method: str) -> None:
     do not depend on the cell volume)."""
     from planner.lattice import Lattice
 
-    if method.startswith("ompl"):
+    if method.startswith("ompl") or neighbors in ("face", "full"):
         return
     for lat in lattices:
         (lat if isinstance(lat, Lattice) else Lattice.named(lat)).neighbors(neighbors)
