@@ -8,6 +8,7 @@ from __future__ import annotations
 import json
 import math
 import time
+import warnings
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -135,7 +136,24 @@ def default_cell_volume(obst, bounds: np.ndarray | None = None) -> float:
         return float(obst.resolution) ** 3
     b = _obstacle_bounds(obst) if bounds is None else np.asarray(bounds, dtype=float)
     vol = float(np.prod(np.maximum(b[1] - b[0], 1e-3)))
+    _warn_far_points(obst, b)
     return vol / _DEFAULT_CELLS
+
+
+def _warn_far_points(obst, b: np.ndarray) -> None:
+    """Warn when a few far points (outliers) stretch the box the default cell volume is
+    taken from: the cells then come out much larger than the bulk of the map suggests."""
+    pts = obst.points
+    if len(pts) < 100 or len(obst.boxes):
+        return
+    lo, hi = np.percentile(pts, [0.5, 99.5], axis=0)
+    bulk = np.maximum(hi - lo, 1e-3)
+    if np.any(np.maximum(b[1] - b[0], 1e-3) > 10 * bulk):
+        warnings.warn(f"{obst.source}: a few far points stretch the map box to "
+                      f"{np.round(b[1] - b[0], 3).tolist()} m while 99% of the points lie "
+                      f"within {np.round(bulk, 3).tolist()} m; the default cell volume "
+                      "follows the whole box (pass a cell volume or bounds)", RuntimeWarning,
+                      stacklevel=3)
 
 
 def build_world(

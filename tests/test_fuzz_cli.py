@@ -17,6 +17,7 @@ every command.
 
 from __future__ import annotations
 
+import gzip
 import importlib.util
 import json
 import os
@@ -24,6 +25,7 @@ import re
 import resource
 import subprocess
 import sys
+import time
 from collections import Counter
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
@@ -249,3 +251,138 @@ def test_every_corpus_case_through_the_api(cases):
             counts[case.reader, "error"] += 1
     for reader in ("suite", "voxels", "sidecar", "3dscen"):
         assert counts[reader, "error"] > 0, reader
+
+
+# -- budgets: refusals within seconds, searches that end ------------------------------------------
+DATA = REPO.parent / "shared" / "data"
+GEB079 = DATA / "octomap" / "geb079.bt"
+DA1 = DATA / "warframe" / "DA1.3dmap"
+
+
+def _refused(argv: list[str], *words: str) -> str:
+    """Run the CLI (3 GB limit); assert one budget error line naming ``words``."""
+    proc = _cli(argv)
+    assert proc is not None, f"hang: {argv}"
+    lines = proc.stderr.strip().splitlines()
+    assert proc.returncode == 2 and len(lines) == 1, proc.stderr[-500:]
+    assert all(w in lines[0] for w in words), lines[0]
+    return lines[0]
+
+
+@pytest.mark.skipif(not GEB079.exists(), reason="shared OctoMap data not present")
+@pytest.mark.parametrize("extra", [["--cell-volume", "1e-9", "--radius", "0"],
+                                   ["--cell-volume", "1e-9", "--radius", "0.2"],
+                                   ["--cell-volume", "1e-6", "--radius", "0"],
+                                   ["--radius", "3"]])
+def test_huge_octomap_worlds_are_refused_by_the_memory_budget(extra):
+    _refused(["plan", str(GEB079), "--start", "0,0,0.5", "--goal", "1,0,0.5", *extra],
+             "geb079.bt", "over the memory budget", "--memory-budget")
+
+
+def test_huge_move_sets_and_gzip_bombs_are_refused(tmp_path):
+    _refused(["plan", "office", "--start", "1,1,1", "--goal", "7.6,7.8,0.8", "--neighbors",
+              "face+1000"], "neighbour shells")
+    bomb = tmp_path / "bomb.xyz.gz"
+    chunk = b"0 0 0\n" * ((1 << 20) // 6)
+    with gzip.open(bomb, "wb") as f:
+        for _ in range(64):  # 64 MB of text, 64 kB compressed
+            f.write(chunk)
+    _refused(["--memory-budget", "64M", "plan", str(bomb), "--radius", "0.1", "--start",
+              "0,0,0", "--goal", "1,1,1"], "bomb.xyz.gz", "decompression budget")
+
+
+def test_any_angle_scratch_does_not_grow_with_the_box():
+    # a 2000 km box: the sight-line scratch is capped by the budget, not sized by the box
+    proc = _cli(["plan", "office", "--method", "lazy-theta", "--start", "1,1,1", "--goal",
+                 "7.6,7.8,0.8", "--bounds", "-1e6,-1e6,-1e6,1e6,1e6,1e6",
+                 "--max-expansions", "50"])
+    assert proc is not None and "Traceback" not in proc.stderr, proc.stderr[-500:]
+    assert proc.returncode == 1 and "search budget exhausted after 50 expansions" in proc.stdout
+
+
+def _sealed(tmp_path: Path, shell: int) -> tuple[Path, str, str]:
+    """DA1 with a closed cube of voxels ``shell`` cells around the first scenario's goal."""
+    lines = DA1.read_text().splitlines()
+    scen = (DATA / "warframe" / "DA1.3dmap.3dscen").read_text().splitlines()[2].split()
+    start, goal = scen[0:3], scen[3:6]
+    g = [int(v) for v in goal]
+    r = range(-shell, shell + 1)
+    walls = {f"{g[0] + i} {g[1] + j} {g[2] + k}" for i in r for j in r for k in r
+             if max(abs(i), abs(j), abs(k)) == shell}
+    keep = [ln for ln in lines[1:] if ln.strip() and ln != " ".join(goal)]
+    path = tmp_path / f"DA1_sealed{shell}.3dmap"
+    path.write_text("\n".join([lines[0], *keep, *sorted(walls - set(keep))]) + "\n")
+    return path, ",".join(start), ",".join(goal)
+
+
+@pytest.mark.skipif(not DA1.exists(), reason="shared Warframe data not present")
+def test_a_sealed_goal_on_a_large_map_is_unreachable_at_once(tmp_path):
+    path, start, goal = _sealed(tmp_path, 2)
+    proc = _cli(["plan", str(path), "--lattice", "cubic", "--cell-volume", "1", "--radius",
+                 "0", "--start", start, "--goal", goal])
+    assert proc is not None and proc.returncode == 1, proc and proc.stderr[-500:]
+    assert "no path (goal unreachable" in proc.stdout and "Traceback" not in proc.stderr
+
+
+@pytest.mark.skipif(not DA1.exists(), reason="shared Warframe data not present")
+def test_an_unreachable_goal_ends_at_the_search_budget(tmp_path):
+    # a pocket too big for the goal probe: the search explores until the node budget the
+    # memory budget allows (256 MB), then answers in one line
+    path, start, goal = _sealed(tmp_path, 12)
+    proc = _cli(["--memory-budget", "256M", "plan", str(path), "--lattice", "cubic",
+                 "--cell-volume", "1", "--radius", "0", "--start", start, "--goal", goal])
+    assert proc is not None and proc.returncode == 1, proc and proc.stderr[-500:]
+    out = proc.stdout.strip().splitlines()
+    assert len(out) == 1 and "search budget exhausted after" in out[0], proc.stdout
+    assert "Traceback" not in proc.stderr
+
+
+# -- kill -9 at three points: no finished row is lost -----------------------------------------
+KILL_SUITE = """name = "killed"
+seed = 3
+queries = 6
+lattices = ["cubic", "fcc"]
+neighbors = ["full"]
+methods = ["astar", "dijkstra"]
+min_distance = 0.3
+
+[[maps]]
+path = "office"
+cell_volumes = [0.004]
+radii = [0.25]
+"""
+
+
+def _rows(results: Path) -> dict:
+    """Finished rows by run key (a last line cut short by the kill does not count)."""
+    from planner.bench import runner
+
+    return {runner.row_key(r): r for r in runner.read_rows(results)} if results.is_file() else {}
+
+
+@pytest.mark.parametrize("point", ["first row", "half the rows", "report"])
+def test_kill_9_loses_no_finished_row(tmp_path, point):
+    suite = tmp_path / "killed.toml"
+    suite.write_text(KILL_SUITE)
+    out = tmp_path / "out"
+    results = out / "results.jsonl"
+    wanted = 2 * 2 * 6
+    need = {"first row": 1, "half the rows": wanted // 2, "report": wanted}[point]
+    proc = subprocess.Popen([sys.executable, "-m", "planner", "bench", str(suite), "--out",
+                             str(out), "--no-progress"], env=_env(),
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    try:
+        while proc.poll() is None and len(_rows(results)) < need:
+            time.sleep(0.005)
+    finally:
+        proc.kill()  # SIGKILL: no handler runs
+        _, err = proc.communicate(timeout=HANG)
+    assert "Traceback" not in err.decode(errors="replace")
+    before = _rows(results)
+    assert len(before) >= min(need, wanted) or proc.returncode == 0, err
+    resumed = _cli(["bench", str(suite), "--out", str(out), "--resume", "--no-progress"])
+    assert resumed is not None and resumed.returncode == 0, resumed and resumed.stderr[-500:]
+    after = _rows(results)
+    assert len(after) == wanted
+    assert all(after[k] == row for k, row in before.items())  # kept, not redone
+    assert "PARTIAL" not in resumed.stdout and (out / "report.md").is_file()

@@ -208,9 +208,10 @@ def _check_raw(path: Path, raw: dict) -> None:
     d = raw.get("min_distance", 0.3)
     if isinstance(d, bool) or not isinstance(d, int | float) or not 0 <= d < math.inf:
         raise bad("min_distance", "a finite number >= 0")
-    for key in _LISTS:
+    for key in _LISTS:  # methods may be empty: an OMPL-only suite
         v = raw.get(key, ["x"])
-        if not isinstance(v, list) or not v or not all(isinstance(x, str) for x in v):
+        if not isinstance(v, list) or not (v or key == "methods") or not all(
+                isinstance(x, str) for x in v):
             raise bad(key, "a non-empty list of names")
     if not isinstance(raw.get("name", ""), str):
         raise bad("name", "a string")
