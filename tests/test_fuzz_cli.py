@@ -18,7 +18,6 @@ every command.
 from __future__ import annotations
 
 import gzip
-import importlib.util
 import json
 import os
 import re
@@ -32,6 +31,7 @@ from pathlib import Path
 from types import SimpleNamespace
 
 import pytest
+from test_fuzz_readers import corpus  # tests/fuzz/make_corpus.py, loaded once
 
 import planner
 from planner import OccupiedVoxelList
@@ -40,12 +40,6 @@ from planner.errors import PlannerError
 from planner.io import load_scenarios, load_sidecar
 
 pytestmark = pytest.mark.filterwarnings("error::RuntimeWarning")
-
-_spec = importlib.util.spec_from_file_location(
-    "make_corpus", Path(__file__).parent / "fuzz" / "make_corpus.py")
-corpus = importlib.util.module_from_spec(_spec)
-sys.modules["make_corpus"] = corpus  # dataclasses look their module up there
-_spec.loader.exec_module(corpus)
 
 FULL = os.environ.get("PLANNER_FUZZ_FULL") == "1"
 ADDRESS_SPACE = 3 * 2**30  # bytes: a run over it would die of MemoryError (a traceback)
