@@ -8,12 +8,13 @@ from __future__ import annotations
 import json
 import math
 import time
+import warnings
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from planner.errors import MapError, PlanError
+from planner.errors import MapError, PlanError, PlannerError
 from planner.lattice import Lattice
 
 __all__ = [
@@ -143,7 +144,24 @@ def default_cell_volume(obst, bounds: np.ndarray | None = None) -> float:
     # A flat or linear cloud (one scan line, a floor) has no thickness: size its cells by its
     # largest extent instead, so that the default does not ask for millimetre cells.
     vol = float(np.prod(np.maximum(ext, max(1e-3, 0.01 * float(ext.max())))))
+    _warn_far_points(obst, b)
     return vol / _DEFAULT_CELLS
+
+
+def _warn_far_points(obst, b: np.ndarray) -> None:
+    """Warn when a few far points (outliers) stretch the box the default cell volume is
+    taken from: the cells then come out much larger than the bulk of the map suggests."""
+    pts = obst.points
+    if len(pts) < 100 or len(obst.boxes):
+        return
+    lo, hi = np.percentile(pts, [0.5, 99.5], axis=0)
+    bulk = np.maximum(hi - lo, 1e-3)
+    if np.any(np.maximum(b[1] - b[0], 1e-3) > 10 * bulk):
+        warnings.warn(f"{obst.source}: a few far points stretch the map box to "
+                      f"{np.round(b[1] - b[0], 3).tolist()} m while 99% of the points lie "
+                      f"within {np.round(bulk, 3).tolist()} m; the default cell volume "
+                      "follows the whole box (pass a cell volume or bounds)", RuntimeWarning,
+                      stacklevel=3)
 
 
 def build_world(
@@ -203,6 +221,7 @@ def build_world(
     radius = 0.0 if radius is None else radius
     side = _sidecar(source)
     obst = as_obstacles(source, format)
+    where = "" if bounds is not None else f"{obst.source}: "  # the map's own bounds
     if bounds is None:
         if obst.bounds is not None:
             bounds = obst.bounds
@@ -213,8 +232,8 @@ def build_world(
     d = obst.dim
     bounds = np.asarray(bounds, dtype=float)
     if bounds.shape != (2, d) or not np.isfinite(bounds).all() or np.any(bounds[1] < bounds[0]):
-        raise MapError(f"bounds must be [[xmin, ...], [xmax, ...]] with {d} numbers each, got "
-                       f"{bounds.tolist()}")
+        raise MapError(f"{where}bounds must be [[xmin, ...], [xmax, ...]] with {d} numbers "
+                       f"each, got {bounds.tolist()}")
     if (isinstance(radius, bool) or not isinstance(radius, int | float | np.floating)
             or not math.isfinite(radius) or radius < 0):
         raise PlanError(f"radius must be a non-negative number of metres, got {radius!r}")
@@ -229,7 +248,12 @@ def build_world(
         from planner.lattice.planar import planar_prism
 
         obst, bounds, lat = _lift(obst), _lift_bounds(bounds), planar_prism(lat)
-    cells = inflated_obstacles(obst, lat, radius).indices
+    try:
+        cells = inflated_obstacles(obst, lat, radius).indices
+    except PlannerError as exc:  # name the map, as the readers do
+        if str(obst.source) in str(exc):
+            raise
+        raise type(exc)(f"{obst.source}: {exc}") from None
     unknown_cells = None
     if obst.has_free_space:
         ukeys = _unknown_keys(obst, lat, bounds, radius, d == 2)
@@ -391,7 +415,7 @@ def plan(
         OMPL planning time (s) and RNG seed (an integer in [0, 2**32)).
     max_expansions, memory_budget
         Search budget (:func:`planner.search.search`): status ``"budget"`` when exceeded.
-        Defaults: the nodes that fit in a quarter of the physical memory.
+        Defaults: the nodes that fit in an eighth of the physical memory.
 
     Returns
     -------

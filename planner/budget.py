@@ -5,7 +5,7 @@ Each such step estimates its bytes first and calls :func:`require`, which refuse
 line (``MapError`` / ``PlanError``) when the estimate is over the budget, before anything
 is allocated. The budget is :func:`memory_budget`: ``PLANNER_MEMORY_BUDGET`` (bytes, or
 with a suffix ``K``/``M``/``G``/``T``; the CLI's ``--memory-budget`` sets it) or else
-:func:`default_memory_budget`, a quarter of the physical memory, lowered to half of an
+:func:`default_memory_budget`, an eighth of the physical memory, lowered to half of an
 address-space limit (``ulimit -v``) when one is set so the refusal comes before a
 ``MemoryError``. The budget is per step (one allocation and its scratch), not the total of
 a run.
@@ -23,7 +23,7 @@ __all__ = ["ENV", "MEMORY_SHARE", "default_memory_budget", "memory_budget", "par
            "require", "gb"]
 
 ENV = "PLANNER_MEMORY_BUDGET"
-MEMORY_SHARE = 0.25  # of physical memory
+MEMORY_SHARE = 0.125  # of physical memory: a step's peak is a few times its estimate
 _UNITS = {"": 1, "b": 1, "k": 2**10, "m": 2**20, "g": 2**30, "t": 2**40}
 _SIZE = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:e[+-]?[0-9]+)?)\s*([kmgt]?)(?:i?b)?\s*$", re.I)
 
@@ -63,7 +63,7 @@ def _physical_memory() -> int:
 
 
 def default_memory_budget() -> int:
-    """A safe share of this machine's memory (bytes): a quarter of the physical memory,
+    """A safe share of this machine's memory (bytes): an eighth of the physical memory,
     at most half of the process's address-space limit when one is set."""
     share = int(MEMORY_SHARE * _physical_memory())
     try:

@@ -219,7 +219,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--memory-budget", type=_size, default=None,
                         help="bytes one step (inflation, grid, search) may use, e.g. 4G or "
                              "512M; refused in one line above it (None: "
-                             "$PLANNER_MEMORY_BUDGET or a quarter of the physical memory); "
+                             "$PLANNER_MEMORY_BUDGET or an eighth of the physical memory); "
                              "any command")
     parser.add_argument("--max-expansions", type=_int_range(1), default=None,
                         help="give up a search after this many expansions (exit 1, status "
@@ -393,7 +393,7 @@ def _check_neighbors(lattices, neighbors: str, method: str) -> None:
     do not depend on the cell volume)."""
     from planner.lattice import Lattice
 
-    if method.startswith("ompl"):
+    if method.startswith("ompl") or neighbors in ("face", "full"):
         return
     for lat in lattices:
         (lat if isinstance(lat, Lattice) else Lattice.named(lat)).neighbors(neighbors)

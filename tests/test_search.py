@@ -376,12 +376,20 @@ def test_warframe_optimal_costs(name):
 
 
 # -- budget, one compilation -----------------------------------------------------------------
-def _sealed_goal_world(n=60):
-    """A big empty cubic world whose goal cell (n-5, n-5, n-5) is walled in."""
-    c = np.array([n - 5] * 3)
-    shell = np.array([c + d for d in itertools.product(range(-2, 3), repeat=3)
-                      if max(map(abs, d)) == 2])
+def _sealed_goal_world(n=60, wall=6):
+    """A big empty cubic world whose goal cell (n-8, n-8, n-8) is walled in by a cube
+    ``wall`` cells out (6: a pocket of 11^3 cells, more than the goal probe explores)."""
+    c = np.array([n - 8] * 3)
+    shell = np.array([c + d for d in itertools.product(range(-wall, wall + 1), repeat=3)
+                      if max(map(abs, d)) == wall])
     return _box_world(n=n, blocked=shell), np.array([1, 1, 1]), c
+
+
+def test_a_goal_sealed_in_a_small_pocket_is_unreachable_without_a_search():
+    w, s, g = _sealed_goal_world(wall=2)  # 27 free cells around the goal
+    r = S.search(w, s, g)
+    assert r.status == "unreachable" and r.expansions == 0
+    assert r.reason == "goal unreachable: its free space is 27 cells, closed off from the start"
 
 
 def test_sealed_goal_ends_with_budget_status():

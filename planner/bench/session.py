@@ -33,8 +33,10 @@ def results_lock(out: Path) -> Iterator[None]:
     PlannerError
         Another run holds it (one line, with that run's process id).
     """
+    created = not out.exists()
     out.mkdir(parents=True, exist_ok=True)
     fd = os.open(out / ".lock", os.O_RDWR | os.O_CREAT, 0o644)
+    held = failed = False
     try:
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
@@ -42,10 +44,20 @@ def results_lock(out: Path) -> Iterator[None]:
             other = os.pread(fd, 32, 0).decode(errors="replace").strip() or "?"
             raise PlannerError(f"{out}: results folder in use by another planner bench run "
                                f"(pid {other}); wait for it or use another --out") from None
+        held = True
         os.ftruncate(fd, 0)
         os.pwrite(fd, str(os.getpid()).encode(), 0)
         yield
+    except BaseException:
+        failed = True
+        raise
     finally:
+        if held and failed and [q.name for q in out.iterdir()] == [".lock"]:
+            # a run refused before writing anything leaves nothing behind
+            with contextlib.suppress(OSError):
+                os.unlink(out / ".lock")
+                if created:
+                    out.rmdir()
         os.close(fd)  # closing releases the lock
 
 

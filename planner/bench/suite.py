@@ -221,12 +221,10 @@ def _check_raw(path: Path, raw: dict) -> None:
     d = raw.get("min_distance", 0.3)
     if isinstance(d, bool) or not isinstance(d, int | float) or not 0 <= d < math.inf:
         raise bad("min_distance", "a finite number >= 0")
-    ompl_only = isinstance(raw.get("ompl"), dict) and bool(raw["ompl"].get("planners"))
-    for key in _LISTS:
+    for key in _LISTS:  # methods may be empty: an OMPL-only suite
         v = raw.get(key, ["x"])
-        empty_ok = key == "methods" and ompl_only  # an OMPL-only suite has no lattice methods
-        if not isinstance(v, list) or not (v or empty_ok) or not all(isinstance(x, str)
-                                                                       for x in v):
+        if not isinstance(v, list) or not (v or key == "methods") or not all(
+                isinstance(x, str) for x in v):
             raise bad(key, "a non-empty list of names")
     if not isinstance(raw.get("name", ""), str):
         raise bad("name", "a string")

@@ -155,8 +155,10 @@ def plot(rows: list[dict], out_dir: Path) -> list[Path]:
     for key, ylabel, log, name in metrics:
         data = [[r[key] for r in rows if _label(r) == lab and r.get("found")
                  and r.get(key) is not None] for lab in labels]
-        fig, ax = plt.subplots(figsize=(max(7, 0.55 * len(labels) + 2), 5))
         keep = [i for i, d in enumerate(data) if d]
+        if not keep:  # nothing found: no figure (boxplot([]) would still draw one box)
+            continue
+        fig, ax = plt.subplots(figsize=(max(7, 0.55 * len(labels) + 2), 5))
         bp = ax.boxplot([data[i] for i in keep], whis=1.5, patch_artist=True,
                         medianprops={"color": "black", "linewidth": 1.5})  # visible on every box
         for patch, i in zip(bp["boxes"], keep, strict=True):

@@ -16,7 +16,7 @@ first compiles or loads the kernels (:func:`warm_up`, reported as
 
 Budget: every search is bounded. ``max_expansions`` (default: the memory budget divided by
 the bytes a node costs, :data:`planner.search._nodes.BYTES_PER_NODE`) stops it with status
-``"budget"``; the memory budget defaults to a quarter of the physical memory
+``"budget"``; the memory budget defaults to an eighth of the physical memory
 (:func:`default_memory_budget`).
 
 Examples
@@ -67,7 +67,7 @@ MEMORY_SHARE = _budget.MEMORY_SHARE  # of physical memory, the default memory bu
 
 def default_memory_budget() -> int:
     """Bytes a search may use by default: the one memory budget of :mod:`planner.budget`
-    (``PLANNER_MEMORY_BUDGET`` / ``--memory-budget``, else a quarter of the physical
+    (``PLANNER_MEMORY_BUDGET`` / ``--memory-budget``, else an eighth of the physical
     memory)."""
     return _budget.memory_budget()
 
@@ -160,8 +160,9 @@ def warm_up() -> float:
 def _limit(value, name: str) -> int:
     if value is None:
         return 0
-    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value <= 0:
-        raise PlanError(f"{name} must be a positive integer, got {value!r}")
+    if (isinstance(value, bool) or not isinstance(value, int | np.integer) or value <= 0
+            or value >= 2**63):
+        raise PlanError(f"{name} must be a positive integer below 2**63, got {value!r}")
     return int(value)
 
 
@@ -236,6 +237,13 @@ def search(
     node_cap = min(max_nodes, budget_nodes) if max_nodes else budget_nodes
     params = SearchParams(anyangle, node_cap, max_exp)
     t0 = time.perf_counter()
+    pocket = _goal_pocket(world, ms, s, gl)
+    if pocket is not None:  # the goal is sealed in a small pocket: no search
+        secs = time.perf_counter() - t0
+        return SearchResult(False, np.zeros((0, 3), np.int64), math.inf, pocket[1] + 2, 0,
+                            0, secs, 0, f"goal unreachable: its free space is {pocket[0]} "
+                            "cells, closed off from the start", status="unreachable",
+                            guarantee=guarantee)
     status, keys, cost, st, peak = _driver.run(chk.occupancy, chk.walk, ms, s, gl, params,
                                                _span(world) if anyangle else 0.0)
     secs = time.perf_counter() - t0
@@ -253,6 +261,25 @@ def search(
         why, kind = f"search budget exhausted after {exp} expansions ({peak} bytes)", "budget"
     return SearchResult(False, np.zeros((0, 3), np.int64), math.inf, checks, exp, gen, secs,
                         peak, why, status=kind, guarantee=guarantee, compile_seconds=compile_s)
+
+
+GOAL_PROBE = 256  # expansions of the search from the goal that precedes every search
+
+
+def _goal_pocket(world: World, ms, start, goal) -> tuple[int, int] | None:
+    """``(cells, lookups)`` when a search from the goal (lattice moves, at most
+    :data:`GOAL_PROBE` expansions) runs out of cells before reaching the start: the goal
+    is sealed off, so an unbounded search from the start could only end at the budget.
+    None otherwise; its lookups are then not counted (not part of the measured search;
+    its time, well under a millisecond, is).
+    The moves are symmetric (the same cells are checked either way), so this is exact."""
+    chk = world.checker
+    status, _, _, st, _ = _driver.run(chk.occupancy, chk.walk, ms, goal, start,
+                                      SearchParams(0, 0, GOAL_PROBE), 0.0)
+    if status != _astar.RUN_EXHAUSTED:
+        return None
+    world.cell_checks += int(st[ST_LOOK])
+    return int(st[ST_N]), int(st[ST_LOOK])
 
 
 def _span(world: World) -> float:

@@ -319,7 +319,9 @@ class OccupiedVoxelList:
         except FileNotFoundError:
             raise MapError(f"{name}: voxel list file not found") from None
         except (OSError, ValueError, zipfile.BadZipFile, EOFError, KeyError) as exc:
-            raise MapError(f"{name}: not a readable voxel list file ({exc})") from None
+            # numpy calls any non-.npy/.npz bytes "pickled data": say what a user can act on
+            why = "not an .npz archive" if "pickle" in str(exc) else str(exc).splitlines()[0]
+            raise MapError(f"{name}: not a readable voxel list file ({why})") from None
         return cls._from_fields(data, name, lattice)
 
     @classmethod

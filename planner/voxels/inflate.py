@@ -173,6 +173,13 @@ def exact_inflation(points: np.ndarray, lattice: Lattice, radius: float,
     if r == 0:
         return OccupiedVoxelList._from_keys(lat, unique_keys(pack(base)))
     memory_budget = resolve_budget(memory_budget)
+    # Each point blocks every cell whose centre is within rho = r - covering of it: about
+    # that ball's volume in cells (halved for the lattice-point-count error), times the
+    # points whose balls are disjoint, known before any enumeration.
+    rho = r - lat.covering_radius
+    if rho > 0:
+        ball = 0.5 * math.pi * 4 / 3 * min(rho, 1e100) ** lat.dim / lat.cell_volume
+        _check_result(r, 0.0, ball * _disjoint_balls(x, rho), memory_budget)
     cand = offsets_within(lat, r + 2 * lat.covering_radius, memory_budget, r)
     ext = np.abs(cand).max(axis=0)
     lo, hi = base.min(axis=0) - ext, base.max(axis=0) + ext
@@ -190,10 +197,33 @@ def exact_inflation(points: np.ndarray, lattice: Lattice, radius: float,
                   np.ascontiguousarray(cand @ lat.generator.T, dtype=float),
                   vk.cell_polytope(lat.voronoi), tol, r)
     n = int(np.count_nonzero(grid))
+    _check_result(r, cells, n, memory_budget)
     out = np.empty(n, dtype=np.int64)
     vk.grid_keys(grid, lo.astype(np.int64), dims.astype(np.int64), BITS[lat.dim],
                  index_limit(lat.dim), out)
     return OccupiedVoxelList._from_keys(lat, out)
+
+
+def _disjoint_balls(x: np.ndarray, rho: float) -> int:
+    """A count of points of ``x`` (N, d) pairwise >= 2 ``rho`` apart: occupied cells of a
+    grid of edge 2 ``rho``, in the best of the 2^d index-parity classes (two cells of one
+    class are a whole cell apart)."""
+    c = np.floor(x / (2 * rho)).astype(np.int64) & 0x1FFFFF  # 21 bits an axis: cells that
+    key = np.zeros(len(x), dtype=np.int64)  # share them merge, which keeps a lower bound
+    for j in range(x.shape[1]):
+        key |= c[:, j] << (21 * j)
+    key = unique_keys(key)
+    parity = np.zeros(len(key), dtype=np.int64)
+    for j in range(x.shape[1]):
+        parity |= ((key >> (21 * j)) & 1) << j
+    return int(np.bincount(parity).max())
+
+
+def _check_result(r: float, cells: float, n: int, budget: float) -> None:
+    """Refuse ``n`` blocked cells whose keys, and the (n, 3) indices and sorts callers make
+    of them (~40 bytes a cell), do not fit the budget next to the ``cells``-byte grid."""
+    if cells + 40.0 * n > budget:
+        raise over_budget(r, cells + 40.0 * n, budget)
 
 
 # -- boxes --------------------------------------------------------------------------------------
@@ -402,6 +432,8 @@ def exact_box_inflation(lo: np.ndarray, hi: np.ndarray, lattice: Lattice, radius
                        np.ascontiguousarray(cand_flat[corder]),
                        np.ascontiguousarray(cand[corder] @ lat.generator.T @ rot, dtype=float),
                        verts, cell.packing_radius, cell.covering_radius, r, tol, grid)
-    out = np.empty(int(np.count_nonzero(grid)), dtype=np.int64)
+    n = int(np.count_nonzero(grid))
+    _check_result(r, cells, n, memory_budget)
+    out = np.empty(n, dtype=np.int64)
     vk.grid_keys(grid, glo.astype(np.int64), dims.astype(np.int64), BITS[d], index_limit(d), out)
     return OccupiedVoxelList._from_keys(lat, out)

@@ -332,7 +332,7 @@ def suite_variants() -> list[str]:
                                                     "cell_volumes = [nan]", "cell_volumes = 0.5",
                                                     "cell_volumes = [inf]")]
     edits += [("radii = [0.1]", v) for v in ("radii = [-1]", 'radii = ["x"]', "radii = [1e300]",
-                                             "radii = [nan]", "radii = [100]")]
+                                             "radii = [nan]", "radii = [1e4]")]
     edits += [('path = "suite_map.xyz"', v) for v in ('path = "missing.xyz"', "path = 5",
                                                        'path = "suite_bad.xyz"',
                                                        'path = "/proc"')]

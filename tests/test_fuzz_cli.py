@@ -1,0 +1,382 @@
+"""The fuzz corpus through the command line and the API: one clean line, never a traceback.
+
+Every case of ``tests/fuzz/make_corpus.py`` (malformed maps of every reader, sidecars,
+scenario files, benchmark suites, saved voxel lists) runs through the CLI (``plan``,
+``compare`` or ``voxels`` for maps and sidecars, ``bench`` for suites and scenario files),
+each in its own process under a 3 GB address-space limit, and through the API. The CLI
+must exit 0/1 for a usable file, or 2 with exactly one stderr line naming the file (or the
+bad endpoint of a usable map), with no traceback, no crash, no hang (30 s) and nothing
+written to ``--out``. The API must return or raise a ``planner`` exception.
+
+Processes: every 25th run is a fresh ``python -m planner``; the others are children forked
+from a warm interpreter (``tests/fuzz/forkcli.py``), which saves the interpreter start-up.
+By default each map case runs through one command (rotating) and a third of the readers'
+byte-level variants is used (>= 200 runs); ``PLANNER_FUZZ_FULL=1`` runs every case through
+every command.
+"""
+
+from __future__ import annotations
+
+import gzip
+import json
+import os
+import re
+import resource
+import subprocess
+import sys
+import time
+from collections import Counter
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+from types import SimpleNamespace
+
+import pytest
+from test_fuzz_readers import corpus  # tests/fuzz/make_corpus.py, loaded once
+
+import planner
+from planner import OccupiedVoxelList
+from planner.bench.suite import load_suite
+from planner.errors import PlannerError
+from planner.io import load_scenarios, load_sidecar
+
+pytestmark = pytest.mark.filterwarnings("error::RuntimeWarning")
+
+FULL = os.environ.get("PLANNER_FUZZ_FULL") == "1"
+ADDRESS_SPACE = 3 * 2**30  # bytes: a run over it would die of MemoryError (a traceback)
+HANG = 30  # seconds: a run still going after this is a hang
+REAL = 25  # every REAL-th run starts a fresh interpreter (python -m planner), the rest fork
+REPO = Path(__file__).resolve().parents[1]
+# Cases kept whole in the default subset: few, and each a different kind of mistake.
+WHOLE = {"sidecar", "suite", "3dscen", "poses", "empty", "directory", "3dmap", "rosmap"}
+# A usable map with a bad query: the line names the endpoint instead of the file.
+QUERY = re.compile(r"^planner: error: (start|goal) \(")
+NAMED = re.compile(r"[\w.-]+\.(pgm|xyz|json|toml|3dscen|3dmap|ya?ml)\b")
+
+
+@pytest.fixture(scope="module")
+def cases(tmp_path_factory) -> list:
+    root = tmp_path_factory.mktemp("corpus")
+    return corpus.make_corpus(root) + corpus.make_entry_corpus(root / "entry")
+
+
+def _selected(cases: list) -> list:
+    """Every case (``FULL``), else the whole of :data:`WHOLE` and every third of the rest."""
+    if FULL:
+        return list(cases)
+    seen = Counter()
+    out = []
+    for c in cases:
+        seen[c.reader] += 1
+        if c.reader in WHOLE or seen[c.reader] % 3 == 1:
+            out.append(c)
+    return out
+
+
+def _map_for(case) -> Path:
+    """The map a case is given as: the file itself, or (sidecars) a valid cloud beside it."""
+    if case.loader != "sidecar":
+        return case.path
+    cloud = case.path.with_suffix(".xyz")
+    cloud.write_bytes(corpus.xyz_text())
+    return cloud
+
+
+def _scenario_suite(case) -> Path:
+    """A suite running a valid .3dmap with the case's scenario file."""
+    grid = case.path.with_suffix(".3dmap")
+    grid.write_bytes(corpus.MAP3D)
+    suite = case.path.with_suffix(".toml")
+    suite.write_text(corpus.SUITE.replace('path = "suite_map.xyz"',
+                                          f'path = "{grid.name}"\nscenarios = '
+                                          f'"{case.path.name}"'))
+    return suite
+
+
+def _runs(case, i: int, out: Path) -> list[tuple[str, list[str], Path]]:
+    """``(command, argv, output path)`` for one case."""
+    if case.loader == "voxels":
+        return []  # saved voxel lists have no CLI reader yet: API only
+    if case.loader in ("suite", "scenarios"):
+        suite = case.path if case.loader == "suite" else _scenario_suite(case)
+        target = out / "bench"
+        return [("bench", ["bench", str(suite), "--out", str(target), "--no-progress"],
+                 target)]
+    m = str(_map_for(case))
+    fmt = ["--format", case.format] if case.format else []
+    query = ["--start", "0,0,0", "--goal", "1,1,1", "--radius", "0.1"]
+    runs = [("plan", ["plan", m, *query, *fmt, "--out", str(out / "path.csv")],
+             out / "path.csv"),
+            ("compare", ["compare", m, *query, *fmt, "--lattices", "cubic,fcc"], out / "none"),
+            ("voxels", ["voxels", m, "--radius", "0.1", *fmt, "--out", str(out / "v.npz")],
+             out / "v.npz")]
+    return runs if FULL else [runs[i % 3]]
+
+
+def _limit_memory() -> None:  # in the child, before exec
+    resource.setrlimit(resource.RLIMIT_AS, (ADDRESS_SPACE, ADDRESS_SPACE))
+
+
+def _env() -> dict:
+    env = dict(os.environ, PYTHONPATH=str(REPO), PYTHONWARNINGS="ignore::DeprecationWarning")
+    env.pop("PLANNER_MEMORY_BUDGET", None)
+    return env
+
+
+def _cli(argv: list[str]) -> SimpleNamespace | None:
+    """``python -m planner ARGV`` in a subprocess (None: still running after HANG s)."""
+    try:
+        p = subprocess.run([sys.executable, "-m", "planner", *argv], capture_output=True,
+                           text=True, timeout=HANG, env=_env(), preexec_fn=_limit_memory,
+                           errors="replace")
+    except subprocess.TimeoutExpired:
+        return None
+    return SimpleNamespace(returncode=p.returncode, stdout=p.stdout, stderr=p.stderr)
+
+
+class _Forker:
+    """``tests/fuzz/forkcli.py``: each command line in a child forked from one warm
+    interpreter (its own process, memory limit and exit status; no ~1 s start-up)."""
+
+    def __init__(self) -> None:
+        self.proc = subprocess.Popen(
+            [sys.executable, str(Path(__file__).parent / "fuzz" / "forkcli.py")],
+            stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, env=_env())
+        assert json.loads(self.proc.stdout.readline())["ready"]
+
+    def run(self, argv: list[str]) -> SimpleNamespace | None:
+        req = {"argv": argv, "limit": ADDRESS_SPACE, "timeout": HANG}
+        self.proc.stdin.write(json.dumps(req) + "\n")
+        self.proc.stdin.flush()
+        got = json.loads(self.proc.stdout.readline())
+        if got["rc"] is None:
+            return None
+        return SimpleNamespace(returncode=got["rc"], stdout=got["stdout"],
+                               stderr=got["stderr"], seconds=got["seconds"])
+
+    def close(self) -> None:
+        self.proc.stdin.close()
+        self.proc.wait(timeout=HANG)
+
+
+def _run_all(argvs: list[list[str]]) -> list[SimpleNamespace | None]:
+    """Every command line, on two workers; every REAL-th through ``python -m planner``."""
+    def worker(k: int) -> list:
+        forker = _Forker()
+        try:
+            return [(i, _cli(a) if i % REAL == 0 else forker.run(a))
+                    for i, a in enumerate(argvs) if i % 2 == k]
+        finally:
+            forker.close()
+
+    with ThreadPoolExecutor(2) as pool:
+        done = [r for part in pool.map(worker, (0, 1)) for r in part]
+    return [p for _, p in sorted(done, key=lambda ip: ip[0])]
+
+
+def _names_the_file(case, line: str) -> bool:
+    """The case's file (name or stem), another file it names (a sidecar's, a suite's map),
+    or any file with a map or description extension."""
+    names = [case.path.name, case.path.stem]
+    if case.loader == "suite":
+        names += [Path(p).name for p in re.findall(r'path = "([^"]+)"', case.path.read_text(
+            encoding="latin-1"))]
+    return any(n and n in line for n in names) or bool(NAMED.search(line))
+
+
+def _problem(case, command: str, proc, target: Path) -> str | None:
+    """What is wrong with one CLI run (None: nothing)."""
+    if proc is None:
+        return "hang"
+    if "Traceback" in proc.stderr or proc.returncode not in (0, 1, 2):
+        return f"exit {proc.returncode}: {proc.stderr[-300:]!r}"
+    if proc.returncode != 2:
+        return None
+    lines = proc.stderr.strip().splitlines()
+    if len(lines) != 1 or not re.match(r"planner( \w+)?: error: ", lines[0]):
+        return f"not one error line: {proc.stderr[-300:]!r}"
+    if not _names_the_file(case, lines[0]) and not QUERY.search(lines[0]):
+        return f"error does not name the file: {lines[0]!r}"
+    if target.exists() and (target.is_file() or any(target.iterdir())):
+        return f"{target.name} written although the run failed"
+    return None
+
+
+def test_every_corpus_case_through_the_cli(cases, tmp_path):
+    chosen = _selected(cases)
+    jobs = []
+    for i, case in enumerate(chosen):
+        out = tmp_path / f"out{i:04d}"
+        out.mkdir()
+        jobs += [(case, cmd, argv, target) for cmd, argv, target in _runs(case, i, out)]
+    assert len(jobs) >= 200, len(jobs)
+    procs = _run_all([argv for _, _, argv, _ in jobs])
+    counts, problems = Counter(), []
+    for (case, cmd, _, target), proc in zip(jobs, procs, strict=True):
+        counts[cmd, "hang" if proc is None else proc.returncode] += 1
+        why = _problem(case, cmd, proc, target)
+        if why:
+            problems.append(f"{case.reader} {case.path.name} [{cmd}]: {why}")
+    assert not problems, "\n".join(problems[:20]) + f"\n({len(problems)} problems, {counts})"
+    # Nearly every case is malformed: most runs must be refused.
+    refused = sum(n for (_, rc), n in counts.items() if rc == 2)
+    assert refused >= 0.7 * len(jobs), counts
+
+
+def _api(case):
+    if case.loader == "voxels":
+        return OccupiedVoxelList.load(case.path)
+    if case.loader == "suite":
+        return load_suite(str(case.path))
+    if case.loader == "scenarios":
+        return load_scenarios(case.path)
+    if case.loader == "sidecar":
+        load_sidecar(case.path)
+    return planner.build_world(str(_map_for(case)), "fcc", radius=0.1, format=case.format)
+
+
+def test_every_corpus_case_through_the_api(cases):
+    counts = Counter()
+    for case in cases:
+        try:
+            _api(case)
+            counts[case.reader, "ok"] += 1
+        except PlannerError as exc:  # any other exception fails the test
+            assert str(exc) and "\n" not in str(exc), (case.path.name, str(exc))
+            counts[case.reader, "error"] += 1
+    for reader in ("suite", "voxels", "sidecar", "3dscen"):
+        assert counts[reader, "error"] > 0, reader
+
+
+# -- budgets: refusals within seconds, searches that end ------------------------------------------
+DATA = REPO.parent / "shared" / "data"
+GEB079 = DATA / "octomap" / "geb079.bt"
+DA1 = DATA / "warframe" / "DA1.3dmap"
+
+
+def _refused(argv: list[str], *words: str) -> str:
+    """Run the CLI (3 GB limit); assert one budget error line naming ``words``."""
+    proc = _cli(argv)
+    assert proc is not None, f"hang: {argv}"
+    lines = proc.stderr.strip().splitlines()
+    assert proc.returncode == 2 and len(lines) == 1, proc.stderr[-500:]
+    assert all(w in lines[0] for w in words), lines[0]
+    return lines[0]
+
+
+@pytest.mark.skipif(not GEB079.exists(), reason="shared OctoMap data not present")
+@pytest.mark.parametrize("extra", [["--cell-volume", "1e-9", "--radius", "0"],
+                                   ["--cell-volume", "1e-9", "--radius", "0.2"],
+                                   ["--cell-volume", "1e-6", "--radius", "0"],
+                                   ["--radius", "3"]])
+def test_huge_octomap_worlds_are_refused_by_the_memory_budget(extra):
+    _refused(["plan", str(GEB079), "--start", "0,0,0.5", "--goal", "1,0,0.5", *extra],
+             "geb079.bt", "over the memory budget", "--memory-budget")
+
+
+def test_huge_move_sets_and_gzip_bombs_are_refused(tmp_path):
+    _refused(["plan", "office", "--start", "1,1,1", "--goal", "7.6,7.8,0.8", "--neighbors",
+              "face+1000"], "neighbour shells")
+    bomb = tmp_path / "bomb.xyz.gz"
+    chunk = b"0 0 0\n" * ((1 << 20) // 6)
+    with gzip.open(bomb, "wb") as f:
+        for _ in range(64):  # 64 MB of text, 64 kB compressed
+            f.write(chunk)
+    _refused(["--memory-budget", "64M", "plan", str(bomb), "--radius", "0.1", "--start",
+              "0,0,0", "--goal", "1,1,1"], "bomb.xyz.gz", "decompression budget")
+
+
+def test_any_angle_scratch_does_not_grow_with_the_box():
+    # a 2000 km box: the sight-line scratch is capped by the budget, not sized by the box
+    proc = _cli(["plan", "office", "--method", "lazy-theta", "--start", "1,1,1", "--goal",
+                 "7.6,7.8,0.8", "--bounds", "-1e6,-1e6,-1e6,1e6,1e6,1e6",
+                 "--max-expansions", "50"])
+    assert proc is not None and "Traceback" not in proc.stderr, proc.stderr[-500:]
+    assert proc.returncode == 1 and "search budget exhausted after 50 expansions" in proc.stdout
+
+
+def _sealed(tmp_path: Path, shell: int) -> tuple[Path, str, str]:
+    """DA1 with a closed cube of voxels ``shell`` cells around the first scenario's goal."""
+    lines = DA1.read_text().splitlines()
+    scen = (DATA / "warframe" / "DA1.3dmap.3dscen").read_text().splitlines()[2].split()
+    start, goal = scen[0:3], scen[3:6]
+    g = [int(v) for v in goal]
+    r = range(-shell, shell + 1)
+    walls = {f"{g[0] + i} {g[1] + j} {g[2] + k}" for i in r for j in r for k in r
+             if max(abs(i), abs(j), abs(k)) == shell}
+    keep = [ln for ln in lines[1:] if ln.strip() and ln != " ".join(goal)]
+    path = tmp_path / f"DA1_sealed{shell}.3dmap"
+    path.write_text("\n".join([lines[0], *keep, *sorted(walls - set(keep))]) + "\n")
+    return path, ",".join(start), ",".join(goal)
+
+
+@pytest.mark.skipif(not DA1.exists(), reason="shared Warframe data not present")
+def test_a_sealed_goal_on_a_large_map_is_unreachable_at_once(tmp_path):
+    path, start, goal = _sealed(tmp_path, 2)
+    proc = _cli(["plan", str(path), "--lattice", "cubic", "--cell-volume", "1", "--radius",
+                 "0", "--start", start, "--goal", goal])
+    assert proc is not None and proc.returncode == 1, proc and proc.stderr[-500:]
+    assert "no path (goal unreachable" in proc.stdout and "Traceback" not in proc.stderr
+
+
+@pytest.mark.skipif(not DA1.exists(), reason="shared Warframe data not present")
+def test_an_unreachable_goal_ends_at_the_search_budget(tmp_path):
+    # a pocket too big for the goal probe: the search explores until the node budget the
+    # memory budget allows (256 MB), then answers in one line
+    path, start, goal = _sealed(tmp_path, 12)
+    proc = _cli(["--memory-budget", "256M", "plan", str(path), "--lattice", "cubic",
+                 "--cell-volume", "1", "--radius", "0", "--start", start, "--goal", goal])
+    assert proc is not None and proc.returncode == 1, proc and proc.stderr[-500:]
+    out = proc.stdout.strip().splitlines()
+    assert len(out) == 1 and "search budget exhausted after" in out[0], proc.stdout
+    assert "Traceback" not in proc.stderr
+
+
+# -- kill -9 at three points: no finished row is lost -----------------------------------------
+KILL_SUITE = """name = "killed"
+seed = 3
+queries = 6
+lattices = ["cubic", "fcc"]
+neighbors = ["full"]
+methods = ["astar", "dijkstra"]
+min_distance = 0.3
+
+[[maps]]
+path = "office"
+cell_volumes = [0.004]
+radii = [0.25]
+"""
+
+
+def _rows(results: Path) -> dict:
+    """Finished rows by run key (a last line cut short by the kill does not count)."""
+    from planner.bench import runner
+
+    return {runner.row_key(r): r for r in runner.read_rows(results)} if results.is_file() else {}
+
+
+@pytest.mark.parametrize("point", ["first row", "half the rows", "report"])
+def test_kill_9_loses_no_finished_row(tmp_path, point):
+    suite = tmp_path / "killed.toml"
+    suite.write_text(KILL_SUITE)
+    out = tmp_path / "out"
+    results = out / "results.jsonl"
+    wanted = 2 * 2 * 6
+    need = {"first row": 1, "half the rows": wanted // 2, "report": wanted}[point]
+    proc = subprocess.Popen([sys.executable, "-m", "planner", "bench", str(suite), "--out",
+                             str(out), "--no-progress"], env=_env(),
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    try:
+        while proc.poll() is None and len(_rows(results)) < need:
+            time.sleep(0.005)
+    finally:
+        proc.kill()  # SIGKILL: no handler runs
+        _, err = proc.communicate(timeout=HANG)
+    assert "Traceback" not in err.decode(errors="replace")
+    before = _rows(results)
+    assert len(before) >= min(need, wanted) or proc.returncode == 0, err
+    resumed = _cli(["bench", str(suite), "--out", str(out), "--resume", "--no-progress"])
+    assert resumed is not None and resumed.returncode == 0, resumed and resumed.stderr[-500:]
+    after = _rows(results)
+    assert len(after) == wanted
+    assert all(after[k] == row for k, row in before.items())  # kept, not redone
+    assert "PARTIAL" not in resumed.stdout and (out / "report.md").is_file()
