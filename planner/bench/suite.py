@@ -193,7 +193,7 @@ def load_suite(name_or_path: str) -> Suite:
 
 
 _KEYS = {"": {"name", "seed", "queries", "lattices", "neighbors", "methods", "min_distance",
-              "ompl", "maps", "kind", "paper"},
+              "ompl", "maps", "kind", "paper", "rotation", "rotations"},
          "maps": {"path", "cell_volumes", "cell_volume", "radii", "radius", "scenarios",
                   "queries"},
          "ompl": {"planners", "time", "seeds", "lattice"}}
