@@ -75,11 +75,16 @@ def sample_queries(
             c = np.asarray(centre, dtype=float)
             R = np.asarray(rotation, dtype=float)
             s, g = (s - c) @ R.T + c, (g - c) @ R.T + c
-        for name, w in worlds.items():
-            for what, pts in (("start", s), ("goal", g)):
-                valid = w.points_free(pts)
-                dropped[f"{what} blocked in {name}"] += int(np.sum(ok & ~valid))
-                ok &= valid
+        for what, pts in (("start", s), ("goal", g)):
+            # Per lattice, so that a point inside a wall (blocked everywhere) is not charged
+            # to whichever lattice happens to be checked first.
+            valid = {name: w.points_free(pts) for name, w in worlds.items()}
+            every = np.logical_and.reduce([~v for v in valid.values()])
+            dropped[f"{what} blocked in every lattice"] += int(np.sum(ok & every))
+            for name, v in valid.items():
+                key = f"{what} blocked in {name}, free in another lattice"
+                dropped[key] += int(np.sum(ok & ~v & ~every))
+            ok &= ~np.logical_or.reduce([~v for v in valid.values()])
         for i in np.flatnonzero(ok):
             if len(starts) < n:
                 starts.append(s[i])
