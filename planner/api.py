@@ -213,6 +213,10 @@ def build_world(
     from planner.world import World
 
     t0 = time.perf_counter()
+    if isinstance(source, str | Path):  # a bundled map by name ("office") from any folder
+        from planner.maps import resolve
+
+        source = resolve(source)
     if is_world_file(source):
         world = load_world(source)
         check_options(world, lattice, cell_volume, radius, unknown, bounds)
