@@ -30,7 +30,7 @@ from planner._jit import njit_cached
 from planner.errors import MapError
 from planner.keys import pack
 from planner.lattice import Lattice
-from planner.voxels._checks import DEFAULT_BUDGET, grid_strides, unique_keys
+from planner.voxels._checks import DEFAULT_BUDGET, grid_strides, resolve_budget, unique_keys
 
 __all__ = ["cells_in_box", "ray_free_keys", "unknown_box_keys", "unknown_cell_keys",
            "unknown_inflation"]
@@ -63,7 +63,7 @@ def _box_cells(g, ilo, idims, lo, hi, out, fill):  # pragma: no cover - compiled
 
 
 def cells_in_box(lattice: Lattice, lo: np.ndarray, hi: np.ndarray,
-                 budget: float = DEFAULT_BUDGET) -> np.ndarray:
+                 budget: float | None = DEFAULT_BUDGET) -> np.ndarray:
     """Every cell of a 3D lattice whose centre lies in the closed box ``[lo, hi]`` (m,
     shape (3,) each).
 
@@ -81,6 +81,7 @@ def cells_in_box(lattice: Lattice, lo: np.ndarray, hi: np.ndarray,
     idims = np.ceil(w.max(axis=0)).astype(np.int64) + 1 - ilo + 1
     out = np.zeros((0, 3), dtype=np.int64)
     n = _box_cells(g, ilo, idims, lo, hi, out, False)
+    budget = resolve_budget(budget)
     if n * 24 > budget:
         raise MapError(f"the box {lo.tolist()} .. {hi.tolist()} holds {n:,} cells, too many "
                        f"to enumerate within {budget / 2**30:.1f} GB; use larger cells")
@@ -236,7 +237,7 @@ def unknown_cell_keys(free_keys: np.ndarray, occupied_keys: np.ndarray, lattice:
 
 
 def unknown_inflation(unknown_keys: np.ndarray, lattice: Lattice, radius: float,
-                      budget: float = DEFAULT_BUDGET) -> np.ndarray:
+                      budget: float | None = DEFAULT_BUDGET) -> np.ndarray:
     """Keys of the cells whose closed Voronoi cell comes closer than ``radius`` (m) to the
     closed Voronoi cell of an unknown cell (the unknown cells themselves included): where a
     robot centre may not go when unknown space counts as an obstacle (module docstring).
