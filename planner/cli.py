@@ -447,7 +447,7 @@ def _cmd_compare(a) -> int:
         a.map, lattices=lattices, cell_volume=a.cell_volume, radius=radius, bounds=a.bounds,
         start=a.start, goal=a.goal, method=a.method, neighbors=a.neighbors, plot=a.plot,
         progress=not a.json and sys.stderr.isatty(), format=a.format,
-        max_expansions=a.max_expansions,
+        max_expansions=a.max_expansions, unknown=a.unknown,
     )
     print(json.dumps(rows) if a.json else compare.format_rows(rows))
     return 0 if all(r["found"] for r in rows) else 1

@@ -106,6 +106,7 @@ def compare(
     progress: bool = True,
     format: str | None = None,
     max_expansions: int | None = None,
+    unknown: str | None = None,
 ) -> list[dict]:
     """Plan the same queries on every lattice and return one summary row per lattice.
 
@@ -115,6 +116,8 @@ def compare(
     Queries are ``start``/``goal`` when given, else the map's default queries (bundled
     maps' JSON sidecar). Radius and cell volume default to the sidecar's suggestions.
     ``max_expansions`` bounds each search (None: the memory budget's default).
+    ``unknown`` is the unknown-space policy of :func:`planner.build_world` (None: the map's
+    default); each row reports the unknown cells its paths cross.
     """
     from planner import api
 
@@ -133,7 +136,7 @@ def compare(
         name = lat if isinstance(lat, str) else (lat.name or "custom")
         t0 = time.perf_counter()
         world = api.build_world(map_path, lat, cell_volume=cell_volume, radius=radius,
-                                bounds=bounds, format=format)
+                                bounds=bounds, format=format, unknown=unknown)
         build = time.perf_counter() - t0
         from planner.search import warm_up
 
@@ -168,6 +171,7 @@ def compare(
             "build_seconds": build,
             "compile_seconds": compile_s,
             "blocked_cells": int(world.n_blocked),
+            "unknown_cells": int(sum(r.unknown_cells or 0 for r in found)),
         })
     if plot:
         plot_paths(plot, world, results)
