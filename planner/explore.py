@@ -254,26 +254,28 @@ def cast_rays(occupied, walk, origin, s, dirs, reach, hits):  # pragma: no cover
 class _Sensor:
     """The true map as the sensor sees it.
 
-    Points (``box_size`` 0): the occupied cells are those holding a point, and a hit
-    reveals the points in the hit cell. Boxes: the occupied cells are those overlapping a
-    box (:func:`planner.voxels.box_keys`), so every ray through a box stops at or before
-    it, and a hit reveals the boxes that can overlap the hit cell (centre within half the
-    box diagonal plus the covering radius of the cell centre).
+    Points (``box_sizes`` None): the occupied cells are those holding a point, and a hit
+    reveals the points in the hit cell. Boxes (edge ``box_sizes[k]`` m each): the occupied
+    cells are those overlapping a box (:func:`planner.voxels.box_keys`), so every ray
+    through a box stops at or before it, and a hit reveals the boxes that can overlap the
+    hit cell (centre within half the largest box diagonal plus the covering radius).
     """
 
-    def __init__(self, points: np.ndarray, box_size: float, lattice: Lattice, walk,
-                 dirs: np.ndarray, reach: float):
+    def __init__(self, points: np.ndarray, box_sizes: np.ndarray | None, lattice: Lattice,
+                 walk, dirs: np.ndarray, reach: float):
         from planner._world_kernels import build_key_set
 
-        self.points, self.box_size = points, float(box_size)
-        if self.box_size > 0:
+        self.points, self.boxes = points, box_sizes is not None
+        if self.boxes:
             from scipy.spatial import cKDTree
 
             from planner.voxels import box_keys
 
-            uniq = box_keys(points, self.box_size, lattice)
+            # each box at its own size (OctoMap's pruned leaves are larger than the rest)
+            uniq = np.unique(np.concatenate([box_keys(points[box_sizes == b], b, lattice)
+                                             for b in np.unique(box_sizes)]))
             self.tree = cKDTree(points)
-            self.near = 0.5 * np.sqrt(3) * self.box_size + lattice.covering_radius
+            self.near = 0.5 * np.sqrt(3) * float(box_sizes.max()) + lattice.covering_radius
         else:
             keys = pack(lattice.quantize(points))
             self.order = np.argsort(keys, kind="stable")
@@ -300,7 +302,7 @@ class _Sensor:
         hit = np.unique(self.hits[found], axis=0)
         if not len(hit):
             return np.zeros(0, np.int64)
-        if self.box_size > 0:
+        if self.boxes:
             near = self.tree.query_ball_point(self.lattice.to_world(hit), self.near)
             idx = np.unique(np.concatenate([np.asarray(x, np.int64) for x in near]))
         else:
@@ -377,8 +379,11 @@ def explore(
     obst = as_obstacles(source)
     if cell_volume is None and not isinstance(lattice, Lattice):
         cell_volume = side.get("cell_volume")
+    # The true world is what a sensor can hit: the obstacles. A map's unobserved space (an
+    # OctoMap's unknown leaves) is not an obstacle here, so it counts as free.
     truth = build_world(obst, lattice, cell_volume=cell_volume, radius=radius,
-                        bounds=side.get("bounds") if bounds is None else bounds)
+                        bounds=side.get("bounds") if bounds is None else bounds,
+                        unknown="free")
     lat = truth.lattice
     boxes = len(obst.boxes) > 0 and (not len(obst.points) or np.array_equal(obst.points,
                                                                            obst.boxes))
@@ -389,9 +394,9 @@ def explore(
     goal_p, gcell = truth.endpoint(goal, "goal")
     known = World(lat, np.zeros((0, 3), np.int64), truth.bounds, radius=truth.radius,
                   source=f"explored {obst.source}")
-    sensor = _Sensor(pts, obst.box_size if boxes else 0.0, lat, _walk(lat), dirs,
+    sensor = _Sensor(pts, obst.box_sizes if boxes else None, lat, _walk(lat), dirs,
                      sensor_range)
-    _warm_up(lat, neighbors, DStarLite, search)
+    _warm_up(lat, neighbors, DStarLite)
     dl = DStarLite(known, s, gcell, neighbors=neighbors)
     rec = {k: [] for k in ("changed", "ds", "dc", "de", "dcost", "as", "ac", "ae", "acost")}
     cur = s.copy()
@@ -406,7 +411,8 @@ def explore(
             seen = io.Obstacles(
                 points=obst.points[new] if len(obst.points) else np.zeros((0, 3)),
                 boxes=obst.boxes[new] if boxes else np.zeros((0, 3)),
-                box_size=obst.box_size, bounds=None, resolution=None, source=obst.source)
+                box_size=obst.box_size, box_sizes=obst.box_sizes[new] if boxes else None,
+                bounds=None, resolution=None, source=obst.source)
             cells = inflated_obstacles(seen, lat, radius).indices
             changed = known.set_cells(cells, True)
         sense_secs += time.perf_counter() - t0
@@ -459,9 +465,10 @@ def explore(
         seen=sensor.seen, rays=len(dirs) * len(traj), sense_seconds=sense_secs)
 
 
-def _warm_up(lat: Lattice, neighbors: str, dstar, search) -> None:
-    """Compile (or load) the D* Lite and A* kernels on a tiny world of the same lattice, so
-    that no replan's time includes JIT compilation."""
+def _warm_up(lat: Lattice, neighbors: str, dstar) -> None:
+    """Compile (or load) the D* Lite kernels on a tiny world of the same lattice, so that no
+    replan's time includes JIT compilation (:func:`planner.search.search` warms up A*
+    itself before its clock starts)."""
     r = lat.covering_radius
     tiny = World(lat, np.zeros((0, 3), np.int64), [[-4 * r] * 3, [4 * r] * 3])
     a = lat.quantize(np.zeros((1, 3)))[0]
@@ -471,7 +478,6 @@ def _warm_up(lat: Lattice, neighbors: str, dstar, search) -> None:
     dl.plan()
     dl.update(tiny.set_cells(mid, True), blocked=True)
     dl.plan()
-    _scratch_astar(search, tiny, a, b, neighbors)
 
 
 def _scratch_astar(search, world, cur, goal, neighbors) -> tuple[float, int, int, float]:
