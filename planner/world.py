@@ -490,9 +490,10 @@ def as_point(p, what: str = "point", dim: int = 3) -> np.ndarray:
 
 
 def _show(p) -> str:
-    """A value on one line for an error message (no ``array(...)`` wrapping)."""
+    """A value on one line for an error message: coordinates as :func:`_fmt` prints them,
+    anything else by its repr with the white space folded."""
     try:
-        return ",".join(f"{v:g}" for v in np.asarray(p, dtype=float).reshape(-1).tolist())
+        return _fmt(np.asarray(p, dtype=float))
     except (TypeError, ValueError):
         return " ".join(repr(p).split())
 

@@ -84,7 +84,7 @@ def sample_queries(
             for name, v in valid.items():
                 key = f"{what} blocked in {name}, free in another lattice"
                 dropped[key] += int(np.sum(ok & ~v & ~every))
-            ok &= ~np.logical_or.reduce([~v for v in valid.values()])
+            ok &= np.logical_and.reduce(list(valid.values()))
         for i in np.flatnonzero(ok):
             if len(starts) < n:
                 starts.append(s[i])
