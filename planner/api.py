@@ -252,6 +252,13 @@ def build_world(
         from planner.lattice.planar import planar_prism
 
         obst, bounds, lat = _lift(obst), _lift_bounds(bounds), planar_prism(lat)
+    if obst.has_free_space and d == 3:  # classified cell by cell: refuse before any work
+        from planner.budget import require
+
+        pad = radius + 2 * lat.covering_radius
+        n = float(np.prod(bounds[1] - bounds[0] + 2 * pad)) / lat.cell_volume
+        require(24.0 * n, f"the unknown-space classification of {obst.source} (~{n:,.0f} "
+                "cells in its box)")
     try:
         cells = inflated_obstacles(obst, lat, radius).indices
     except PlannerError as exc:  # name the map, as the readers do
@@ -262,10 +269,10 @@ def build_world(
     if obst.has_free_space:
         ukeys = _unknown_keys(obst, lat, bounds, radius, d == 2)
         if policy == "blocked":
-            from planner.keys import unpack
             from planner.voxels.known import unknown_inflation
 
-            cells = np.concatenate([cells, unpack(unknown_inflation(ukeys, lat, radius), 3)])
+            blocked = unknown_inflation(ukeys, lat, radius)
+            cells = np.concatenate([cells, _cells_near(blocked, lat, bounds)])
         unknown_cells = ukeys
     if d == 2:  # only the plane z = 0 is in bounds
         cells = cells[cells[:, 2] == 0]
@@ -316,6 +323,21 @@ def _lift(obst):
                         free_box_sizes=obst.free_box_sizes, bounds=None,
                         resolution=obst.resolution, source=obst.source,
                         unknown_default=obst.unknown_default, dim=3)
+
+
+def _cells_near(keys: np.ndarray, lat: Lattice, bounds: np.ndarray) -> np.ndarray:
+    """Indices (N, 3) of the cells of packed ``keys`` whose centre lies within a covering
+    radius of the bounds box (m, (2, 3)), unpacked in chunks: a large radius dilates
+    unknown space far past the box, and only cells in it can ever be searched."""
+    from planner.keys import unpack
+
+    lo, hi = bounds[0] - lat.covering_radius, bounds[1] + lat.covering_radius
+    parts = [np.zeros((0, 3), dtype=np.int64)]
+    for i in range(0, len(keys), 1 << 22):
+        w = unpack(keys[i: i + (1 << 22)], 3)
+        c = lat.to_world(w)
+        parts.append(w[np.all((c >= lo) & (c <= hi), axis=1)])
+    return np.concatenate(parts)
 
 
 def _lift_bounds(bounds: np.ndarray) -> np.ndarray:

@@ -122,11 +122,11 @@ def _env() -> dict:
     return env
 
 
-def _cli(argv: list[str]) -> SimpleNamespace | None:
-    """``python -m planner ARGV`` in a subprocess (None: still running after HANG s)."""
+def _cli(argv: list[str], hang: float = HANG) -> SimpleNamespace | None:
+    """``python -m planner ARGV`` in a subprocess (None: still running after ``hang`` s)."""
     try:
         p = subprocess.run([sys.executable, "-m", "planner", *argv], capture_output=True,
-                           text=True, timeout=HANG, env=_env(), preexec_fn=_limit_memory,
+                           text=True, timeout=hang, env=_env(), preexec_fn=_limit_memory,
                            errors="replace")
     except subprocess.TimeoutExpired:
         return None
@@ -266,11 +266,22 @@ def _refused(argv: list[str], *words: str) -> str:
 @pytest.mark.skipif(not GEB079.exists(), reason="shared OctoMap data not present")
 @pytest.mark.parametrize("extra", [["--cell-volume", "1e-9", "--radius", "0"],
                                    ["--cell-volume", "1e-9", "--radius", "0.2"],
-                                   ["--cell-volume", "1e-6", "--radius", "0"],
-                                   ["--radius", "3"]])
+                                   ["--cell-volume", "1e-6", "--radius", "0"]])
 def test_huge_octomap_worlds_are_refused_by_the_memory_budget(extra):
     _refused(["plan", str(GEB079), "--start", "0,0,0.5", "--goal", "1,0,0.5", *extra],
              "geb079.bt", "over the memory budget", "--memory-budget")
+
+
+@pytest.mark.skipif(not GEB079.exists(), reason="shared OctoMap data not present")
+def test_a_robot_wider_than_the_corridors_gets_one_line_within_the_memory_limit():
+    # r = 3 m with 0.08 m cells: a 200,000-offset stencil over unknown space dilated past
+    # the map box. It is slow (about a minute) but must end in one line under 3 GB.
+    proc = _cli(["plan", str(GEB079), "--start", "0,0,0.5", "--goal", "1,0,0.5",
+                 "--radius", "3"], hang=20 * HANG)
+    assert proc is not None, "hang"
+    lines = proc.stderr.strip().splitlines()
+    assert proc.returncode == 2 and len(lines) == 1, proc.stderr[-500:]
+    assert "start (0.000, 0.000, 0.500) is blocked" in lines[0], lines[0]
 
 
 def test_huge_move_sets_and_gzip_bombs_are_refused(tmp_path):

@@ -139,6 +139,35 @@ def dilate(grid, occ_flat, stencil_flat, full_flat):  # pragma: no cover - compi
 
 
 @njit_cached
+def dilate_rows(grid, occ_flat, full_flat, row_start, row_len, diff
+                ):  # pragma: no cover - compiled
+    """:func:`dilate` with the stencil as runs along the last (stride 1) axis: each
+    boundary cell adds +1 at a run's start and -1 after its end in ``diff`` (int32, one
+    longer than ``grid``), and one prefix sum marks the union. Two writes per run instead
+    of one per offset (a 3 m ball of 0.08 m cells: ~4,000 runs for ~200,000 offsets)."""
+    for i in range(occ_flat.shape[0]):
+        grid[occ_flat[i]] = 1
+    for i in range(occ_flat.shape[0]):
+        p = occ_flat[i]
+        interior = True
+        for j in range(full_flat.shape[0]):
+            if (grid[p + full_flat[j]] & 1) == 0:
+                interior = False
+                break
+        if interior:
+            continue
+        for j in range(row_start.shape[0]):
+            a = p + row_start[j]
+            diff[a] += 1
+            diff[a + row_len[j]] -= 1
+    run = 0
+    for f in range(grid.shape[0]):
+        run += diff[f]
+        if run > 0:
+            grid[f] |= 2
+
+
+@njit_cached
 def flat_positions(keys, lo, strides, bits, limit, out):  # pragma: no cover - compiled
     """Flat grid positions ``sum((w - lo) * strides)`` of packed ``keys`` into ``out``."""
     d = lo.shape[0]

@@ -110,13 +110,35 @@ def _dilate_dense(keys: np.ndarray, lo: np.ndarray, dims: np.ndarray, stencil: n
     grid = np.zeros(int(np.prod(dims)), dtype=np.uint8)
     flat = np.empty(len(keys), dtype=np.int64)
     vk.flat_positions(keys, lo.astype(np.int64), strides, BITS[d], index_limit(d), flat)
-    vk.dilate(grid, flat, stencil @ strides, full @ strides)
+    runs = _stencil_runs(stencil)
+    if runs is not None and grid.nbytes * 5 + 8 * len(keys) <= budget:  # + int32 diff
+        diff = np.zeros(grid.size + 1, dtype=np.int32)
+        vk.dilate_rows(grid, flat, full @ strides, runs[0] @ strides, runs[1], diff)
+        del diff
+    else:
+        vk.dilate(grid, flat, stencil @ strides, full @ strides)
     n = int(np.count_nonzero(grid))
     if grid.nbytes + 8 * n > budget:
         raise over_budget(radius, grid.nbytes + 8 * n, budget)
     out = np.empty(n, dtype=np.int64)
     vk.grid_keys(grid, lo.astype(np.int64), dims.astype(np.int64), BITS[d], index_limit(d), out)
     return out
+
+
+def _stencil_runs(stencil: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    """The stencil (S, d) as runs along its last axis: ``(starts (R, d), lengths (R,))``
+    covering exactly the same offsets, or None when a row has a gap (the stencil is the
+    lattice points of a convex set, so rows are runs; None only guards rounding)."""
+    order = np.lexsort(stencil.T[::-1])
+    s = stencil[order]
+    new_row = np.ones(len(s), dtype=bool)
+    new_row[1:] = (s[1:, :-1] != s[:-1, :-1]).any(axis=1)
+    first = np.flatnonzero(new_row)
+    lengths = np.diff(np.append(first, len(s)))
+    last = s[np.append(first[1:], len(s)) - 1, -1]
+    if not np.array_equal(last - s[first, -1] + 1, lengths):
+        return None
+    return np.ascontiguousarray(s[first]), lengths.astype(np.int64)
 
 
 def _dilate_keys(keys: np.ndarray, stencil: np.ndarray, full: np.ndarray, budget: float,
