@@ -202,35 +202,47 @@ ROTATED = SUITE.replace('min_distance = 0.2', 'min_distance = 0.2\nrotation = "y
 
 def test_rotating_by_the_identity_gives_the_unrotated_world():
     from planner import build_world
-    from planner.bench.worlds import map_frame, rotated_world
+    from planner.bench.worlds import rotated_world
 
     p = str(map_path("office"))
     for lat in ("cubic", "fcc"):
         plain = build_world(p, lat, cell_volume=0.03, radius=0.2)
-        turned = rotated_world(map_frame(p), lat, 0.03, 0.2, [1.0, 0.0, 0.0, 0.0])
+        turned = rotated_world(p, lat, 0.03, 0.2, [1.0, 0.0, 0.0, 0.0])
         assert np.allclose(plain.bounds, turned.bounds)
         assert {tuple(c) for c in plain.blocked} == {tuple(c) for c in turned.blocked}
 
 
-def test_a_rotated_world_keeps_the_robot_inside_the_rotated_map_box():
-    from planner.bench.rotations import quaternion_matrix
-    from planner.bench.worlds import map_frame, rotated_world
+@pytest.mark.parametrize("name", ["cubic", "bcc", "fcc", "mcc", "hex"])
+def test_turning_the_lattice_blocks_the_cells_turning_the_map_blocks(name):
+    # The rotated world's premise: cell w of lattice G is within r of the turned points R p
+    # exactly when cell w of lattice R^T G is within r of p.
+    from planner import Lattice
+    from planner.bench.rotations import quaternion_matrix, sample_rotations
+    from planner.bench.worlds import rotated_lattice
+    from planner.voxels import exact_inflation
+
+    pts = np.random.default_rng(3).uniform(-2, 2, (300, 3))
+    for q in sample_rotations("so3", 3, seed=1):
+        R = quaternion_matrix(q)
+        lat = Lattice.named(name, 0.05)
+        turned_map = exact_inflation(pts @ R.T, lat, 0.21)
+        turned_lattice = exact_inflation(pts, rotated_lattice(name, 0.05, q), 0.21)
+        assert np.array_equal(np.sort(turned_map.keys), np.sort(turned_lattice.keys))
+
+
+def test_a_rotated_world_keeps_the_map_box_and_its_corridor():
+    from planner.bench.worlds import rotated_world
 
     p = str(map_path("office"))
-    frame = map_frame(p)
     q = [np.cos(np.pi / 8), 0.0, 0.0, np.sin(np.pi / 8)]  # 45 degrees about z
-    w = rotated_world(frame, "bcc", 0.03, 0.2, q)
-    lo, hi = w.bounds
-    corner = np.array([[lo[0] + 0.3, lo[1] + 0.3, 1.5]])  # in the bounds, outside the map box
-    assert not w.points_free(corner)[0]
-    R = quaternion_matrix(q)
-    free_in_map = np.array([[10.0, 6.0, 1.5]])  # the corridor
-    moved = (free_in_map - frame.centre) @ R.T + frame.centre
-    assert w.points_free(moved)[0]
+    plain = rotated_world(p, "bcc", 0.03, 0.2, [1.0, 0.0, 0.0, 0.0])
+    w = rotated_world(p, "bcc", 0.03, 0.2, q)
+    assert np.allclose(w.bounds, plain.bounds)
+    assert w.points_free(np.array([[10.0, 6.0, 1.5]]))[0]  # the corridor
+    assert not w.points_free(np.array([w.bounds[1] + 0.1]))[0]  # outside the map box
 
 
 def test_rotated_suites_share_one_rotation_sample_and_record_it(tmp_path):
-    from planner.bench.rotations import quaternion_matrix
 
     p = tmp_path / "rot.toml"
     p.write_text(ROTATED.format(map=map_path("office").as_posix()))
@@ -245,11 +257,9 @@ def test_rotated_suites_share_one_rotation_sample_and_record_it(tmp_path):
     from planner.bench.worlds import map_frame
 
     frame = map_frame(str(map_path("office")))
-    for rec in record.values():  # queries turned back lie in the map's own box
-        R = quaternion_matrix(rec["quaternion"])
+    for rec in record.values():  # queries (and worlds) are in the map's own frame
         pts = np.array([q["start"] for q in rec["queries"]] + [q["goal"] for q in rec["queries"]])
-        back = (pts - frame.centre) @ R + frame.centre
-        assert np.all(back >= frame.bounds[0] - 1e-9) and np.all(back <= frame.bounds[1] + 1e-9)
+        assert np.all(pts >= frame.bounds[0]) and np.all(pts <= frame.bounds[1])
     rows = runner.run(tasks, tmp_path / "results.jsonl", progress=False)
     assert {r["rotation"] for r in rows} == {0, 1}
     assert all(len(r["quaternion"]) == 4 for r in rows)
@@ -339,15 +349,15 @@ def test_operating_points_compare_lattices_on_the_queries_all_solved():
 
 
 def test_a_cached_world_is_the_world_it_was_built_as(tmp_path):
-    from planner.bench.worlds import cached_world, map_frame
+    from planner.bench.worlds import cached_world
 
     p = str(map_path("office"))
-    frame = map_frame(p)
     q = (np.cos(0.3), 0.0, 0.0, np.sin(0.3))
-    built = cached_world(str(tmp_path), frame, p, "fcc", 0.03, 0.2, q, True)
-    loaded = cached_world(str(tmp_path), frame, p, "fcc", 0.03, 0.2, q, True)
+    built = cached_world(str(tmp_path), p, "fcc", 0.03, 0.2, q)
+    loaded = cached_world(str(tmp_path), p, "fcc", 0.03, 0.2, q)
     assert loaded is not built and len(list(tmp_path.iterdir())) == 1
     assert {tuple(c) for c in built.blocked} == {tuple(c) for c in loaded.blocked}
+    assert np.array_equal(built.lattice.generator, loaded.lattice.generator)
     assert np.allclose(built.bounds, loaded.bounds)
 
 

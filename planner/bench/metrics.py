@@ -14,8 +14,9 @@ def _segment_point_dist(a: np.ndarray, b: np.ndarray, p: np.ndarray) -> np.ndarr
     return np.linalg.norm(a + t[:, None] * ab - p, axis=1)
 
 
-def _segment_box_dist(a: np.ndarray, b: np.ndarray, c: np.ndarray, half: float) -> np.ndarray:
-    """Distances from the segment a-b to axis-aligned cubes (centres c (N, 3), half edge).
+def _segment_box_dist(a: np.ndarray, b: np.ndarray, c: np.ndarray, half) -> np.ndarray:
+    """Distances from the segment a-b to axis-aligned cubes (centres c (N, 3), half edges
+    (N, 1) or one for all, metres).
 
     The distance to a convex set along a segment is convex in the segment parameter, so
     a golden-section search converges to the exact minimum.
@@ -44,13 +45,17 @@ class Clearance:
     points : ndarray, shape (N, 3)
         Sensed obstacle points (m).
     boxes : ndarray, shape (M, 3)
-        Centres of solid axis-aligned cubes of edge ``box_size`` (m).
+        Centres of solid axis-aligned cubes (m).
+    box_sizes : float or ndarray, shape (M,)
+        Their edges (m): one for all, or each its own (OctoMap leaves).
     """
 
-    def __init__(self, points: np.ndarray, boxes: np.ndarray, box_size: float = 0.0):
+    def __init__(self, points: np.ndarray, boxes: np.ndarray, box_sizes=0.0):
         self.points = np.asarray(points, dtype=float).reshape(-1, 3)
         self.boxes = np.asarray(boxes, dtype=float).reshape(-1, 3)
-        self.half = 0.5 * float(box_size)
+        self.halves = np.broadcast_to(0.5 * np.asarray(box_sizes, dtype=float),
+                                      (len(self.boxes),)).reshape(-1, 1)
+        self.half = float(self.halves.max()) if len(self.boxes) else 0.0
         self._pt = cKDTree(self.points) if len(self.points) else None
         self._bt = cKDTree(self.boxes) if len(self.boxes) else None
 
@@ -77,7 +82,7 @@ class Clearance:
                 if not len(idx):
                     continue
                 if pad:
-                    d = _segment_box_dist(a, b, data[idx], self.half)
+                    d = _segment_box_dist(a, b, data[idx], self.halves[idx])
                 else:
                     d = _segment_point_dist(a, b, data[idx])
                 best = min(best, float(d.min()))

@@ -15,15 +15,13 @@ def sample_queries(
     min_distance: float = 0.3,
     max_tries: int = 200,
     *,
-    rotation: np.ndarray | None = None,
-    centre: np.ndarray | None = None,
     free=None,
 ) -> tuple[np.ndarray, np.ndarray, dict]:
     """Sample ``n`` start/goal pairs in continuous space, kept only if valid everywhere.
 
-    Candidates are drawn uniformly in the map's own box ``bounds`` and then turned with
-    the map (``rotation`` about ``centre``), so that every rotation of a map sees the same
-    stream of candidates and a rotated query never lies outside the rotated map.
+    Candidates are drawn uniformly in the map's box ``bounds`` (a rotated world is in the
+    map's own frame too, :mod:`planner.bench.worlds`), so every rotation of a map sees the
+    same stream of candidates.
 
     Parameters
     ----------
@@ -37,8 +35,6 @@ def sample_queries(
     min_distance : float
         Minimum start-goal distance as a fraction of the box diagonal (trivial queries
         measure nothing).
-    rotation : ndarray, shape (3, 3), optional
-        The map's rotation (default: none); ``centre`` (3,) its fixed point (m).
     free : callable, optional
         ``free(points (N, 3)) -> (N,) bool`` in the map's own frame: observed free space.
         When given, a start or goal outside it is dropped ("in unknown space"): a map with
@@ -71,10 +67,6 @@ def sample_queries(
                 seen = free(pts)
                 dropped[f"{what} in unknown space"] += int(np.sum(ok & ~seen))
                 ok &= seen
-        if rotation is not None:
-            c = np.asarray(centre, dtype=float)
-            R = np.asarray(rotation, dtype=float)
-            s, g = (s - c) @ R.T + c, (g - c) @ R.T + c
         for what, pts in (("start", s), ("goal", g)):
             # Per lattice, so that a point inside a wall (blocked everywhere) is not charged
             # to whichever lattice happens to be checked first.

@@ -46,24 +46,23 @@ def _world(task: dict):
     from planner.bench.worlds import cached_world
 
     quat = tuple(task.get("quaternion", (1.0, 0.0, 0.0, 0.0)))
-    key = (task["map"], task["lattice"], task["cell_volume"], task["radius"], quat,
-           bool(task.get("rotated")))
+    key = (task["map"], task["lattice"], task["cell_volume"], task["radius"], quat)
     if key not in _WORLDS:
         if len(_WORLDS) > 12:
             _WORLDS.clear()
-        _WORLDS[key] = cached_world(task.get("world_cache"), _frame(task["map"]), *key)
+        _WORLDS[key] = cached_world(task.get("world_cache"), *key)
     return _WORLDS[key]
 
 
 def _clearance(map_path: str):
-    """Clearance against the map's own (unrotated) obstacles: distances do not change under
-    a rigid motion, so a rotated path is turned back instead of rotating the boxes."""
+    """Clearance against the map's obstacles (paths of rotated worlds are in the map's own
+    frame too, see :mod:`planner.bench.worlds`)."""
     from planner.bench.metrics import Clearance
 
     if map_path not in _CLEARANCE:
         _CLEARANCE.clear()
         o = _frame(map_path).obstacles
-        _CLEARANCE[map_path] = Clearance(o.points, o.boxes, o.box_size)
+        _CLEARANCE[map_path] = Clearance(o.points, o.boxes, o.box_sizes)
     return _CLEARANCE[map_path]
 
 
@@ -81,16 +80,9 @@ def run_task(task: dict) -> list[dict]:
     A plain function of plain data so that it pickles to processes and Dask workers.
     """
     from planner import api, search
-    from planner.bench.rotations import quaternion_matrix
 
     world = _world(task)
     clear = _clearance(task["map"])
-    R = quaternion_matrix(task.get("quaternion", (1.0, 0.0, 0.0, 0.0)))
-    centre = _frame(task["map"]).centre
-
-    def back(path: np.ndarray) -> np.ndarray:  # into the map's own frame
-        return (np.asarray(path, dtype=float) - centre) @ R + centre
-
     step = 0.25 * world.lattice.packing_radius
     rows = []
     for q in task["queries"]:
@@ -126,8 +118,8 @@ def run_task(task: dict) -> list[dict]:
                 smooth = np.concatenate([raw[:1], world.lattice.to_world(cells), raw[-1:]])
             else:
                 smooth = raw
-            c_raw = clear.of_path(back(raw), step)
-            c_smooth = clear.of_path(back(smooth), step)
+            c_raw = clear.of_path(raw, step)
+            c_smooth = clear.of_path(smooth, step)
             tol = 1e-9 * max(1.0, world.lattice.covering_radius)
             row.update(length=path_length(raw), length_smoothed=path_length(smooth),
                        clearance=min(c_raw, c_smooth),
@@ -141,8 +133,7 @@ def _build_cached(spec: tuple) -> None:
     """Build one world into the cache (a pool task: the world stays in its file)."""
     from planner.bench.worlds import cached_world
 
-    cache, path, *rest = spec
-    cached_world(cache, _frame(path), path, *rest)
+    cached_world(*spec)
 
 
 def _prebuild(specs: list[tuple], jobs: int) -> None:
@@ -178,7 +169,7 @@ def plan_tasks(suite: Suite, log=print, saved: dict | None = None,
 
     Returns the tasks and, per group, the query record (kept, dropped by reason, queries).
     """
-    from planner.bench.rotations import quaternion_matrix, sample_rotations
+    from planner.bench.rotations import sample_rotations
     from planner.bench.worlds import cached_world, map_frame
 
     rotated = suite.rotation != "none"
@@ -192,7 +183,7 @@ def plan_tasks(suite: Suite, log=print, saved: dict | None = None,
     for m in suite.maps:
         frame = map_frame(m.path) if not m.scenarios else None
         if world_cache and jobs > 1 and not m.scenarios:
-            specs = [(world_cache, m.path, lat, cv, radius, tuple(q.tolist()), rotated)
+            specs = [(world_cache, m.path, lat, cv, radius, tuple(q.tolist()))
                      for cv in m.cell_volumes for radius in m.radii
                      for ri, q in enumerate(quats)
                      if (saved or {}).get(group_name(m, cv, radius, ri), {}).get("wanted")
@@ -211,7 +202,8 @@ def plan_tasks(suite: Suite, log=print, saved: dict | None = None,
                               "rotated": rotated, "world_cache": world_cache}
                     n = m.queries or suite.queries
                     old = (saved or {}).get(group)
-                    if old and old.get("wanted") == n and "queries" in old:
+                    if (old and old.get("wanted") == n and "queries" in old
+                            and old.get("frame") == "map"):
                         record[group] = old
                         tasks += _group_tasks(suite, common, old["queries"])
                         continue
@@ -223,19 +215,18 @@ def plan_tasks(suite: Suite, log=print, saved: dict | None = None,
                         dropped = {}
                     else:
                         log(f"sampling {n} queries for {group} ...")
-                        R = quaternion_matrix(quat)
-                        worlds = {lat: cached_world(world_cache, frame, m.path, lat, cv,
-                                                    radius, tuple(quat.tolist()), rotated)
+                        worlds = {lat: cached_world(world_cache, m.path, lat, cv, radius,
+                                                    tuple(quat.tolist()))
                                   for lat in suite.lattices}
                         free = frame.free.contains if frame.free is not None else None
                         s, g, dropped = sample_queries(worlds, frame.bounds, n, suite.seed,
-                                                       suite.min_distance, rotation=R,
-                                                       centre=frame.centre, free=free)
+                                                       suite.min_distance, free=free)
                         costs = [None] * len(s)
                     queries = [{"id": i, "start": s[i].tolist(), "goal": g[i].tolist(),
                                 "optimal_cost": None if costs[i] is None else float(costs[i])}
                                for i in range(len(s))]
                     record[group] = {"kept": len(s), "wanted": n, "dropped": dropped,
+                                     "frame": "map",
                                      "queries": queries, "map": m.path, "cell_volume": cv,
                                      "radius": radius, "rotation": ri,
                                      "quaternion": quat.tolist()}

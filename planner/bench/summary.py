@@ -219,7 +219,7 @@ def write_report(out_dir: Path, suite, rows: list[dict], summary: list[dict], re
 
     rot = getattr(suite, "rotation", "none")
     lines += [f"Rotations: `{rot}`, {len({r.get('rotation', 0) for r in rows})} per map "
-              "(the map and its queries turned together about the map centre; the same "
+              "(the lattice turned by R^T in the map's frame, i.e. the map by R; the same "
               "sample for every lattice, neighbour set and method).", ""]
     lines += ["## Queries", ""] + _query_lines(record)
     lines += ["", "## Lattice vs cubic (paired per query, 95% bootstrap CI, Wilcoxon p)", "",
