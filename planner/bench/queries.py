@@ -35,10 +35,11 @@ def sample_queries(
     min_distance : float
         Minimum start-goal distance as a fraction of the box diagonal (trivial queries
         measure nothing).
-    free : callable, optional
-        ``free(points (N, 3)) -> (N,) bool`` in the map's own frame: observed free space.
-        When given, a start or goal outside it is dropped ("in unknown space"): a map with
-        free-space information is queried only where it was observed.
+    free : FreeSpace, optional
+        Observed free space (:class:`planner.bench.worlds.FreeSpace`, or any object with
+        ``sample(rng, n) -> (n, 3)`` points): candidates are drawn uniformly from it
+        instead of the box, so a map with free-space information is queried only where it
+        was observed (and a building whose box is mostly unobserved still yields queries).
 
     Returns
     -------
@@ -56,17 +57,17 @@ def sample_queries(
     for _ in range(max_tries):
         if len(starts) >= n:
             break
-        s = rng.uniform(lo, hi, (batch, 3))
-        g = rng.uniform(lo, hi, (batch, 3))
-        ok = np.ones(batch, dtype=bool)
+        if free is None:
+            s = rng.uniform(lo, hi, (batch, 3))
+            g = rng.uniform(lo, hi, (batch, 3))
+            ok = np.ones(batch, dtype=bool)
+        else:
+            s, g = free.sample(rng, batch), free.sample(rng, batch)
+            ok = np.all((s >= lo) & (s <= hi) & (g >= lo) & (g <= hi), axis=1)
+            dropped["start or goal outside the map box"] += int(np.sum(~ok))
         short = np.linalg.norm(g - s, axis=1) < min_distance * diag
         dropped["start and goal too close"] += int(np.sum(short & ok))
         ok &= ~short
-        if free is not None:
-            for what, pts in (("start", s), ("goal", g)):
-                seen = free(pts)
-                dropped[f"{what} in unknown space"] += int(np.sum(ok & ~seen))
-                ok &= seen
         for what, pts in (("start", s), ("goal", g)):
             # Per lattice, so that a point inside a wall (blocked everywhere) is not charged
             # to whichever lattice happens to be checked first.

@@ -218,9 +218,8 @@ def plan_tasks(suite: Suite, log=print, saved: dict | None = None,
                         worlds = {lat: cached_world(world_cache, m.path, lat, cv, radius,
                                                     tuple(quat.tolist()))
                                   for lat in suite.lattices}
-                        free = frame.free.contains if frame.free is not None else None
                         s, g, dropped = sample_queries(worlds, frame.bounds, n, suite.seed,
-                                                       suite.min_distance, free=free)
+                                                       suite.min_distance, free=frame.free)
                         costs = [None] * len(s)
                     queries = [{"id": i, "start": s[i].tolist(), "goal": g[i].tolist(),
                                 "optimal_cost": None if costs[i] is None else float(costs[i])}

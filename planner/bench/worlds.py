@@ -45,6 +45,15 @@ class FreeSpace:
         self.grid = np.zeros(tuple(self.shape), dtype=bool)
         self.grid[tuple(idx.T)] = True
 
+    def sample(self, rng: np.random.Generator, n: int) -> np.ndarray:
+        """(n, 3) points (m) uniform in observed free space (a uniform free voxel, then a
+        uniform point in it: the voxels are equal)."""
+        if getattr(self, "_flat", None) is None:
+            self._flat = np.flatnonzero(self.grid)
+        pick = self._flat[rng.integers(0, len(self._flat), n)]
+        idx = np.stack(np.unravel_index(pick, self.grid.shape), axis=1)
+        return self.origin + (idx + rng.random((n, 3))) * self.step
+
     def contains(self, points: np.ndarray) -> np.ndarray:
         """(N,) bool: each point (N, 3), metres, lies in observed free space."""
         idx = np.floor((np.asarray(points, dtype=float) - self.origin) / self.step)
