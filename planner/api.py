@@ -19,7 +19,7 @@ from planner.lattice import Lattice
 
 __all__ = [
     "PlanResult", "as_obstacles", "build_world", "default_cell_volume", "inflated_obstacles",
-    "plan", "unknown_on_path",
+    "map_box", "plan", "unknown_on_path",
 ]
 
 # Default planning resolution for raw clouds: about this many cells in the bounding box.
@@ -128,6 +128,31 @@ def _sidecar(source) -> dict:
     return {}
 
 
+def map_box(source, obst=None) -> np.ndarray:
+    """The world box :func:`build_world` chooses for a map when given no ``bounds``: the
+    map's own (OctoMap, .3dmap, ROS map), else its sidecar's, else the obstacles' extent.
+
+    Parameters
+    ----------
+    source : str, Path, ndarray or Obstacles
+        As for :func:`build_world`.
+    obst : Obstacles, optional
+        ``source`` already loaded (saves reading it again).
+
+    Returns
+    -------
+    ndarray, shape (2, d)
+        ``[[xmin, ...], [xmax, ...]]``, metres (not yet checked).
+    """
+    obst = as_obstacles(source) if obst is None else obst
+    if obst.bounds is not None:
+        return np.asarray(obst.bounds, dtype=float)
+    side = _sidecar(source)
+    if "bounds" in side:
+        return np.asarray(side["bounds"], dtype=float)
+    return _obstacle_bounds(obst)
+
+
 def _obstacle_bounds(obst) -> np.ndarray:
     parts = [p for p in (obst.points, obst.boxes) if len(p)]
     allp = np.concatenate(parts)
@@ -227,12 +252,7 @@ def build_world(
     obst = as_obstacles(source, format)
     where = "" if bounds is not None else f"{obst.source}: "  # the map's own bounds
     if bounds is None:
-        if obst.bounds is not None:
-            bounds = obst.bounds
-        elif "bounds" in side:
-            bounds = side["bounds"]
-        else:
-            bounds = _obstacle_bounds(obst)
+        bounds = map_box(source, obst)
     d = obst.dim
     bounds = np.asarray(bounds, dtype=float)
     if bounds.shape != (2, d) or not np.isfinite(bounds).all() or np.any(bounds[1] < bounds[0]):

@@ -75,17 +75,10 @@ class MapFrame:
 
 def map_frame(map_path: str) -> MapFrame:
     """Load a map and its world box as :func:`planner.build_world` would choose it."""
-    from planner import api
+    from planner.api import as_obstacles, map_box
 
-    obst = api.as_obstacles(map_path)
-    side = api._sidecar(map_path)
-    if obst.bounds is not None:
-        bounds = obst.bounds
-    elif "bounds" in side:
-        bounds = side["bounds"]
-    else:
-        bounds = api._obstacle_bounds(obst)
-    bounds = np.asarray(bounds, dtype=float)
+    obst = as_obstacles(map_path)
+    bounds = map_box(map_path, obst)
     free = FreeSpace(obst) if len(obst.free_boxes) else None
     return MapFrame(obst, bounds, free)
 
