@@ -43,7 +43,7 @@ pytestmark = pytest.mark.filterwarnings("error::RuntimeWarning")
 
 FULL = os.environ.get("PLANNER_FUZZ_FULL") == "1"
 ADDRESS_SPACE = 3 * 2**30  # bytes: a run over it would die of MemoryError (a traceback)
-HANG = 30  # seconds: a run still going after this is a hang
+HANG = 90  # seconds: a run still going after this is a hang (generous: CI machines are shared)
 REAL = 25  # every REAL-th run starts a fresh interpreter (python -m planner), the rest fork
 REPO = Path(__file__).resolve().parents[1]
 # Cases kept whole in the default subset: few, and each a different kind of mistake.
@@ -277,7 +277,7 @@ def test_a_robot_wider_than_the_corridors_gets_one_line_within_the_memory_limit(
     # r = 3 m with 0.08 m cells: a 200,000-offset stencil over unknown space dilated past
     # the map box. It is slow (about a minute) but must end in one line under 3 GB.
     proc = _cli(["plan", str(GEB079), "--start", "0,0,0.5", "--goal", "1,0,0.5",
-                 "--radius", "3"], hang=20 * HANG)
+                 "--radius", "3"], hang=8 * HANG)
     assert proc is not None, "hang"
     lines = proc.stderr.strip().splitlines()
     assert proc.returncode == 2 and len(lines) == 1, proc.stderr[-500:]
