@@ -35,6 +35,7 @@ S_N, S_HN, S_EXP, S_LOOK, S_STAMP, S_GOAL = 0, 1, 2, 3, 4, 5
 S_SIZE = 6
 DONE, GROW, BLOCKED = 0, 1, 2
 _TOL = 1e-9  # relative: "rhs(s) = c + g_old" tested with slack (a spare recompute is safe)
+_BIAS = 4 * _TOL  # relative: an underconsistent node's key ahead of the ties (_key1)
 
 
 class DNodes(NamedTuple):
@@ -131,6 +132,20 @@ def _h(ms, start, v0, v1, v2):  # pragma: no cover - compiled
 
 
 @njit(cache=True, inline="always")
+def _key1(ms, g, rhs, hv, km):  # pragma: no cover - compiled
+    """First key of a queued node. An underconsistent node (g < rhs) goes ahead of every
+    key equal to its own up to float noise (``_BIAS``): its stale low g may carry the
+    start's path, and two sums of the same moves can round to neighbouring grid steps of
+    :func:`_k1`, which would otherwise queue it one step behind an overconsistent tie (or
+    the start itself) and let the search stop on a stale value."""
+    x = min(g, rhs) + hv + km
+    k = _k1(ms, x)
+    if g < rhs:
+        k -= _BIAS * (1.0 + abs(x))
+    return k
+
+
+@njit(cache=True, inline="always")
 def _k1(ms, x):  # pragma: no cover - compiled
     """First key on a grid of 1e-9 move lengths: equal sums of the same moves in another
     order (float noise) mostly tie exactly, so the second key orders them."""
@@ -167,7 +182,7 @@ def update_vertex(ms, nd, heap, st, km, start, s):  # pragma: no cover - compile
     if g != rhs:
         gm = min(g, rhs)
         u0, u1, u2 = unpack3(nd.key[s])
-        k1 = _k1(ms, gm + _h(ms, start, u0, u1, u2) + km)
+        k1 = _key1(ms, g, rhs, _h(ms, start, u0, u1, u2), km)
         tb = np.inf if g < rhs else gm
         if pos[s] >= 0:
             i = pos[s]
@@ -240,8 +255,7 @@ def compute_path(occ, ms, ufree, bx, nd, heap, st, km, start, check_start):
         u = heap_s[0]
         st[S_EXP] += 1
         u0, u1, u2 = unpack3(nd.key[u])
-        gm = min(nd.g[u], nd.rhs[u])
-        k1n = _k1(ms, gm + _h(ms, start, u0, u1, u2) + km)
+        k1n = _key1(ms, nd.g[u], nd.rhs[u], _h(ms, start, u0, u1, u2), km)
         if k1o < k1n:  # a key from an earlier start: requeue (the tie-break is current)
             update_vertex(ms, nd, heap, st, km, start, u)
             continue
