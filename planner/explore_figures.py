@@ -157,13 +157,14 @@ def animate_gif(res, path: str | Path, max_frames: int = 150, fps: float = 6.0,
     masks = _observed_masks(res, np.asarray(steps), ext, (ny, nx))
 
     band = _band(res)
+    zc = float(np.median(res.trajectory[:, 2]))
     pts = res.points[band]
     seen_step = res.seen_step[band]
     fig, ax = plt.subplots(figsize=(w, h))
     ax.set_facecolor("0.82")
     img = ax.imshow(np.zeros((ny, nx)), extent=ext, origin="lower", cmap="gray", vmin=0,
                     vmax=1, interpolation="nearest", zorder=0)
-    ax.scatter(pts[:, 0], pts[:, 1], s=0.2, c="0.6", zorder=1, label="not seen yet")
+    ax.scatter(pts[:, 0], pts[:, 1], s=0.2, c="0.6", zorder=1, label="obstacles not seen yet")
     seen_sc = ax.scatter([], [], s=0.6, c="k", zorder=2, label="seen obstacles")
     (traj,) = ax.plot([], [], "-", c="tab:red", lw=1.6, zorder=4, label="trajectory")
     (plan,) = ax.plot([], [], "--", c="tab:blue", lw=1.4, zorder=3, label="current plan")
@@ -176,8 +177,17 @@ def animate_gif(res, path: str | Path, max_frames: int = 150, fps: float = 6.0,
     ax.set_aspect("equal")
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
-    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(0.0, -0.12), ncol=3,
-              frameon=False)
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    dots = [Line2D([], [], ls="", marker="o", ms=3, c=c, label=lab)
+            for c, lab in (("0.6", "obstacles not seen yet"), ("k", "seen obstacles"))]
+    lines = [h for h in ax.get_legend_handles_labels()[0] if isinstance(h, Line2D)]
+    handles = dots + lines + [
+        Patch(facecolor="white", edgecolor="0.5", label="swept by the sensor"),
+        Patch(facecolor="0.82", edgecolor="0.5", label="not observed")]
+    ax.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(0.0, -0.12),
+              ncol=4, frameon=False)
     title = ax.set_title("")
     fig.tight_layout()
 
@@ -190,7 +200,8 @@ def animate_gif(res, path: str | Path, max_frames: int = 150, fps: float = 6.0,
         plan.set_data(paths[k][:, 0], paths[k][:, 1])
         robot.center = (float(tr[-1, 0]), float(tr[-1, 1]))
         d = float(np.linalg.norm(np.diff(tr, axis=0), axis=1).sum())
-        title.set_text(f"{res.lattice}: {labels[k]}, {step} moves, {d:.1f} m travelled")
+        title.set_text(f"{res.lattice}: {labels[k]}, {step} moves, {d:.1f} m travelled "
+                       f"(slice z = {zc:.1f} +- {_SLICE} m)")
         return img, seen_sc, traj, plan, robot, title
 
     anim = FuncAnimation(fig, draw, frames=len(steps), blit=False)
