@@ -159,7 +159,7 @@ def _generator(text: str):
 _OUTPUTS = {("plan", "out"): (".csv", ".json"), ("world", "out"): (".npz",),
             ("voxels", "out"): (".npz",),
             ("plan", "plot"): PLOT_SUFFIXES, ("compare", "plot"): PLOT_SUFFIXES,
-            ("explore", "plot"): (".png",)}
+            ("explore", "plot"): (".png",), ("explore", "gif"): (".gif",)}
 
 
 def _check_output(option: str, text: str, suffixes: tuple[str, ...]) -> None:
@@ -300,6 +300,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--max-steps", type=_int_range(1), default=100_000, help="move budget")
     p.add_argument("--plot", help="summary figure (PNG); with several lattices, one per "
                                   "lattice (name suffixed)")
+    p.add_argument("--gif", help="animated GIF of the exploration, one frame per replan "
+                                 "(at most --frames); with several lattices, one per lattice")
+    p.add_argument("--frames", type=_int_range(1), default=150,
+                   help="most replan frames in the GIF (evenly subsampled; 150)")
     p.add_argument("--json", action="store_true", help="print the summaries as JSON")
 
     p = sub.add_parser("bench", help="run a benchmark suite (which lattice for my map?)")
@@ -478,13 +482,21 @@ def _cmd_explore(a) -> int:
                       max_steps=a.max_steps)
         rows.append(res.summary())
         bad += res.mismatches + res.contacts
+        several = len(a.lattice) > 1
         if a.plot:
-            p = Path(a.plot)
-            res.plot(p if len(a.lattice) == 1 else p.with_name(f"{p.stem}_{name}{p.suffix}"))
+            res.plot(_per_lattice(a.plot, name, several))
+        if a.gif:
+            res.animate(_per_lattice(a.gif, name, several), max_frames=a.frames)
     print(json.dumps(rows) if a.json else format_table(rows))
     if bad:  # D* Lite disagreed with A* from scratch, or the robot touched the true map
         raise PlannerError(f"{bad} mismatches/contacts: see the table")
     return 0 if all(r["status"] == "reached" for r in rows) else 1
+
+
+def _per_lattice(out: str, name: str, several: bool) -> Path:
+    """The output file of one lattice's run: ``out`` itself, or suffixed by the name."""
+    p = Path(out)
+    return p.with_name(f"{p.stem}_{name}{p.suffix}") if several else p
 
 
 def _cmd_bench(a) -> int:

@@ -7,14 +7,8 @@ anything changed, repairs the plan with :class:`planner.search.incremental.DStar
 replan is also solved from scratch with A* on the same map state in the same process, and
 the two costs must agree (counted as ``mismatches``).
 
-Sensor (exact, noise-free): rays from the robot's position over a field of view (``fov``:
-horizontal total and vertical +- half-angle, degrees) at ``resolution`` degrees, up to
-``sensor_range`` metres. The true map is the lattice occupied voxel list of the obstacle
-points (radius 0), or of the cells overlapping the boxes of a box map (OctoMap leaves,
-``.3dmap``); a ray stops at the occupied cell whose closed Voronoi cell it enters first (the
-lattice segment walk plus the exact entry parameter of each touched cell). A hit reveals
-every obstacle point in that cell, or every box that can overlap it (a lidar return from
-that surface patch).
+Sensor: :mod:`planner.sensor` (exact rays through the lattice against the true map's
+occupied cells; a hit reveals the obstacles of the cell it stops in).
 
 Known map: the revealed obstacles, inflated for the radius by the same rule as the true
 world (:func:`planner.api.inflated_obstacles`: points exactly, boxes grown by the radius),
@@ -33,13 +27,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from numba import njit
 
-from planner._world_kernels import Occupancy, occ_free, walk_on, walk_scratch
 from planner.errors import MapError, PlanError
-from planner.fsutil import atomic_path
-from planner.keys import pack
 from planner.lattice import Lattice
+from planner.sensor import Sensor, cast_rays, ray_directions
 from planner.world import World
 
 __all__ = ["ExploreResult", "explore", "ray_directions", "cast_rays"]
@@ -91,6 +82,17 @@ class ExploreResult:
     seen: np.ndarray = field(repr=False)  # (N,) bool: revealed by the sensor
     rays: int = 0  # rays cast in total
     sense_seconds: float = 0.0
+    radius: float = 0.0  # robot radius (m)
+    # For the animation: per replan, the moves made before it and its path (K, 3) m;
+    # per obstacle the move count at which it was first seen (-1 never); per scan (one per
+    # trajectory point) the ranges (m) of the horizontal rays at ``ring_azimuths`` (rad).
+    replan_step: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64),
+                                    repr=False)
+    paths: list = field(default_factory=list, repr=False)
+    seen_step: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64),
+                                  repr=False)
+    ring_ranges: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)), repr=False)
+    ring_azimuths: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
 
     @property
     def replans(self) -> int:
@@ -124,196 +126,21 @@ class ExploreResult:
         """Summary figure (PNG): top view with the true and the seen obstacles and the
         trajectory; per-replan cell checks and times of D* Lite and A*. Written atomically.
         """
-        import matplotlib
+        from planner.explore_figures import summary_png
 
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
+        return summary_png(self, path)
 
-        fig, (ax, ac, at) = plt.subplots(1, 3, figsize=(16, 5),
-                                         gridspec_kw={"width_ratios": [1.6, 1, 1]})
-        z = self.trajectory[:, 2]
-        band = np.abs(self.points[:, 2] - np.median(z)) <= 0.5  # a slice at robot height
-        pts = self.points[band]
-        ax.scatter(pts[:, 0], pts[:, 1], s=0.3, c="0.8", label="true obstacles (slice)")
-        sp = self.points[band & self.seen]
-        ax.scatter(sp[:, 0], sp[:, 1], s=0.5, c="k", label="seen")
-        ax.plot(self.trajectory[:, 0], self.trajectory[:, 1], "-", c="tab:red", lw=1.5,
-                label=f"robot, {self.distance:.1f} m")
-        ax.plot(*self.start[:2], "o", c="tab:green", label="start")
-        ax.plot(*self.goal[:2], "*", c="tab:blue", ms=12, label="goal")
-        ax.set_aspect("equal")
-        ax.set_title(f"{self.lattice}: {self.status}, {self.replans} replans, "
-                     f"{self.mismatches} mismatches, {self.contacts} contacts", fontsize=9)
-        ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(0.0, -0.08), ncol=3,
-                  frameon=False)
-        i = np.arange(self.replans)
-        for a, (d, s, what) in ((ac, (self.dstar_checks, self.astar_checks, "cell checks")),
-                                (at, (self.dstar_seconds, self.astar_seconds, "seconds"))):
-            a.semilogy(i, s, ".", c="0.5", label="A* from scratch")
-            a.semilogy(i, d, ".", c="tab:red", label="D* Lite (update + plan)")
-            a.set_xlabel("replan")
-            a.set_title(f"{what} per replan", fontsize=9)
-            a.legend(fontsize=7)
-        fig.tight_layout()
-        out = Path(path)
-        with atomic_path(out) as tmp:
-            fig.savefig(tmp, dpi=110, format="png")
-        plt.close(fig)
-        return out
+    def animate(self, path: str | Path, max_frames: int = 150, fps: float = 6.0) -> Path:
+        """Animated GIF of the run, one frame per replan (evenly subsampled to at most
+        ``max_frames``): observed area, seen obstacles, trajectory, current plan, goal
+        (:func:`planner.explore_figures.animate_gif`). Written atomically."""
+        from planner.explore_figures import animate_gif
+
+        return animate_gif(self, path, max_frames=max_frames, fps=fps)
 
 
 def _div(a, b) -> float:
     return float(a) / float(b) if b else math.nan
-
-
-def ray_directions(fov=(360.0, 30.0), resolution: float = 3.0) -> np.ndarray:
-    """Unit ray directions (R, 3): azimuths over ``fov[0]`` degrees (centred on +x) and
-    elevations over +-``fov[1]`` degrees, both every ``resolution`` degrees."""
-    try:
-        h, v = (float(x) for x in fov)
-        res = float(resolution)
-    except (TypeError, ValueError):
-        raise PlanError(f"fov must be (horizontal, vertical) degrees, got {fov!r}") from None
-    if not (0 < h <= 360 and 0 <= v <= 90 and 0 < res <= 90):
-        raise PlanError(f"need 0 < horizontal fov <= 360, 0 <= vertical half-fov <= 90 and "
-                        f"0 < resolution <= 90 degrees, got {fov!r}, {resolution!r}")
-    na = max(1, int(round(h / res)))
-    az = np.arange(na) * (h / na) if h >= 360 else np.linspace(-h / 2, h / 2, na + 1)
-    nv = int(round(v / res))
-    el = np.linspace(-v, v, 2 * nv + 1) if nv else np.zeros(1)
-    a, e = np.meshgrid(np.radians(az), np.radians(el), indexing="ij")
-    a, e = a.ravel(), e.ravel()
-    return np.ascontiguousarray(np.stack([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a),
-                                          np.sin(e)], axis=1))
-
-
-@njit(cache=True)
-def _entry(u0, u1, u2, av, dq, wv, nrel):  # pragma: no cover - compiled
-    """Smallest t in [0, 1] at which a + t (b - a) is in the closed Voronoi cell at offset
-    u from the walk's start cell (the clipping of ``_world_kernels._touches``)."""
-    lo = 0.0
-    for r in range(nrel):
-        q = dq[r]
-        if q < 0.0:
-            t = (av[r] + (wv[r, 0] * u0 + wv[r, 1] * u1 + wv[r, 2] * u2)) * q
-            if t > lo:
-                lo = t
-    return lo
-
-
-@njit(cache=True)
-def cast_rays(occupied, walk, origin, s, dirs, reach, hits):  # pragma: no cover - compiled
-    """Cast rays from ``origin`` (m, in cell ``s``) along ``dirs`` (R, 3) for ``reach`` m
-    against the occupied cells (an :class:`Occupancy` whose *blocked* cells are the
-    obstacles). ``hits[r]`` (R, 3) gets the first occupied cell along ray r; returns (R,)
-    bool, False where the ray ends in free space."""
-    rel, rhs, wv = walk.rel, walk.rhs, walk.wv
-    nrel = rel.shape[0]
-    c0 = walk.g @ s.astype(np.float64)
-    av = np.empty(nrel)
-    dq = np.empty(nrel)
-    b = np.empty(3)
-    found = np.zeros(dirs.shape[0], np.bool_)
-    step = np.sqrt(2.0 * rhs.min())
-    scale = 1.0
-    vis, vgen, queue = walk_scratch(reach, step, walk.full.shape[0])
-    gen = 0
-    for k in range(dirs.shape[0]):
-        for j in range(3):
-            b[j] = origin[j] + reach * dirs[k, j]
-        for r in range(nrel):
-            x = ((origin[0] - c0[0]) * rel[r, 0] + (origin[1] - c0[1]) * rel[r, 1]
-                 + (origin[2] - c0[2]) * rel[r, 2])
-            av[r] = rhs[r] * (1.0 + 1e-9) - x
-            y = ((b[0] - origin[0]) * rel[r, 0] + (b[1] - origin[1]) * rel[r, 1]
-                 + (b[2] - origin[2]) * rel[r, 2])
-            dq[r] = 1.0 / y if y != 0.0 else 0.0
-        while True:
-            gen += 1
-            qt, _, _, ok = walk_on(occupied, walk, origin, b, s, False, vis, vgen, gen, queue)
-            if ok:
-                break
-            scale *= 2.0  # scratch too small for this ray: grow it (stamps restart)
-            vis, vgen, queue = walk_scratch(scale * reach + 1.0, step, walk.full.shape[0])
-            gen = 0
-        best = np.inf
-        for n in range(qt):
-            u0, u1, u2 = queue[n, 0], queue[n, 1], queue[n, 2]
-            if occ_free(occupied, s[0] + u0, s[1] + u1, s[2] + u2):
-                continue
-            t = _entry(u0, u1, u2, av, dq, wv, nrel)
-            if t < best:
-                best = t
-                hits[k, 0] = s[0] + u0
-                hits[k, 1] = s[1] + u1
-                hits[k, 2] = s[2] + u2
-        found[k] = best < np.inf
-    return found
-
-
-class _Sensor:
-    """The true map as the sensor sees it.
-
-    Points (``box_sizes`` None): the occupied cells are those holding a point, and a hit
-    reveals the points in the hit cell. Boxes (edge ``box_sizes[k]`` m each): the occupied
-    cells are those overlapping a box (:func:`planner.voxels.box_keys`), so every ray
-    through a box stops at or before it, and a hit reveals the boxes that can overlap the
-    hit cell (centre within half the largest box diagonal plus the covering radius).
-    """
-
-    def __init__(self, points: np.ndarray, box_sizes: np.ndarray | None, lattice: Lattice,
-                 walk, dirs: np.ndarray, reach: float):
-        from planner._world_kernels import build_key_set
-
-        self.points, self.boxes = points, box_sizes is not None
-        if self.boxes:
-            from scipy.spatial import cKDTree
-
-            from planner.voxels import box_keys
-
-            # each box at its own size (OctoMap's pruned leaves are larger than the rest)
-            uniq = np.unique(np.concatenate([box_keys(points[box_sizes == b], b, lattice)
-                                             for b in np.unique(box_sizes)]))
-            self.tree = cKDTree(points)
-            self.near = 0.5 * np.sqrt(3) * float(box_sizes.max()) + lattice.covering_radius
-        else:
-            keys = pack(lattice.quantize(points))
-            self.order = np.argsort(keys, kind="stable")
-            self.sorted = keys[self.order]
-            uniq = np.unique(keys)
-        size = 16
-        while size < 2 * len(uniq):
-            size *= 2
-        big = np.full(3, np.inf)
-        g = np.array(lattice.generator, dtype=float, order="C")
-        self.occ = Occupancy(1, np.zeros(1, np.uint8), np.zeros(3, np.int64),
-                             np.zeros(3, np.int64), build_key_set(uniq, size), size - 1, g,
-                             -big, big.copy())
-        self.walk, self.dirs, self.reach = walk, dirs, float(reach)
-        self.lattice = lattice
-        self.hits = np.zeros((len(dirs), 3), np.int64)
-        self.seen = np.zeros(len(points), bool)
-
-    def scan(self, cell: np.ndarray) -> np.ndarray:
-        """Cast every ray from the centre of ``cell``; return the indices of the obstacles
-        revealed for the first time."""
-        origin = self.lattice.to_world(cell[None])[0]
-        found = cast_rays(self.occ, self.walk, origin, cell, self.dirs, self.reach, self.hits)
-        hit = np.unique(self.hits[found], axis=0)
-        if not len(hit):
-            return np.zeros(0, np.int64)
-        if self.boxes:
-            near = self.tree.query_ball_point(self.lattice.to_world(hit), self.near)
-            idx = np.unique(np.concatenate([np.asarray(x, np.int64) for x in near]))
-        else:
-            keys = pack(hit)
-            lo = np.searchsorted(self.sorted, keys, "left")
-            hi = np.searchsorted(self.sorted, keys, "right")
-            idx = self.order[np.concatenate([np.arange(a, b)
-                                             for a, b in zip(lo, hi, strict=True)])]
-        idx = idx[~self.seen[idx]]
-        self.seen[idx] = True
-        return idx
 
 
 def explore(
@@ -336,9 +163,9 @@ def explore(
     Parameters
     ----------
     source : str, Path, ndarray (N, 3) or Obstacles
-        The true map (as :func:`planner.build_world` takes it). Point maps are sensed by
-        the cells holding their points; box maps (``.3dmap``, OctoMap leaves) by the cells
-        overlapping their boxes, and a seen box is inflated as a box.
+        The true map (as :func:`planner.build_world` takes it, bundled names too). Point
+        maps are sensed by the cells holding their points; box maps (``.3dmap``, OctoMap
+        leaves) by the cells overlapping their boxes, and a seen box is inflated as a box.
     start, goal : array_like, shape (3,)
         Metres; must be free in the true inflated world.
     lattice, cell_volume, bounds
@@ -366,6 +193,10 @@ def explore(
     from planner.search.incremental import DStarLite
     from planner.world import _walk
 
+    if isinstance(source, str | Path):  # a bundled map by name ("office"), as build_world
+        from planner.maps import resolve
+
+        source = resolve(source)
     side = _sidecar(source)
     if radius is None:
         radius = float(side.get("robot_radius", 0.0))
@@ -394,18 +225,20 @@ def explore(
     goal_p, gcell = truth.endpoint(goal, "goal")
     known = World(lat, np.zeros((0, 3), np.int64), truth.bounds, radius=truth.radius,
                   source=f"explored {obst.source}")
-    sensor = _Sensor(pts, obst.box_sizes if boxes else None, lat, _walk(lat), dirs,
+    sensor = Sensor(pts, obst.box_sizes if boxes else None, lat, _walk(lat), dirs,
                      sensor_range)
     _warm_up(lat, neighbors, DStarLite)
     dl = DStarLite(known, s, gcell, neighbors=neighbors)
-    rec = {k: [] for k in ("changed", "ds", "dc", "de", "dcost", "as", "ac", "ae", "acost")}
+    rec = {k: [] for k in ("changed", "ds", "dc", "de", "dcost", "as", "ac", "ae", "acost",
+                           "step")}
+    paths = []
     cur = s.copy()
     traj = [cur.copy()]
     status, distance, contacts, mismatches, path, at = "budget", 0.0, 0, 0, None, 0
     sense_secs = 0.0
     for _step in range(max_steps + 1):
         t0 = time.perf_counter()
-        new = sensor.scan(cur)
+        new = sensor.scan(cur, _step)
         changed = np.zeros((0, 3), np.int64)
         if len(new):
             seen = io.Obstacles(
@@ -423,6 +256,8 @@ def explore(
             d_secs = time.perf_counter() - t0
             a = _scratch_astar(search, known, cur, gcell, neighbors)
             rec["changed"].append(len(changed))
+            rec["step"].append(_step)
+            paths.append(lat.to_world(r.cells) if len(r.cells) else np.zeros((0, 3)))
             rec["ds"].append(d_secs)
             rec["dc"].append(r.cell_checks)
             rec["de"].append(r.expansions)
@@ -462,7 +297,11 @@ def explore(
         astar_seconds=arr["as"].astype(float), astar_checks=arr["ac"].astype(np.int64),
         astar_expansions=arr["ae"].astype(np.int64), astar_cost=arr["acost"].astype(float),
         mismatches=mismatches, contacts=contacts, start=start_p, goal=goal_p, points=pts,
-        seen=sensor.seen, rays=len(dirs) * len(traj), sense_seconds=sense_secs)
+        seen=sensor.seen, rays=len(dirs) * len(traj), sense_seconds=sense_secs,
+        radius=float(truth.radius), replan_step=arr["step"].astype(np.int64), paths=paths,
+        seen_step=sensor.seen_step, ring_azimuths=sensor.ring_azimuths,
+        ring_ranges=np.array(sensor.ring_ranges).reshape(len(sensor.ring_ranges),
+                                                         len(sensor.ring)))
 
 
 def _warm_up(lat: Lattice, neighbors: str, dstar) -> None:

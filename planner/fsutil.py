@@ -10,15 +10,18 @@ from pathlib import Path
 
 
 @contextlib.contextmanager
-def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
+def atomic_path(path: str | os.PathLike, keep_suffix: bool = False) -> Iterator[Path]:
     """Yield a temporary path in the target's folder; on success rename it over ``path``.
 
     On any exception the temporary file is removed and ``path`` is left untouched, so a
-    failed or killed run never leaves a half-written output.
+    failed or killed run never leaves a half-written output. ``keep_suffix``: the temporary
+    name ends with the target's suffix too (``.x.gif.tmp.gif``), for writers that choose
+    the format by the file name.
     """
     target = Path(path)
     target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
+    suffix = ".tmp" + (target.suffix if keep_suffix else "")
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=suffix, dir=target.parent)
     os.close(fd)
     try:
         yield Path(tmp)

@@ -89,3 +89,41 @@ def test_bad_sensor_settings_are_one_clear_error():
     with pytest.raises(PlanError, match="goal"):
         explore(_wall(True), [1, 1, 1], [5, 1, 1], radius=0.2, cell_volume=1e-3,
                 bounds=BOUNDS)
+
+
+def test_office_exploration_animates_one_frame_per_replan(tmp_path):
+    from PIL import Image
+
+    from planner.maps import load_map_info
+
+    q = load_map_info("office")["queries"][0]
+    r = explore("office", q["start"], q["goal"], lattice="cubic", sensor_range=3.0,
+                resolution=10.0, fov=(360, 10), max_steps=12)
+    assert r.status == "budget" and r.replans >= 2
+    out = r.animate(tmp_path / "office.gif", max_frames=3)
+    with Image.open(out) as im:
+        assert im.format == "GIF"
+        assert im.n_frames == min(r.replans, 3) + 1  # the replans drawn, then the end
+    assert not [p for p in tmp_path.iterdir() if p.name != "office.gif"]  # no temp left
+
+
+def test_animation_frames_are_subsampled_evenly_keeping_first_and_last():
+    from planner.explore_figures import frame_replans
+
+    assert list(frame_replans(4, 150)) == [0, 1, 2, 3]
+    f = frame_replans(1000, 150)
+    assert len(f) == 150 and f[0] == 0 and f[-1] == 999 and np.all(np.diff(f) > 0)
+
+
+def test_cli_writes_the_gif_and_refuses_another_suffix(tmp_path, capsys):
+    from planner.cli import main
+
+    gif = tmp_path / "run.gif"
+    args = ["explore", "office", "--start", "2.5,2.5,1.2", "--goal", "18.3,10.5,1.2",
+            "--lattice", "bcc", "--sensor-range", "3", "--resolution", "10", "--fov", "360,10",
+            "--max-steps", "6"]
+    assert main([*args, "--gif", str(gif), "--frames", "2"]) == 1  # budget: not reached
+    assert "budget" in capsys.readouterr().out
+    assert gif.read_bytes()[:6] in (b"GIF87a", b"GIF89a")
+    assert main([*args, "--gif", str(tmp_path / "run.png")]) == 2
+    assert "unsupported output type '.png'" in capsys.readouterr().err

@@ -81,6 +81,10 @@ def run_task(task: dict) -> list[dict]:
     """
     from planner import api, search
 
+    if task["method"] == "explore":  # a robot sensing its way, not one planned path
+        from planner.bench.explore_rows import explore_rows
+
+        return explore_rows(task)
     world = _world(task)
     clear = _clearance(task["map"])
     step = 0.25 * world.lattice.packing_radius
@@ -238,8 +242,11 @@ def _group_tasks(suite: Suite, common: dict, queries: list[dict]) -> list[dict]:
     for lat in suite.lattices:
         for nb in suite.neighbors:
             for meth in suite.methods:
-                tasks += _split({**common, "lattice": lat, "neighbors": nb,
-                                 "method": meth, "seed": 0}, queries)
+                head = {**common, "lattice": lat, "neighbors": nb, "method": meth, "seed": 0}
+                if meth == "explore":  # one long run per task
+                    tasks += _split({**head, "explore": suite.explore}, queries, size=1)
+                else:
+                    tasks += _split(head, queries)
     for planner_name in suite.ompl_planners:
         for seed in suite.ompl_seeds:
             tasks += _split({**common, "lattice": suite.ompl_lattice,

@@ -7,7 +7,8 @@ Example::
     queries = 6                      # per map x cell volume x radius
     lattices = ["cubic", "bcc", "fcc", "mcc", "hex"]
     neighbors = ["face", "full"]
-    methods = ["astar", "theta"]     # lattice methods
+    methods = ["astar", "theta"]     # lattice methods; "explore": exploration runs
+                                     # (planner.bench.explore_rows, sensor in [explore])
     min_distance = 0.3               # start-goal distance, fraction of the box diagonal
     rotation = "yaw"                 # "none" | "yaw" (about z) | "so3": the map and its
     rotations = 8                    # queries turn together; same sample for every lattice
@@ -71,6 +72,7 @@ class Suite:
     rotations: int = 1
     kind: str = "planning"
     paper: dict = field(default_factory=dict)
+    explore: dict = field(default_factory=dict)
     source: str = ""
     skipped: tuple[str, ...] = field(default=())
 
@@ -93,9 +95,10 @@ def _check_methods(path: Path, methods: tuple[str, ...], planners: tuple[str, ..
     from planner.search import METHODS
 
     for m in methods:
-        if m not in METHODS:
+        if m not in (*METHODS, "explore"):
             raise SuiteError(f"{path}: unknown method {m!r} (lattice methods: "
-                             f"{', '.join(METHODS)}; OMPL planners go in [ompl] planners)")
+                             f"{', '.join(METHODS)}, or explore; OMPL planners go in "
+                             f"[ompl] planners)")
     for p in planners:
         if p not in PLANNERS:
             raise SuiteError(f"{path}: unknown OMPL planner {p!r} (known: "
@@ -159,6 +162,7 @@ def load_suite(name_or_path: str) -> Suite:
             rotations=int(raw.get("rotations", 1)),
             kind=str(raw.get("kind", "planning")),
             paper=dict(raw.get("paper", {})),
+            explore=dict(raw.get("explore", {})),
             source=str(path),
             skipped=tuple(skipped),
         )
@@ -193,7 +197,7 @@ def load_suite(name_or_path: str) -> Suite:
 
 
 _KEYS = {"": {"name", "seed", "queries", "lattices", "neighbors", "methods", "min_distance",
-              "ompl", "maps", "kind", "paper", "rotation", "rotations"},
+              "ompl", "maps", "kind", "paper", "rotation", "rotations", "explore"},
          "maps": {"path", "cell_volumes", "cell_volume", "radii", "radius", "scenarios",
                   "queries"},
          "ompl": {"planners", "time", "seeds", "lattice"}}
@@ -241,6 +245,16 @@ def _check_raw(path: Path, raw: dict) -> None:
         q = m.get("queries", 1)
         if isinstance(q, bool) or not isinstance(q, int) or not 1 <= q <= 10**6:
             raise bad("maps.queries", "an integer in 1..1000000")
+    ex = raw.get("explore", {})
+    if not isinstance(ex, dict):
+        raise bad("explore", "an [explore] table")
+    if ex and "explore" not in raw.get("methods", ()):
+        raise SuiteError(f"{path}: an [explore] table needs \"explore\" in methods")
+    from planner.bench.explore_rows import check_explore_table
+
+    why = check_explore_table(ex)
+    if why:
+        raise SuiteError(f"{path}: {why}")
     ompl = raw.get("ompl", {})
     if not isinstance(ompl, dict):
         raise bad("ompl", "an [ompl] table")

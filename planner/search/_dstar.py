@@ -33,8 +33,9 @@ from planner.search.stencils import move_allowed
 # int64 state vector: node count, heap size, expansions, lookups, update stamp, goal slot
 S_N, S_HN, S_EXP, S_LOOK, S_STAMP, S_GOAL = 0, 1, 2, 3, 4, 5
 S_SIZE = 6
-DONE, GROW = 0, 1
+DONE, GROW, BLOCKED = 0, 1, 2
 _TOL = 1e-9  # relative: "rhs(s) = c + g_old" tested with slack (a spare recompute is safe)
+_BIAS = 4 * _TOL  # relative: an underconsistent node's key ahead of the ties (_key1)
 
 
 class DNodes(NamedTuple):
@@ -131,6 +132,20 @@ def _h(ms, start, v0, v1, v2):  # pragma: no cover - compiled
 
 
 @njit(cache=True, inline="always")
+def _key1(ms, g, rhs, hv, km):  # pragma: no cover - compiled
+    """First key of a queued node. An underconsistent node (g < rhs) goes ahead of every
+    key equal to its own up to float noise (``_BIAS``): its stale low g may carry the
+    start's path, and two sums of the same moves can round to neighbouring grid steps of
+    :func:`_k1`, which would otherwise queue it one step behind an overconsistent tie (or
+    the start itself) and let the search stop on a stale value."""
+    x = min(g, rhs) + hv + km
+    k = _k1(ms, x)
+    if g < rhs:
+        k -= _BIAS * (1.0 + abs(x))
+    return k
+
+
+@njit(cache=True, inline="always")
 def _k1(ms, x):  # pragma: no cover - compiled
     """First key on a grid of 1e-9 move lengths: equal sums of the same moves in another
     order (float noise) mostly tie exactly, so the second key orders them."""
@@ -167,7 +182,7 @@ def update_vertex(ms, nd, heap, st, km, start, s):  # pragma: no cover - compile
     if g != rhs:
         gm = min(g, rhs)
         u0, u1, u2 = unpack3(nd.key[s])
-        k1 = _k1(ms, gm + _h(ms, start, u0, u1, u2) + km)
+        k1 = _key1(ms, g, rhs, _h(ms, start, u0, u1, u2), km)
         tb = np.inf if g < rhs else gm
         if pos[s] >= 0:
             i = pos[s]
@@ -203,10 +218,16 @@ def best_successor(occ, ms, ufree, bx, nd, st, s):  # pragma: no cover - compile
 
 
 @njit(cache=True)
-def compute_path(occ, ms, ufree, bx, nd, heap, st, km, start):  # pragma: no cover - compiled
+def compute_path(occ, ms, ufree, bx, nd, heap, st, km, start, check_start):
+    # pragma: no cover - compiled
     """ComputeShortestPath: expand until the start is consistent and no queued key is
-    smaller than its key (ties, up to float noise, are expanded too). Returns DONE, or
-    GROW when a new node might not fit."""
+    smaller than its key (ties, up to float noise, are expanded too). Returns DONE, GROW
+    when a new node might not fit, or BLOCKED when ``check_start`` and the start's own
+    cell is blocked (one lookup, as A*'s endpoint check)."""
+    if check_start:
+        st[S_LOOK] += 1
+        if not occ_free(occ, start[0], start[1], start[2]):
+            return BLOCKED
     cap = nd.key.shape[0]
     nm = ms.moves.shape[0]
     goal = st[S_GOAL]
@@ -234,8 +255,7 @@ def compute_path(occ, ms, ufree, bx, nd, heap, st, km, start):  # pragma: no cov
         u = heap_s[0]
         st[S_EXP] += 1
         u0, u1, u2 = unpack3(nd.key[u])
-        gm = min(nd.g[u], nd.rhs[u])
-        k1n = _k1(ms, gm + _h(ms, start, u0, u1, u2) + km)
+        k1n = _key1(ms, nd.g[u], nd.rhs[u], _h(ms, start, u0, u1, u2), km)
         if k1o < k1n:  # a key from an earlier start: requeue (the tie-break is current)
             update_vertex(ms, nd, heap, st, km, start, u)
             continue
@@ -322,15 +342,21 @@ def _touch(nd, u, stamp, touched, nt, redo):  # pragma: no cover - compiled
 def apply_changes(occ, ms, ufree, bx, nd, heap, st, km, start, ss, old, redo, n, touched):
     # pragma: no cover - compiled
     """Look up the edge masks of the collected nodes marked ``redo``, then repair every
-    edge whose state flipped, in both directions, recomputing each affected rhs once.
-    Needs room for ``n * len(moves)`` new nodes; ``touched``: scratch of 2 n len(moves)."""
+    edge whose state flipped, recomputing each affected rhs once.
+    Needs room for ``n * len(moves)`` new nodes; ``touched``: scratch of 2 n len(moves).
+
+    A collected node left without edges (its own cell blocked, or walled in) is *dead*:
+    no rhs can read its g any more (edges are symmetric), so it settles at inf at once and
+    its flipped edges are seen from the live end only. Inside a newly blocked region (most
+    of a scan's cells) that skips every edge between two dead nodes.
+    """
     for i in range(n):
         if redo[i]:
             nd.mask[ss[i]] = -1
             edges(occ, ms, ufree, nd, st, ss[i])
-    # Each flipped edge x <-> v, both directions (fig. 4, lines 31-36): a freed edge
-    # lowers rhs at once; a lost support (rhs = c + g of the other end) marks the rhs for
-    # one recompute after all flips (g does not change meanwhile).
+    # Each flipped edge x <-> v with a live x (fig. 4, lines 31-36): a freed edge lowers
+    # rhs at once; a lost support (rhs = c + g of the other end) marks the rhs for one
+    # recompute after all flips (g does not change meanwhile).
     st[S_STAMP] += 1
     stamp = st[S_STAMP]
     goal = st[S_GOAL]
@@ -341,8 +367,11 @@ def apply_changes(occ, ms, ufree, bx, nd, heap, st, km, start, ss, old, redo, n,
         diff = old[i] ^ mx
         if diff == 0:
             continue
+        dead = mx == 0 and x != goal
         x0, x1, x2 = unpack3(nd.key[x])
         gx = nd.g[x]
+        if dead and gx == np.inf:
+            continue  # no rhs can rest on it
         for m in range(ms.moves.shape[0]):
             bit = np.int64(1) << np.int64(m)
             if not diff & bit:
@@ -350,6 +379,13 @@ def apply_changes(occ, ms, ufree, bx, nd, heap, st, km, start, ss, old, redo, n,
             c = ms.cost[m]
             v0, v1, v2 = x0 + ms.moves[m, 0], x1 + ms.moves[m, 1], x2 + ms.moves[m, 2]
             v = node(bx, nd, st, v0, v1, v2, False)
+            if dead:
+                # A live end with a cached mask is collected too and sees this edge; one
+                # never looked up (mask -1) may still rest its rhs on x.
+                if (v >= 0 and v != goal and nd.mask[v] < 0
+                        and abs(nd.rhs[v] - (c + gx)) <= _TOL * (c + gx)):
+                    nt = _touch(nd, v, stamp, touched, nt, True)
+                continue
             gv = nd.g[v] if v >= 0 else np.inf
             if mx & bit:  # freed
                 if gv < np.inf and x != goal and c + gv < nd.rhs[x]:
@@ -364,22 +400,31 @@ def apply_changes(occ, ms, ufree, bx, nd, heap, st, km, start, ss, old, redo, n,
             else:  # blocked
                 if gv < np.inf and x != goal and abs(nd.rhs[x] - (c + gv)) <= _TOL * (c + gv):
                     nt = _touch(nd, x, stamp, touched, nt, True)
-                if (gx < np.inf and v >= 0 and v != goal
+                if (gx < np.inf and v >= 0 and v != goal and nd.mask[v] != 0
                         and abs(nd.rhs[v] - (c + gx)) <= _TOL * (c + gx)):
                     nt = _touch(nd, v, stamp, touched, nt, True)
+    for i in range(n):  # after the live ends read their g
+        x = ss[i]
+        if nd.mask[x] == 0 and x != goal:
+            _settle(nd, heap, st, x)
     for i in range(nt):
         u = touched[i]
         if nd.mask[u] == 0:
-            # No edge left (its own cell blocked, or walled in): no rhs reads its g any
-            # more, so it is consistent at inf without queueing it.
-            nd.g[u] = np.inf
-            nd.rhs[u] = np.inf
-            if nd.pos[u] >= 0:
-                _remove(heap, nd.pos, st, u)
+            _settle(nd, heap, st, u)
             continue
         if nd.batch[u] == 1:
             nd.rhs[u] = best_successor(occ, ms, ufree, bx, nd, st, u)[0]
         update_vertex(ms, nd, heap, st, km, start, u)
+
+
+@njit(cache=True, inline="always")
+def _settle(nd, heap, st, u):  # pragma: no cover - compiled
+    """A node without edges: no rhs reads its g any more, so it is consistent at inf
+    without queueing it."""
+    nd.g[u] = np.inf
+    nd.rhs[u] = np.inf
+    if nd.pos[u] >= 0:
+        _remove(heap, nd.pos, st, u)
 
 
 @njit(cache=True)

@@ -101,6 +101,7 @@ class DStarLite:
         dk.update_vertex(self._ms, self._nd, self._heap, self._st, self._km, self.start, g)
         self._mark = (0, 0)  # lookups, expansions at the last plan
         self._seconds = 0.0  # kernel time since the last plan
+        self._scr: dict[str, np.ndarray] = {}  # scratch kept between repairs
 
     # -- storage -----------------------------------------------------------------------
     def _room(self, extra: int) -> None:
@@ -112,6 +113,15 @@ class DStarLite:
             cap *= 2
         self._nd = dk.DNodes(*(_grown(a, cap, n) for a in self._nd))
         self._heap = Heap(*(_grown(a, cap, int(self._st[dk.S_HN])) for a in self._heap))
+
+    def _scratch(self, name: str, size: int, dtype) -> np.ndarray:
+        """A scratch array of at least ``size`` items, reused between calls (a replan
+        should not pay for allocating buffers sized to the whole node table)."""
+        a = self._scr.get(name)
+        if a is None or len(a) < size:
+            a = np.empty(max(size, 2 * len(a) if a is not None else 1024), dtype)
+            self._scr[name] = a
+        return a
 
     @property
     def nodes(self) -> int:
@@ -148,18 +158,19 @@ class DStarLite:
             state = ~self.world.checker.cells_free(c)
             self._st[dk.S_LOOK] += len(c)
         else:
-            state = np.full(len(c), bool(blocked))
-        nu = len(self._ms.union)
-        ss = np.empty(len(c) * (nu + 1), np.int64)
-        old = np.empty_like(ss)
-        redo = np.empty(len(ss), np.bool_)
+            state = self._scratch("state", len(c), np.bool_)
+            state[:len(c)] = bool(blocked)
+        size = len(c) * (len(self._ms.union) + 1)
+        ss = self._scratch("ss", size, np.int64)
+        old = self._scratch("old", size, np.int64)
+        redo = self._scratch("redo", size, np.bool_)
         n = dk.collect(self._ms, self._affect, self._bx, self._nd, self._st, c, state, ss,
                        old, redo)
         nm = len(self._ms.moves)
         self._room(n * nm + 1)
         dk.apply_changes(self.world.occupancy, self._ms, self._ufree, self._bx, self._nd,
                          self._heap, self._st, self._km, self.start, ss, old, redo, n,
-                         np.empty(2 * n * nm + 1, np.int64))
+                         self._scratch("touched", 2 * n * nm + 1, np.int64))
         self._seconds += time.perf_counter() - t0
 
     def plan(self) -> SearchResult:
@@ -175,15 +186,17 @@ class DStarLite:
         t0 = time.perf_counter()
         occ = self.world.occupancy
         st = self._st
-        st[dk.S_LOOK] += 1  # the start's own cell, as A*'s endpoint check
-        if not self.world.checker.cells_free(self.start[None])[0]:
-            return self._result(None, math.inf, t0, "start cell is blocked", "blocked")
+        first = True  # the start's own cell is looked up once, as A*'s endpoint check
         while True:
             self._room(len(self._ms.moves) + 1)
-            if dk.compute_path(occ, self._ms, self._ufree, self._bx, self._nd, self._heap,
-                               st, self._km, self.start) == dk.DONE:
+            done = dk.compute_path(occ, self._ms, self._ufree, self._bx, self._nd,
+                                   self._heap, st, self._km, self.start, first)
+            if done == dk.BLOCKED:
+                return self._result(None, math.inf, t0, "start cell is blocked", "blocked")
+            if done == dk.DONE:
                 break
-        out = np.empty(self.nodes + 1, np.int64)
+            first = False
+        out = self._scratch("path", self.nodes + 1, np.int64)
         k, cost = dk.extract(occ, self._ms, self._ufree, self._bx, self._nd, st, self.start,
                              out)
         if k == 0:
