@@ -18,11 +18,9 @@ checks and times and of their ratios. ``cell_checks``, ``expansions`` and ``seco
 the incremental search's totals over the run. ``length`` stays None: a travelled distance
 is not a planned path, so exploration rows never enter the path-length ratios.
 
-Rotations: the map's points turn with the queries about the map centre, as in every other
-row of a rotated suite; the explored world is the axis-aligned box around the rotated map
-box, whose corners outside the map count as unobserved (free) space, as exploration treats
-any space its sensor cannot hit. Box maps (OctoMap leaves, ``.3dmap``) explore unrotated
-only: a rotated box is an oriented solid the simulated sensor does not cast against.
+Rotations: as every row of a rotated suite, the robot explores the map in its own frame
+on the lattice turned by R^T (:func:`planner.bench.worlds.rotated_lattice`), which is the
+map turned by R against the lattice; point and box maps alike.
 """
 
 from __future__ import annotations
@@ -63,23 +61,15 @@ def check_explore_table(table: dict) -> str | None:
     return None
 
 
-def _source(task: dict):
-    """The map the robot explores, turned by the task's rotation, and its bounds (m)."""
-    from planner.bench.rotations import quaternion_matrix
+def _setting(task: dict):
+    """The map the robot explores, its bounds (m) and the task's (turned) lattice."""
     from planner.bench.runner import _frame
-    from planner.bench.worlds import rotated_bounds
+    from planner.bench.worlds import rotated_lattice
 
     frame = _frame(task["map"])
-    quat = task.get("quaternion", (1.0, 0.0, 0.0, 0.0))
-    R = quaternion_matrix(quat)
-    if np.allclose(R, np.eye(3), atol=1e-12):
-        return frame.obstacles, frame.bounds
-    obst = frame.obstacles
-    if len(obst.boxes):
-        raise PlannerError(f"{obst.source}: exploration of a rotated box map is not "
-                           f"supported (use rotation = \"none\")")
-    rot, _ = obst.rotated(R, frame.centre)
-    return rot.points, rotated_bounds(frame.bounds, R, frame.centre)
+    lat = rotated_lattice(task["lattice"], task["cell_volume"],
+                          task.get("quaternion", (1.0, 0.0, 0.0, 0.0)))
+    return frame.obstacles, frame.bounds, lat
 
 
 def explore_rows(task: dict) -> list[dict]:
@@ -100,9 +90,8 @@ def explore_rows(task: dict) -> list[dict]:
                     resolution=cfg["resolution"])
         t0 = time.perf_counter()
         try:
-            source, bounds = _source(task)
-            r = explore(source, q["start"], q["goal"], lattice=task["lattice"],
-                        radius=task["radius"], cell_volume=task["cell_volume"],
+            source, bounds, lat = _setting(task)
+            r = explore(source, q["start"], q["goal"], lattice=lat, radius=task["radius"],
                         bounds=bounds, sensor_range=cfg["sensor_range"],
                         fov=tuple(cfg["fov"]), resolution=cfg["resolution"],
                         neighbors=task["neighbors"], max_steps=cfg["max_steps"])
