@@ -263,6 +263,7 @@ def test_rotated_suites_share_one_rotation_sample_and_record_it(tmp_path):
     rows = runner.run(tasks, tmp_path / "results.jsonl", progress=False)
     assert {r["rotation"] for r in rows} == {0, 1}
     assert all(len(r["quaternion"]) == 4 for r in rows)
+    assert all(r["commit"] for r in rows)  # the code that ran each row
     assert len({runner.row_key(r) for r in rows}) == len(rows)
     for r in rows:
         if r["found"]:

@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import datetime
+import functools
 import os
 import platform
 import subprocess
+from collections import Counter
 from importlib import metadata
 from pathlib import Path
 
@@ -13,8 +15,10 @@ _PACKAGES = ("lattice-planner", "numpy", "scipy", "numba", "matplotlib", "ompl",
              "distributed", "plyfile")
 
 
+@functools.cache
 def _commit() -> str:
-    """The source checkout's commit (``+dirty`` with local changes), or ``unknown``."""
+    """The source checkout's commit (``+dirty`` with local changes), or ``unknown``; read
+    once per process, so a row records the code that ran it."""
     root = Path(__file__).resolve().parents[2]
     if not (root / "pyproject.toml").is_file() or not (root / "planner").is_dir():
         return "unknown (installed package)"  # site-packages may sit inside another repo
@@ -61,11 +65,21 @@ def run_metadata(jobs: int = 1) -> dict:
     }
 
 
-def metadata_markdown(meta: dict) -> str:
-    """The metadata as Markdown bullet lines for a report."""
+def row_commit() -> str:
+    """The commit a benchmark row records (:func:`_commit`, cached per process)."""
+    return _commit()
+
+
+def metadata_markdown(meta: dict, rows: list[dict] | None = None) -> str:
+    """The metadata as Markdown bullet lines for a report; with ``rows``, also the commits
+    that ran them (they differ from the report's when a run was resumed or the checkout
+    changed while it ran)."""
     pk = ", ".join(f"{k} {v}" for k, v in meta["packages"].items())
+    ran = Counter(r.get("commit", "not recorded") for r in rows or [])
+    by = "; rows run by " + ", ".join(f"`{c}` ({n})" for c, n in ran.most_common()) \
+        if ran else ""
     return "\n".join([
-        f"- commit: `{meta['commit']}`; date: {meta['date']}",
+        f"- commit: `{meta['commit']}` (this report){by}; date: {meta['date']}",
         f"- CPU: {meta['cpu']} ({meta['cpu_count']} cores), jobs: {meta['jobs']}",
         f"- Python {meta['python']}; {pk}",
     ])

@@ -74,6 +74,7 @@ def _setting(task: dict):
 
 def explore_rows(task: dict) -> list[dict]:
     """Rows of one exploration task (a world configuration and a batch of queries)."""
+    from planner.analysis.metadata import row_commit
     from planner.explore import explore
 
     cfg = {**EXPLORE_KEYS, **task.get("explore", {})}
@@ -81,7 +82,7 @@ def explore_rows(task: dict) -> list[dict]:
     for q in task["queries"]:
         base = {k: task[k] for k in ("suite", "map", "cell_volume", "radius", "lattice",
                                      "neighbors", "method", "seed")}
-        base.update(rotation=task.get("rotation", 0),
+        base.update(commit=row_commit(), rotation=task.get("rotation", 0),
                     quaternion=list(task.get("quaternion", (1.0, 0.0, 0.0, 0.0))),
                     query=q["id"], start=q["start"], goal=q["goal"],
                     optimal_cost=q.get("optimal_cost"), length=None, length_smoothed=None,

@@ -80,6 +80,7 @@ def run_task(task: dict) -> list[dict]:
     A plain function of plain data so that it pickles to processes and Dask workers.
     """
     from planner import api, search
+    from planner.analysis.metadata import row_commit
 
     if task["method"] == "explore":  # a robot sensing its way, not one planned path
         from planner.bench.explore_rows import explore_rows
@@ -92,7 +93,7 @@ def run_task(task: dict) -> list[dict]:
     for q in task["queries"]:
         base = {k: task[k] for k in ("suite", "map", "cell_volume", "radius", "lattice",
                                      "neighbors", "method", "seed")}
-        base.update(rotation=task.get("rotation", 0),
+        base.update(commit=row_commit(), rotation=task.get("rotation", 0),
                     quaternion=list(task.get("quaternion", (1.0, 0.0, 0.0, 0.0))))
         base.update(query=q["id"], start=q["start"], goal=q["goal"],
                     optimal_cost=q.get("optimal_cost"))
