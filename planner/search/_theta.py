@@ -3,7 +3,8 @@
 Theta* (``anyangle`` 1) checks line of sight from the expanded node's parent to each
 neighbour when it is generated and links the neighbour to that parent when it can see it.
 Lazy Theta* (``anyangle`` 2) assumes the sight line and verifies it once, when the node is
-expanded (:func:`lazy_set_vertex`), falling back to its best closed lattice neighbour.
+expanded (in the kernel), falling back to its best closed lattice neighbour
+(:func:`lazy_fallback`).
 Both use the Euclidean heuristic and the exact walk of :mod:`planner.search._los`.
 """
 
@@ -12,7 +13,6 @@ from __future__ import annotations
 import numpy as np
 
 from planner._jit import njit_cached
-from planner.keys import unpack3
 from planner.search._los import sight
 from planner.search._nodes import ST_WGEN, find_slot
 from planner.search.stencils import move_allowed
@@ -30,20 +30,12 @@ def euclid(g, p0, p1, p2, q0, q1, q2):  # pragma: no cover - compiled
     return np.sqrt(x * x + y * y + z * z)
 
 
-@njit_cached(inline="always")
-def lazy_set_vertex(occ, walk, ms, nodes, slots, sc, st, ufree, s, u0, u1, u2):
-    # pragma: no cover - compiled
-    """Lazy Theta* SetVertex for slot ``s`` at cell u: verify the assumed line of sight to
-    its parent; else take the best closed neighbour that an allowed move reaches (one
-    exists: the node that generated s). ``ufree`` holds the union stencil lookups of u.
-    Returns the lookups made."""
+@njit_cached
+def lazy_fallback(ms, nodes, slots, ufree, s, u0, u1, u2):  # pragma: no cover - compiled
+    """Lazy Theta* SetVertex when slot ``s`` at cell u does not see its assumed parent:
+    take the best closed neighbour that an allowed move reaches (one exists: the node that
+    generated s). ``ufree`` holds the union stencil lookups of u."""
     par = nodes.par
-    if par[s] == s:
-        return 0
-    p0, p1, p2 = unpack3(nodes.key[par[s]])
-    ok, c = sight(occ, walk, sc, st, ST_WGEN, p0, p1, p2, u0, u1, u2)
-    if ok:
-        return c
     moves, mcost, mptr, midx = ms.moves, ms.cost, ms.ptr, ms.idx
     best = np.inf
     bp = -1
@@ -59,7 +51,6 @@ def lazy_set_vertex(occ, walk, ms, nodes, slots, sc, st, ufree, s, u0, u1, u2):
             bp = t
     par[s] = bp
     nodes.g[s] = best
-    return c
 
 
 @njit_cached(inline="always")
