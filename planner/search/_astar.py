@@ -28,7 +28,7 @@ from planner.search._nodes import (
     local,
     new_page,
 )
-from planner.search._theta import LAZY_THETA, euclid, lazy_fallback, theta_parent
+from planner.search._theta import LAZY_THETA, THETA, euclid, lazy_fallback
 from planner.search.stencils import H_EUCLID, H_GAUGE, MAX_BITS, move_allowed
 
 _EMPTY = -1
@@ -195,12 +195,14 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st):
                 if not ufree[j]:
                     blocked |= np.int64(1) << j
         lookups += nu
-        if anyangle == LAZY_THETA and npar[s] != s:  # verify the assumed sight line
+        # Verify the assumed sight line, walked from s: a blocked cell is likelier near s
+        # (its parent saw s's generator), so the walk stops sooner.
+        if anyangle == LAZY_THETA and npar[s] != s:
             p0, p1, p2 = unpack3(nkey[npar[s]])
             if cubic:
-                ok, c = cubic_walk(occ, p0, p1, p2, u0, u1, u2)
+                ok, c = cubic_walk(occ, u0, u1, u2, p0, p1, p2)
             else:
-                ok, c = sight(occ, walk, sc, st, ST_WGEN, p0, p1, p2, u0, u1, u2)
+                ok, c = sight(occ, walk, sc, st, ST_WGEN, u0, u1, u2, p0, p1, p2)
             lookups += c
             if not ok:
                 lazy_fallback(ms, nodes, slots, ufree, s, u0, u1, u2)
@@ -277,10 +279,10 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st):
             if anyangle == 0:
                 gt = ng[s] + mcost[m]
                 par = s
-            elif anyangle == LAZY_THETA or ps == s:
-                # The assumed sight line to s's parent, written out: numba did not inline
-                # theta_parent here and the call's reference counting cost ~2 us per
-                # expansion (26 calls), more than the whole A* expansion.
+            else:
+                # Any-angle g through s's parent, written out: numba did not inline a helper
+                # here and the call's reference counting cost ~2 us per expansion (26
+                # calls), more than the whole A* expansion.
                 e0 = v0 - p0
                 e1 = v1 - p1
                 e2 = v2 - p2
@@ -289,10 +291,18 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st):
                 z = g20 * e0 + g21 * e1 + g22 * e2
                 gt = ng[ps] + np.sqrt(x * x + y * y + z * z)
                 par = ps
-            else:
-                gt, par, c = theta_parent(occ, walk, sc, st, nodes, anyangle, s, ps, p0, p1,
-                                          p2, v0, v1, v2, mcost[m])
-                lookups += c
+                if anyangle == THETA and ps != s:
+                    g1 = ng[s] + mcost[m]
+                    if gt >= ng[t] and g1 >= ng[t]:
+                        continue  # neither parent improves t: its sight line is moot
+                    if cubic:
+                        ok, c = cubic_walk(occ, v0, v1, v2, p0, p1, p2)
+                    else:
+                        ok, c = sight(occ, walk, sc, st, ST_WGEN, p0, p1, p2, v0, v1, v2)
+                    lookups += c
+                    if not ok:
+                        gt = g1
+                        par = s
             if gt < ng[t]:
                 ng[t] = gt
                 # f on a 1e-9-cell grid: equal-cost paths tie exactly (float noise would

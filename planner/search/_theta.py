@@ -1,11 +1,14 @@
-"""Any-angle parent rules (numba, inlined into the search kernel): Theta* and Lazy Theta*.
+"""Any-angle parts of the search kernel (numba): Theta* and Lazy Theta*.
 
 Theta* (``anyangle`` 1) checks line of sight from the expanded node's parent to each
-neighbour when it is generated and links the neighbour to that parent when it can see it.
+neighbour when it is generated and links the neighbour to that parent when it can see it
+(skipped when neither that parent nor the lattice move would improve the neighbour's g).
 Lazy Theta* (``anyangle`` 2) assumes the sight line and verifies it once, when the node is
 expanded (in the kernel), falling back to its best closed lattice neighbour
 (:func:`lazy_fallback`).
-Both use the Euclidean heuristic and the exact walk of :mod:`planner.search._los`.
+Both use the Euclidean heuristic and the exact walk of :mod:`planner.search._los`. The
+parent rules are written out in the kernel (:func:`planner.search._astar.search_run`):
+helpers taking the structs were not inlined there and cost more than an A* expansion.
 """
 
 from __future__ import annotations
@@ -13,8 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from planner._jit import njit_cached
-from planner.search._los import sight
-from planner.search._nodes import ST_WGEN, find_slot
+from planner.search._nodes import find_slot
 from planner.search.stencils import move_allowed
 
 THETA, LAZY_THETA = 1, 2
@@ -51,16 +53,3 @@ def lazy_fallback(ms, nodes, slots, ufree, s, u0, u1, u2):  # pragma: no cover -
             bp = t
     par[s] = bp
     nodes.g[s] = best
-
-
-@njit_cached(inline="always")
-def theta_parent(occ, walk, sc, st, nodes, anyangle, s, ps, p0, p1, p2, v0, v1, v2, mc):
-    # pragma: no cover - compiled
-    """Any-angle (g, parent, lookups) of neighbour v generated from slot s whose parent is
-    ``ps`` at cell p (``mc``: the lattice move's length s -> v)."""
-    if anyangle == LAZY_THETA or ps == s:
-        return nodes.g[ps] + euclid(walk.g, p0, p1, p2, v0, v1, v2), ps, 0
-    ok, c = sight(occ, walk, sc, st, ST_WGEN, p0, p1, p2, v0, v1, v2)
-    if ok:
-        return nodes.g[ps] + euclid(walk.g, p0, p1, p2, v0, v1, v2), ps, c
-    return nodes.g[s] + mc, s, c
