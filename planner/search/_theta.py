@@ -16,7 +16,8 @@ from __future__ import annotations
 import numpy as np
 
 from planner._jit import njit_cached
-from planner.search._nodes import find_slot
+from planner._world_kernels import mix64
+from planner.search._nodes import PAGE, block_key, local
 from planner.search.stencils import move_allowed
 
 THETA, LAZY_THETA = 1, 2
@@ -36,20 +37,39 @@ def euclid(g, p0, p1, p2, q0, q1, q2):  # pragma: no cover - compiled
 def lazy_fallback(ms, nodes, slots, ufree, s, u0, u1, u2):  # pragma: no cover - compiled
     """Lazy Theta* SetVertex when slot ``s`` at cell u does not see its assumed parent:
     take the best closed neighbour that an allowed move reaches (one exists: the node that
-    generated s). ``ufree`` holds the union stencil lookups of u."""
-    par = nodes.par
+    generated s). ``ufree`` holds the union stencil lookups of u.
+
+    The slot lookups are written out over the unpacked slot map: calling ``find_slot``
+    with the struct cost ~70 ns of reference counting per move (measured)."""
+    par, ng, npos = nodes.par, nodes.g, nodes.pos
     moves, mcost, mptr, midx = ms.moves, ms.cost, ms.ptr, ms.idx
+    pages, btab, bkeys, dsl, lo, dims = slots
+    dense = dsl.shape[0] > 1
+    bmask = btab.shape[0] - 1
     best = np.inf
     bp = -1
     for m in range(moves.shape[0]):
         if not move_allowed(ufree, mptr, midx, m):
             continue
-        t = find_slot(slots, u0 + moves[m, 0], u1 + moves[m, 1], u2 + moves[m, 2])
-        if t == -1 or nodes.pos[t] != -1:
+        v0, v1, v2 = u0 + moves[m, 0], u1 + moves[m, 1], u2 + moves[m, 2]
+        t = np.int64(-1)
+        if dense:
+            a, b, c = v0 - lo[0], v1 - lo[1], v2 - lo[2]
+            if 0 <= a < dims[0] and 0 <= b < dims[1] and 0 <= c < dims[2]:
+                t = np.int64(dsl[(a * dims[1] + b) * dims[2] + c]) - 1
+        else:
+            bk = block_key(v0, v1, v2)
+            q = mix64(bk) & bmask
+            while btab[q] != -1:
+                if bkeys[btab[q]] == bk:
+                    t = np.int64(pages[btab[q] * PAGE + local(v0, v1, v2)])
+                    break
+                q = (q + 1) & bmask
+        if t == -1 or npos[t] != -1:
             continue
-        v = nodes.g[t] + mcost[m]
+        v = ng[t] + mcost[m]
         if v < best:
             best = v
             bp = t
     par[s] = bp
-    nodes.g[s] = best
+    ng[s] = best
