@@ -250,7 +250,7 @@ def anyangle_table(geb: tuple[World, np.ndarray] | None, n: int,
             f"{'med ratio':>9s} {'LT*/A* exp':>10s} {'LT* length m':>12s}")
     ref = json.loads(check.read_text()) if check is not None else None
     print(head + (f" {'max dlen':>9s} {'>0.1%':>5s}" if ref is not None else ""))
-    cases = [(m, *load_warframe(m)) for m in ("Simple", "DA1")]
+    cases = [(m, *load_warframe(m)) for m in MAPS]
     if geb is not None:
         cases.append(("geb079", *geb))
     lengths = {}

@@ -3,8 +3,10 @@ checker (:mod:`planner._world_kernels`) on reusable scratch, and greedy path sho
 
 Two cells see each other iff every cell whose closed Voronoi cell the centre-to-centre
 segment touches is free (the same test as a motion check of :class:`planner.world.
-ValidityChecker`). On the cubic lattice (:func:`cubic_sight`) those cells are enumerated
-directly by nested clipping, with no walk search; tests check both give the same cells.
+ValidityChecker`). On the cubic lattice those cells are enumerated directly, with no walk
+search: by nested clipping (:func:`cubic_sight`, the reference) and, faster, by integer
+stepping from cell to cell (:func:`cubic_walk`, used by the searches and shortcutting);
+tests check that both accept and reject exactly as the generic walk's cells say.
 """
 
 from __future__ import annotations
