@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import argparse
 import heapq
+import json
 import math
 import subprocess
 import sys
@@ -237,17 +238,25 @@ def lattice_table(geb: tuple[World, np.ndarray]) -> None:
         print(f"{name:8s} {r['n']:7d} {r['exp']:11d} {ns:8.0f} {ns / base:8.2f}")
 
 
-def anyangle_table(geb: tuple[World, np.ndarray] | None, n: int) -> None:
-    """Lazy Theta* vs A* on the same queries: median per-query time ratio (goal <= 2)."""
+def anyangle_table(geb: tuple[World, np.ndarray] | None, n: int,
+                   save: Path | None = None, check: Path | None = None) -> None:
+    """Lazy Theta* vs A* on the same queries: median per-query time ratio (goal <= 2).
+
+    ``save`` writes each query's Lazy Theta* path length (JSON, per world); ``check``
+    compares this run's lengths with such a file (a run of another version): the largest
+    relative difference and the queries differing by more than 0.1% (goal: none)."""
     print(f"\nLazy Theta* vs A* (cubic-26, same queries; kernel time); up to {n} per world")
-    print(f"{'world':10s} {'queries':>7s} {'A* med ms':>9s} {'LT* med ms':>10s} "
-          f"{'med ratio':>9s} {'LT*/A* exp':>10s} {'LT* length m':>12s}")
-    cases = [(m, *load_warframe(m)) for m in ("Simple", "DA1")]
+    head = (f"{'world':10s} {'queries':>7s} {'A* med ms':>9s} {'LT* med ms':>10s} "
+            f"{'med ratio':>9s} {'LT*/A* exp':>10s} {'LT* length m':>12s}")
+    ref = json.loads(check.read_text()) if check is not None else None
+    print(head + (f" {'max dlen':>9s} {'>0.1%':>5s}" if ref is not None else ""))
+    cases = [(m, *load_warframe(m)) for m in MAPS]
     if geb is not None:
         cases.append(("geb079", *geb))
+    lengths = {}
     for name, world, scen in cases:
         qs = scen[:: max(1, len(scen) // n)][:n]
-        ta, tl, ea, el, length = [], [], 0, 0, 0.0
+        ta, tl, ea, el, ll = [], [], 0, 0, []
         S.search(world, qs[0, :3].astype(np.int64), qs[0, 3:6].astype(np.int64),
                  method="lazy-theta")
         for q in qs:
@@ -258,10 +267,20 @@ def anyangle_table(geb: tuple[World, np.ndarray] | None, n: int) -> None:
             tl.append(rl.seconds)
             ea += ra.expansions
             el += rl.expansions
-            length += rl.cost
+            ll.append(rl.cost)
         ta, tl = np.array(ta), np.array(tl)
-        print(f"{name:10s} {len(qs):7d} {1e3 * np.median(ta):9.2f} {1e3 * np.median(tl):10.2f} "
-              f"{np.median(tl / ta):9.2f} {el / ea:10.2f} {length:12.4f}")
+        lengths[name] = ll
+        row = (f"{name:10s} {len(qs):7d} {1e3 * np.median(ta):9.2f} "
+               f"{1e3 * np.median(tl):10.2f} {np.median(tl / ta):9.2f} {el / ea:10.2f} "
+               f"{sum(ll):12.4f}")
+        if ref is not None and name in ref and len(ref[name]) == len(ll):
+            old, new = np.array(ref[name]), np.array(ll)
+            rel = np.abs(new - old) / np.maximum(old, 1e-12)
+            rel[~np.isfinite(old) & ~np.isfinite(new)] = 0.0
+            row += f" {rel.max():9.2e} {int((rel > 1e-3).sum()):5d}"
+        print(row)
+    if save is not None:
+        save.write_text(json.dumps(lengths))
 
 
 def cold_warm() -> tuple[float, float]:
@@ -299,6 +318,10 @@ def main(argv: list[str] | None = None) -> int:
                     help="skip the A* vs C++ anchor table")
     ap.add_argument("--anyangle", type=int, default=20,
                     help="queries per world for Lazy Theta* vs A* (0: skip)")
+    ap.add_argument("--save-lengths", type=Path, metavar="JSON",
+                    help="write each query's Lazy Theta* path length here")
+    ap.add_argument("--check-lengths", type=Path, metavar="JSON",
+                    help="compare Lazy Theta* path lengths with a --save-lengths file")
     a = ap.parse_args(argv)
     if not WARFRAME.exists():
         print(f"no Warframe data at {WARFRAME}; skipping")
@@ -335,7 +358,7 @@ def main(argv: list[str] | None = None) -> int:
     if geb is not None and a.lattices:
         lattice_table(geb)
     if a.anyangle:
-        anyangle_table(geb, a.anyangle)
+        anyangle_table(geb, a.anyangle, a.save_lengths, a.check_lengths)
 
     if a.da1:
         world, scen = load_warframe("DA1")

@@ -186,6 +186,32 @@ def test_cubic_sight_blocks_exactly_the_walked_cells():
             occ.grid[idx(c)] = 1
 
 
+def test_cubic_integer_walk_matches_the_clipping():
+    """The integer-stepping walk on the cubic lattice accepts and rejects exactly as the
+    nested clipping, with one cell blocked in turn around random and tie-heavy segments
+    (axis, face- and space-diagonal, knight-like; some leave the grid's box), in dense
+    and hash storage."""
+    from planner.search._los import cubic_sight, cubic_walk
+
+    rng = np.random.default_rng(5)
+    ring = np.array([d for d in itertools.product((-1, 0, 1), repeat=3)])
+    lat, bounds = Lattice.named("cubic", 1.0), [[0, 0, 0], [16, 16, 16]]
+    for k in range(36):
+        p = rng.integers(-1, 18, 3)
+        d = (rng.integers(-1, 2, 3) * rng.integers(1, 7) if k % 3 == 0
+             else np.array([2, 1, 0])[rng.permutation(3)] * rng.integers(-3, 4)
+             if k % 3 == 1 else rng.integers(-7, 8, 3))
+        q = p + d
+        near = {tuple(np.rint(p + t * d).astype(int) + r) for t in np.linspace(0, 1, 15)
+                for r in ring}
+        for c in [None, *sorted(near)]:
+            blocked = np.array([c] if c else np.zeros((0, 3)), np.int64).reshape(-1, 3)
+            for budget in ({}, {"dense_budget": 0}) if k % 4 == 0 else ({},):
+                occ = World(lat, blocked, bounds, **budget).occupancy
+                ref = cubic_sight(occ, p, q)[0]
+                assert cubic_walk(occ, *p, *q)[0] == ref, (p, q, c, budget)
+
+
 def test_segment_free_counts_lookups():
     w = _box_world(blocked=[(3, 3, 3)], n=10)
     assert not w.segment_free([1, 1, 1], [5, 5, 5])

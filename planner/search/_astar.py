@@ -13,6 +13,7 @@ from planner._jit import njit_cached
 from planner._world_kernels import _free, mix64
 from planner.keys import pack3, unpack3
 from planner.search import _heap
+from planner.search._los import cubic_walk, is_cubic, sight
 from planner.search._nodes import (
     PAGE,
     ST_EXP,
@@ -21,12 +22,13 @@ from planner.search._nodes import (
     ST_LOOK,
     ST_N,
     ST_NP,
+    ST_WGEN,
     block_key,
     dense_index,
     local,
     new_page,
 )
-from planner.search._theta import euclid, lazy_set_vertex, theta_parent
+from planner.search._theta import LAZY_THETA, THETA, euclid, lazy_fallback
 from planner.search.stencils import H_EUCLID, H_GAUGE, MAX_BITS, move_allowed
 
 _EMPTY = -1
@@ -140,6 +142,7 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st):
     dense = dsl.shape[0] > 1 and mode == 0  # the dense slot box is the grid's box
     anyangle, max_nodes, max_exp = params
     g = walk.g
+    cubic = is_cubic(g)
     gl0, gl1, gl2 = goal[0], goal[1], goal[2]
     g00, g01, g02 = g[0, 0], g[0, 1], g[0, 2]
     g10, g11, g12 = g[1, 0], g[1, 1], g[1, 2]
@@ -192,9 +195,17 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st):
                 if not ufree[j]:
                     blocked |= np.int64(1) << j
         lookups += nu
-        if anyangle == 2:
-            lookups += lazy_set_vertex(occ, walk, ms, nodes, slots, sc, st, ufree, s, u0, u1,
-                                       u2)
+        # Verify the assumed sight line, walked from s: a blocked cell is likelier near s
+        # (its parent saw s's generator), so the walk stops sooner.
+        if anyangle == LAZY_THETA and npar[s] != s:
+            p0, p1, p2 = unpack3(nkey[npar[s]])
+            if cubic:
+                ok, c = cubic_walk(occ, u0, u1, u2, p0, p1, p2)
+            else:
+                ok, c = sight(occ, walk, sc, st, ST_WGEN, u0, u1, u2, p0, p1, p2)
+            lookups += c
+            if not ok:
+                lazy_fallback(ms, nodes, slots, ufree, s, u0, u1, u2)
         if nkey[s] == gk:
             status = RUN_FOUND
             st[ST_GOAL] = s
@@ -269,9 +280,29 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st):
                 gt = ng[s] + mcost[m]
                 par = s
             else:
-                gt, par, c = theta_parent(occ, walk, sc, st, nodes, anyangle, s, ps, p0, p1,
-                                          p2, v0, v1, v2, mcost[m])
-                lookups += c
+                # Any-angle g through s's parent, written out: numba did not inline a helper
+                # here and the call's reference counting cost ~2 us per expansion (26
+                # calls), more than the whole A* expansion.
+                e0 = v0 - p0
+                e1 = v1 - p1
+                e2 = v2 - p2
+                x = g00 * e0 + g01 * e1 + g02 * e2
+                y = g10 * e0 + g11 * e1 + g12 * e2
+                z = g20 * e0 + g21 * e1 + g22 * e2
+                gt = ng[ps] + np.sqrt(x * x + y * y + z * z)
+                par = ps
+                if anyangle == THETA and ps != s:
+                    g1 = ng[s] + mcost[m]
+                    if gt >= ng[t] and g1 >= ng[t]:
+                        continue  # neither parent improves t: its sight line is moot
+                    if cubic:
+                        ok, c = cubic_walk(occ, v0, v1, v2, p0, p1, p2)
+                    else:
+                        ok, c = sight(occ, walk, sc, st, ST_WGEN, p0, p1, p2, v0, v1, v2)
+                    lookups += c
+                    if not ok:
+                        gt = g1
+                        par = s
             if gt < ng[t]:
                 ng[t] = gt
                 # f on a 1e-9-cell grid: equal-cost paths tie exactly (float noise would

@@ -1,10 +1,14 @@
-"""Any-angle parent rules (numba, inlined into the search kernel): Theta* and Lazy Theta*.
+"""Any-angle parts of the search kernel (numba): Theta* and Lazy Theta*.
 
 Theta* (``anyangle`` 1) checks line of sight from the expanded node's parent to each
-neighbour when it is generated and links the neighbour to that parent when it can see it.
+neighbour when it is generated and links the neighbour to that parent when it can see it
+(skipped when neither that parent nor the lattice move would improve the neighbour's g).
 Lazy Theta* (``anyangle`` 2) assumes the sight line and verifies it once, when the node is
-expanded (:func:`lazy_set_vertex`), falling back to its best closed lattice neighbour.
-Both use the Euclidean heuristic and the exact walk of :mod:`planner.search._los`.
+expanded (in the kernel), falling back to its best closed lattice neighbour
+(:func:`lazy_fallback`).
+Both use the Euclidean heuristic and the exact walk of :mod:`planner.search._los`. The
+parent rules are written out in the kernel (:func:`planner.search._astar.search_run`):
+helpers taking the structs were not inlined there and cost more than an A* expansion.
 """
 
 from __future__ import annotations
@@ -12,9 +16,8 @@ from __future__ import annotations
 import numpy as np
 
 from planner._jit import njit_cached
-from planner.keys import unpack3
-from planner.search._los import sight
-from planner.search._nodes import ST_WGEN, find_slot
+from planner._world_kernels import mix64
+from planner.search._nodes import PAGE, block_key, local
 from planner.search.stencils import move_allowed
 
 THETA, LAZY_THETA = 1, 2
@@ -30,46 +33,43 @@ def euclid(g, p0, p1, p2, q0, q1, q2):  # pragma: no cover - compiled
     return np.sqrt(x * x + y * y + z * z)
 
 
-@njit_cached(inline="always")
-def lazy_set_vertex(occ, walk, ms, nodes, slots, sc, st, ufree, s, u0, u1, u2):
-    # pragma: no cover - compiled
-    """Lazy Theta* SetVertex for slot ``s`` at cell u: verify the assumed line of sight to
-    its parent; else take the best closed neighbour that an allowed move reaches (one
-    exists: the node that generated s). ``ufree`` holds the union stencil lookups of u.
-    Returns the lookups made."""
-    par = nodes.par
-    if par[s] == s:
-        return 0
-    p0, p1, p2 = unpack3(nodes.key[par[s]])
-    ok, c = sight(occ, walk, sc, st, ST_WGEN, p0, p1, p2, u0, u1, u2)
-    if ok:
-        return c
+@njit_cached
+def lazy_fallback(ms, nodes, slots, ufree, s, u0, u1, u2):  # pragma: no cover - compiled
+    """Lazy Theta* SetVertex when slot ``s`` at cell u does not see its assumed parent:
+    take the best closed neighbour that an allowed move reaches (one exists: the node that
+    generated s). ``ufree`` holds the union stencil lookups of u.
+
+    The slot lookups are written out over the unpacked slot map: calling ``find_slot``
+    with the struct cost ~70 ns of reference counting per move (measured)."""
+    par, ng, npos = nodes.par, nodes.g, nodes.pos
     moves, mcost, mptr, midx = ms.moves, ms.cost, ms.ptr, ms.idx
+    pages, btab, bkeys, dsl, lo, dims = slots
+    dense = dsl.shape[0] > 1
+    bmask = btab.shape[0] - 1
     best = np.inf
     bp = -1
     for m in range(moves.shape[0]):
         if not move_allowed(ufree, mptr, midx, m):
             continue
-        t = find_slot(slots, u0 + moves[m, 0], u1 + moves[m, 1], u2 + moves[m, 2])
-        if t == -1 or nodes.pos[t] != -1:
+        v0, v1, v2 = u0 + moves[m, 0], u1 + moves[m, 1], u2 + moves[m, 2]
+        t = np.int64(-1)
+        if dense:
+            a, b, c = v0 - lo[0], v1 - lo[1], v2 - lo[2]
+            if 0 <= a < dims[0] and 0 <= b < dims[1] and 0 <= c < dims[2]:
+                t = np.int64(dsl[(a * dims[1] + b) * dims[2] + c]) - 1
+        else:
+            bk = block_key(v0, v1, v2)
+            q = mix64(bk) & bmask
+            while btab[q] != -1:
+                if bkeys[btab[q]] == bk:
+                    t = np.int64(pages[btab[q] * PAGE + local(v0, v1, v2)])
+                    break
+                q = (q + 1) & bmask
+        if t == -1 or npos[t] != -1:
             continue
-        v = nodes.g[t] + mcost[m]
+        v = ng[t] + mcost[m]
         if v < best:
             best = v
             bp = t
     par[s] = bp
-    nodes.g[s] = best
-    return c
-
-
-@njit_cached(inline="always")
-def theta_parent(occ, walk, sc, st, nodes, anyangle, s, ps, p0, p1, p2, v0, v1, v2, mc):
-    # pragma: no cover - compiled
-    """Any-angle (g, parent, lookups) of neighbour v generated from slot s whose parent is
-    ``ps`` at cell p (``mc``: the lattice move's length s -> v)."""
-    if anyangle == LAZY_THETA or ps == s:
-        return nodes.g[ps] + euclid(walk.g, p0, p1, p2, v0, v1, v2), ps, 0
-    ok, c = sight(occ, walk, sc, st, ST_WGEN, p0, p1, p2, v0, v1, v2)
-    if ok:
-        return nodes.g[ps] + euclid(walk.g, p0, p1, p2, v0, v1, v2), ps, c
-    return nodes.g[s] + mc, s, c
+    ng[s] = best
