@@ -30,7 +30,9 @@ def warm() -> float:
     """Compile (or load) the kernels of ``compare``, ``plan`` and ``explore``; returns seconds.
 
     Kernels compile per argument *type*, not per size, so coarse cells and short queries
-    reach the same compiled code as the real commands.
+    reach the same compiled code as the real commands (when they run the same Python
+    paths: ``tests/test_cold_start.py`` checks that ``compare office`` compiles nothing
+    more).
     """
     t0 = time.perf_counter()
     from planner import api
@@ -40,10 +42,11 @@ def warm() -> float:
     from planner.search import warm_up
 
     warm_up()  # every search method's kernel
-    # The README's first command, on coarse cells: map reading, inflation, world build,
-    # A* and shortcutting on every lattice.
+    # The README's first command itself (a few seconds): map reading, inflation, world
+    # build, A* and shortcutting on every lattice. On coarser cells its paths may not be
+    # found, and then the shortcut kernel would not be reached.
     office = str(MAPS_DIR / "office.ply")  # the bundled file, whatever the current folder
-    compare(office, lattices=list(NAMED_LATTICES), cell_volume=0.05, progress=False)
+    compare(office, lattices=list(NAMED_LATTICES), progress=False)
     world = api.build_world(office, "fcc", cell_volume=0.05, radius=0.25)
     chk = world.checker  # OMPL's state and motion checks
     chk.is_valid(np.array([2.5, 2.5, 1.2]))
