@@ -39,7 +39,6 @@ __all__ = ["Lattice", "NAMED_LATTICES", "PAPER_DELTAS", "Quantizer", "VoronoiCel
            "named_generator"]
 
 
-
 def _qk():
     """The quantizer kernels, imported on first use: importing numba costs ~0.2 s, which
     ``import planner`` should not pay."""
