@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import shutil
 import statistics
 import subprocess
 import sys
@@ -66,12 +67,16 @@ def import_time(cache: str | None, runs: int = 5, **kw) -> float:
 def fresh_install(runs: int) -> int:
     """Build and install a wheel of the checkout, then time the command from it."""
     with tempfile.TemporaryDirectory(prefix="planner_install_") as tmp:
-        dist, site, home = (Path(tmp) / d for d in ("dist", "site", "home"))
+        src, dist, site, home = (Path(tmp) / d for d in ("src", "dist", "site", "home"))
         home.mkdir()
+        # A clean copy: pip builds in the source folder, and an earlier build/ (with its
+        # kernel cache) would make the build look cheap.
+        shutil.copytree(ROOT, src, ignore=shutil.ignore_patterns(
+            ".git", "build", "__pycache__", "*.egg-info", ".ci", "results", ".*cache"))
         env = {k: v for k, v in os.environ.items() if k not in ("NUMBA_CACHE_DIR", "PYTHONPATH")}
         pip = [sys.executable, "-m", "pip", "-q"]
         t = time.perf_counter()
-        subprocess.run([*pip, "wheel", "--no-deps", "-w", str(dist), str(ROOT)], check=True,
+        subprocess.run([*pip, "wheel", "--no-deps", "-w", str(dist), str(src)], check=True,
                        env=env)
         build = time.perf_counter() - t
         subprocess.run([*pip, "install", "--no-deps", "--target", str(site),
