@@ -2,20 +2,32 @@
 
 Usage::
 
-    python benchmarks/cold_start.py            # planner compare office, fresh then warm
+    python benchmarks/cold_start.py --install  # build + install a wheel, first run (shipped cache)
+    python benchmarks/cold_start.py            # no install-time cache: every kernel compiles
     python benchmarks/cold_start.py --runs 3   # warm runs to take the median of
 
-Each run is a new Python process (``python -m planner compare office``) with its own
-``NUMBA_CACHE_DIR``: the first run starts from an empty directory (what a fresh install
-sees: every kernel compiles), the warm runs reuse what it wrote. Also prints the time of
-``import planner`` alone, and the "compile s" / "search s" columns the command reports (JIT
-time is reported apart from search time). No assertions: this prints figures.
+Each run is a new Python process (``python -m planner compare office``).
+
+``--install``: what a fresh install sees. ``pip wheel`` builds the checkout (in pip's
+isolated build environment, where ``setup.py`` compiles the kernels into the package's numba
+cache: :mod:`planner._warm`), ``pip install --no-deps --target`` installs it into an empty
+folder, and the command runs from there with an empty HOME and no ``NUMBA_CACHE_DIR``.
+
+Default: each run has its own ``NUMBA_CACHE_DIR`` (it takes precedence over the package's
+cache); the first run starts from an empty directory: every kernel compiles, as on a machine
+whose shipped cache does not match (another CPU or numba version, or ``PLANNER_NO_WARM=1``);
+the warm runs reuse what it wrote.
+
+Also prints the time of ``import planner`` alone, and the "compile s" / "search s" columns
+the command reports (JIT time is reported apart from search time). No assertions: this
+prints figures.
 """
 
 from __future__ import annotations
 
 import argparse
 import os
+import shutil
 import statistics
 import subprocess
 import sys
@@ -27,36 +39,82 @@ ROOT = Path(__file__).resolve().parents[1]
 COMMAND = ["-m", "planner", "compare", "office"]
 
 
-def timed(args: list[str], cache: str) -> tuple[float, str]:
-    """Wall seconds and stdout of ``python args`` with ``NUMBA_CACHE_DIR=cache``."""
-    env = dict(os.environ, NUMBA_CACHE_DIR=cache, PYTHONPATH=str(ROOT))
+def timed(args: list[str], cache: str | None, site: Path = ROOT,
+          home: str | None = None) -> tuple[float, str]:
+    """Wall seconds and stdout of ``python args`` importing planner from ``site``, with
+    ``NUMBA_CACHE_DIR=cache`` (None: unset, numba's in-tree cache) and ``HOME=home``."""
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    env["PYTHONPATH"] = str(site)
+    if cache is not None:
+        env["NUMBA_CACHE_DIR"] = cache
+    if home is not None:
+        env.update(HOME=home, XDG_CACHE_HOME=os.path.join(home, ".cache"))
     t = time.perf_counter()
     out = subprocess.run([sys.executable, *args], capture_output=True, text=True, env=env,
-                         cwd=ROOT)
+                         cwd=home or ROOT)
     secs = time.perf_counter() - t
     if out.returncode != 0:
         raise SystemExit(f"{' '.join(args)} failed ({out.returncode}): {out.stderr.strip()}")
     return secs, out.stdout
 
 
-def import_time(cache: str, runs: int = 5) -> float:
+def import_time(cache: str | None, runs: int = 5, **kw) -> float:
     """Median seconds of ``import planner`` in a fresh process (interpreter start excluded)."""
     code = "import time; t = time.perf_counter(); import planner; print(time.perf_counter() - t)"
-    return statistics.median(float(timed(["-c", code], cache)[1]) for _ in range(runs))
+    return statistics.median(float(timed(["-c", code], cache, **kw)[1]) for _ in range(runs))
+
+
+def fresh_install(runs: int) -> int:
+    """Build and install a wheel of the checkout, then time the command from it."""
+    with tempfile.TemporaryDirectory(prefix="planner_install_") as tmp:
+        src, dist, site, home = (Path(tmp) / d for d in ("src", "dist", "site", "home"))
+        home.mkdir()
+        # A clean copy: pip builds in the source folder, and an earlier build/ (with its
+        # kernel cache) would make the build look cheap.
+        shutil.copytree(ROOT, src, ignore=shutil.ignore_patterns(
+            ".git", "build", "__pycache__", "*.egg-info", ".ci", "results", ".*cache"))
+        env = {k: v for k, v in os.environ.items() if k not in ("NUMBA_CACHE_DIR", "PYTHONPATH")}
+        pip = [sys.executable, "-m", "pip", "-q"]
+        t = time.perf_counter()
+        subprocess.run([*pip, "wheel", "--no-deps", "-w", str(dist), str(src)], check=True,
+                       env=env)
+        build = time.perf_counter() - t
+        subprocess.run([*pip, "install", "--no-deps", "--target", str(site),
+                        *map(str, dist.glob("*.whl"))], check=True, env=env)
+        shipped = len(list(site.rglob("*.nbi")))
+        kw = dict(site=site, home=str(home))
+        imp = import_time(None, **kw)
+        cold, table = timed(COMMAND, None, **kw)
+        warm = statistics.median(timed(COMMAND, None, **kw)[0] for _ in range(max(1, runs)))
+    print(f"command: python {' '.join(COMMAND)}  (from a freshly built and installed wheel, "
+          "empty HOME, no NUMBA_CACHE_DIR, new process each)")
+    print(f"wheel build (pip wheel, isolated build env, kernels compiled into the package "
+          f"cache): {build:.0f} s; {shipped} kernel cache indexes shipped")
+    print(f"import planner: {imp:.2f} s")
+    print(f"first run after install: {cold:.1f} s")
+    print(f"warm run (median of {max(1, runs)}): {warm:.1f} s")
+    print("\nthe first run's table:")
+    print(table.rstrip())
+    return 0
 
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--runs", type=int, default=2, help="warm runs (median reported)")
+    ap.add_argument("--install", action="store_true",
+                    help="build and install a wheel first; time the command from the install")
     a = ap.parse_args(argv)
+    if a.install:
+        return fresh_install(a.runs)
     with tempfile.TemporaryDirectory(prefix="planner_numba_") as cache:
         imp = import_time(cache)
         cold, table = timed(COMMAND, cache)
         warm = statistics.median(timed(COMMAND, cache)[0] for _ in range(max(1, a.runs)))
         imp_warm = import_time(cache)
-    print(f"command: python {' '.join(COMMAND)}  (fresh NUMBA_CACHE_DIR, new process each)")
+    print(f"command: python {' '.join(COMMAND)}  (fresh NUMBA_CACHE_DIR: no install-time "
+          "cache; new process each)")
     print(f"import planner: {imp:.2f} s (empty cache), {imp_warm:.2f} s (warm cache)")
-    print(f"first run (fresh install, every kernel compiles): {cold:.1f} s")
+    print(f"first run (empty cache, every kernel compiles): {cold:.1f} s")
     print(f"warm run (kernels from the cache, median of {max(1, a.runs)}): {warm:.1f} s")
     print("\nthe first run's table (compile s = the search kernels' compilation, kept out of "
           "search s):")

@@ -113,6 +113,14 @@ int main(int argc, char** argv) {
         double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         std::printf("%.9f %lld %.9f\n", cost, (long long)exp, sec);
     }
+    // This image's own peak resident memory on stderr (its getrusage would also count the
+    // parent's pages mapped before exec).
+    if (FILE* st = std::fopen("/proc/self/status", "r")) {
+        char line[256];
+        while (std::fgets(line, sizeof line, st))
+            if (!std::strncmp(line, "VmHWM:", 6)) std::fputs(line, stderr);
+        std::fclose(st);
+    }
     return 0;
 }
 """
@@ -158,18 +166,27 @@ def run(free: np.ndarray, queries: np.ndarray) -> np.ndarray:
         Per query: path cost (-1 when unreachable), expansions, seconds (search only:
         loading and padding the grid are outside the clock).
     """
+    return run_measured(free, queries)[0]
+
+
+def run_measured(free: np.ndarray, queries: np.ndarray) -> tuple[np.ndarray, int | None]:
+    """:func:`run`, and the anchor process's own peak resident memory (bytes; its VmHWM
+    after exec, None where /proc is not there)."""
     free = np.asarray(free, dtype=bool)
     q = np.ascontiguousarray(queries, dtype=np.int64).reshape(-1, 6)
     with tempfile.TemporaryDirectory(prefix="cpp_anchor_in_") as tmp:
         path = Path(tmp) / "in.bin"
         with open(path, "wb") as f:
             f.write(np.asarray(free.shape, dtype="<i8").tobytes())
-            f.write(np.ascontiguousarray(free.transpose(2, 1, 0), dtype=np.uint8).tobytes())
+            for z in range(free.shape[2]):  # x fastest, one z slab at a time (no full copy)
+                f.write(np.ascontiguousarray(free[:, :, z].T, dtype=np.uint8).tobytes())
             f.write(np.int64(len(q)).tobytes())
             f.write(q.astype("<i8").tobytes())
-        out = subprocess.run([str(binary()), str(path)], check=True, capture_output=True,
-                             text=True).stdout
-    return np.loadtxt(out.splitlines(), ndmin=2).reshape(-1, 3)
+        res = subprocess.run([str(binary()), str(path)], check=True, capture_output=True,
+                             text=True)
+    peak = [int(line.split()[1]) * 1024 for line in res.stderr.splitlines()
+            if line.startswith("VmHWM:")]
+    return np.loadtxt(res.stdout.splitlines(), ndmin=2).reshape(-1, 3), (peak or [None])[0]
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -312,7 +312,9 @@ def segment_walk(occ, walk, a, b, s, check):  # pragma: no cover - compiled
     while True:
         vis, vgen, queue = walk_scratch(length, np.sqrt(2.0 * walk.rhs.min()),
                                         walk.full.shape[0])
-        qt, free, lookups, ok = walk_on(occ, walk, a, b, s, check, vis, vgen, 1, queue)
+        # np.int64(1), not 1: a literal would compile walk_on once more for Literal[int](1)
+        qt, free, lookups, ok = walk_on(occ, walk, a, b, s, check, vis, vgen, np.int64(1),
+                                        queue)
         if ok:
             break
         length = 2.0 * length + 1.0

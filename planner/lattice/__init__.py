@@ -15,12 +15,13 @@ Nothing is tabulated per lattice except the paper's unit-determinant generators
 
 from __future__ import annotations
 
+import importlib
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from planner.errors import LatticeError
-from planner.lattice import _quantize as qk
 from planner.lattice._geometry import (
     TOL,
     VoronoiCell,
@@ -29,11 +30,26 @@ from planner.lattice._geometry import (
     rounding_offsets,
     sorted_offsets,
 )
-from planner.lattice._quantize import Quantizer
 from planner.lattice.paper import NAMED_LATTICES, PAPER_DELTAS, named_generator
+
+if TYPE_CHECKING:
+    from planner.lattice._quantize import Quantizer
 
 __all__ = ["Lattice", "NAMED_LATTICES", "PAPER_DELTAS", "Quantizer", "VoronoiCell",
            "named_generator"]
+
+
+def _qk():
+    """The quantizer kernels, imported on first use: importing numba costs ~0.2 s, which
+    ``import planner`` should not pay."""
+    return importlib.import_module("planner.lattice._quantize")
+
+
+def __getattr__(name: str):
+    if name == "Quantizer":  # public, from the numba kernel module: loaded when asked for
+        return _qk().Quantizer
+    raise AttributeError(f"module 'planner.lattice' has no attribute {name!r}")
+
 
 _CHUNK = 1 << 20  # points per chunk of the input checks (no full-size temporaries)
 # Largest |index| a quantized point may have: float64 holds integers exactly up to 2**53.
@@ -171,7 +187,7 @@ class Lattice:
         """Tables of the exact generic quantizer (what :meth:`quantize_generic` runs), as a
         picklable struct for compiled code elsewhere (e.g. another process)."""
         if self._quantizer is None:
-            self._quantizer = qk.make_quantizer(self._geo)
+            self._quantizer = _qk().make_quantizer(self._geo)
         return self._quantizer
 
     def neighbors(self, kind: str = "face") -> np.ndarray:
@@ -287,6 +303,7 @@ class Lattice:
         if not len(x):
             return out
         self._check_range(x)
+        qk = _qk()
         if not qk.run_named(self._kind, self._g, self._ginv, x, out):
             qk.run_generic(self.quantizer(), x, out)
         return out
@@ -317,7 +334,7 @@ class Lattice:
             out = np.empty(x.shape, dtype=np.int64)
         if len(x):
             self._check_range(x)
-            qk.run_generic(self.quantizer(), x, out)
+            _qk().run_generic(self.quantizer(), x, out)
         return out
 
     def to_world(self, indices: np.ndarray) -> np.ndarray:
