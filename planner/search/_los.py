@@ -209,9 +209,12 @@ def los(occ, walk, p, q, sc, gen):  # pragma: no cover - compiled
         return cubic_walk(occ, p[0], p[1], p[2], q[0], q[1], q[2])
     a = g @ p.astype(np.float64)
     b = g @ q.astype(np.float64)
-    _, free, n, ok = walk_on(occ, walk, a, b, p, True, sc.vis, sc.vgen, gen, sc.queue)
+    # np.bool_, not a literal True: the callers' other call sites pass a bool value, and a
+    # literal would compile a second specialisation
+    stop = np.bool_(True)
+    _, free, n, ok = walk_on(occ, walk, a, b, p, stop, sc.vis, sc.vgen, gen, sc.queue)
     if not ok:  # longer than the scratch was sized for: walk again on fresh arrays
-        _, free, n = segment_walk(occ, walk, a, b, p, True)
+        _, free, n = segment_walk(occ, walk, a, b, p, stop)
     return free, n
 
 
