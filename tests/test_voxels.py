@@ -416,6 +416,9 @@ def test_stencil_and_exact_inflation(lat):
         assert {tuple(x) for x in lat.neighbors("full").tolist()} <= set(map(tuple, st.tolist()))
         assert set(map(tuple, st.tolist())) == set(map(tuple, (-st).tolist()))
         inflated = occ.inflate(r)
+        # ... is every occupied cell plus every stencil offset (brute force).
+        every = (occ.indices[:, None, :] + st[None]).reshape(-1, lat.dim)
+        assert inflated == OccupiedVoxelList(lat, every)
         exact = exact_inflation(pts, lat, r)
         assert np.isin(exact.keys, inflated.keys).all()
         # Every exact cell is within r + covering radius of a point (centre distance).
