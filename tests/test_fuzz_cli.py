@@ -275,7 +275,7 @@ def test_huge_octomap_worlds_are_refused_by_the_memory_budget(extra):
 @pytest.mark.skipif(not GEB079.exists(), reason="shared OctoMap data not present")
 def test_a_robot_wider_than_the_corridors_gets_one_line_within_the_memory_limit():
     # r = 3 m with 0.08 m cells: a 200,000-offset stencil over unknown space dilated past
-    # the map box. It is slow (about a minute) but must end in one line under 3 GB.
+    # the map box. It is slow (minutes under load) but must end in one line under 3 GB.
     proc = _cli(["plan", str(GEB079), "--start", "0,0,0.5", "--goal", "1,0,0.5",
                  "--radius", "3"], hang=8 * HANG)
     assert proc is not None, "hang"
