@@ -145,9 +145,13 @@ def map_box(source, obst=None) -> np.ndarray:
         ``[[xmin, ...], [xmax, ...]]``, metres (not yet checked).
     """
     obst = as_obstacles(source) if obst is None else obst
+    return _map_box(obst, _sidecar(source) if obst.bounds is None else {})
+
+
+def _map_box(obst, side: dict) -> np.ndarray:
+    """:func:`map_box` of a loaded map and its sidecar."""
     if obst.bounds is not None:
         return np.asarray(obst.bounds, dtype=float)
-    side = _sidecar(source)
     if "bounds" in side:
         return np.asarray(side["bounds"], dtype=float)
     return _obstacle_bounds(obst)
@@ -252,7 +256,7 @@ def build_world(
     obst = as_obstacles(source, format)
     where = "" if bounds is not None else f"{obst.source}: "  # the map's own bounds
     if bounds is None:
-        bounds = map_box(source, obst)
+        bounds = _map_box(obst, side)
     d = obst.dim
     bounds = np.asarray(bounds, dtype=float)
     if bounds.shape != (2, d) or not np.isfinite(bounds).all() or np.any(bounds[1] < bounds[0]):
@@ -275,8 +279,8 @@ def build_world(
     if obst.has_free_space and d == 3:  # classified cell by cell: refuse before any work
         from planner.budget import require
 
-        pad = radius + 2 * lat.covering_radius
-        n = float(np.prod(bounds[1] - bounds[0] + 2 * pad)) / lat.cell_volume
+        lo, hi = _unknown_region(lat, bounds, radius)
+        n = float(np.prod(hi - lo)) / lat.cell_volume
         require(24.0 * n, f"the unknown-space classification of {obst.source} (~{n:,.0f} "
                 "cells in its box)")
     try:
@@ -364,15 +368,21 @@ def _lift_bounds(bounds: np.ndarray) -> np.ndarray:
     return np.concatenate([bounds, np.zeros((2, 1))], axis=1)
 
 
+def _unknown_region(lat: Lattice, bounds: np.ndarray, radius: float
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """The box (m) classified for unknown space: the bounds padded by the reach of a robot
+    centre's cell (radius + twice the covering radius)."""
+    pad = radius + 2 * lat.covering_radius
+    return bounds[0] - pad, bounds[1] + pad
+
+
 def _unknown_keys(obst, lat: Lattice, bounds: np.ndarray, radius: float, planar: bool
                   ) -> np.ndarray:
-    """Keys of the cells meeting unknown space, over the bounds padded by the reach of a
-    robot centre's cell (radius + twice the covering radius)."""
+    """Keys of the cells meeting unknown space over :func:`_unknown_region`."""
     from planner.voxels import exact_inflation
     from planner.voxels.known import ray_free_keys, unknown_box_keys, unknown_cell_keys
 
-    pad = radius + 2 * lat.covering_radius
-    lo, hi = bounds[0] - pad, bounds[1] + pad
+    lo, hi = _unknown_region(lat, bounds, radius)
     parts = []
     if len(obst.free_boxes):
         res = obst.resolution or float(np.min(np.concatenate([obst.box_sizes,

@@ -44,11 +44,12 @@ class FreeSpace:
         self.shape = idx.max(axis=0) + 1
         self.grid = np.zeros(tuple(self.shape), dtype=bool)
         self.grid[tuple(idx.T)] = True
+        self._flat: np.ndarray | None = None  # free voxels' flat indices, on first sample
 
     def sample(self, rng: np.random.Generator, n: int) -> np.ndarray:
         """(n, 3) points (m) uniform in observed free space (a uniform free voxel, then a
         uniform point in it: the voxels are equal)."""
-        if getattr(self, "_flat", None) is None:
+        if self._flat is None:
             self._flat = np.flatnonzero(self.grid)
         pick = self._flat[rng.integers(0, len(self._flat), n)]
         idx = np.stack(np.unravel_index(pick, self.grid.shape), axis=1)
@@ -118,16 +119,15 @@ def cached_world(cache_dir: str | None, map_path: str, lattice: str, cell_volume
     through files.
 
     The query sampler and every worker need the same worlds; building them is the dominant
-    cost of a rotated suite, so the blocked and unknown cells, bounds and generator are
-    kept in ``cache_dir`` (compressed ``.npz`` of the sorted keys' steps, written
-    atomically) and reloaded; None builds every time.
+    cost of a rotated suite, so the blocked and unknown cells and bounds are kept in
+    ``cache_dir`` (compressed ``.npz`` of the sorted keys' steps, written atomically) and
+    reloaded; None builds every time.
     """
     import hashlib
     from pathlib import Path
 
     from planner.fsutil import atomic_path
     from planner.keys import pack, unpack
-    from planner.lattice import Lattice
     from planner.world import World
 
     if cache_dir is None:
@@ -138,10 +138,8 @@ def cached_world(cache_dir: str | None, map_path: str, lattice: str, cell_volume
     if f.is_file():
         try:
             with np.load(f) as z:
-                lat = rotated_lattice(lattice, cell_volume, quaternion)
-                if not np.array_equal(lat.generator, z["generator"]):
-                    lat = Lattice(z["generator"], name=lattice)
-                return World(lat, unpack(np.cumsum(z["key_steps"]), 3), z["bounds"],
+                return World(rotated_lattice(lattice, cell_volume, quaternion),
+                             unpack(np.cumsum(z["key_steps"]), 3), z["bounds"],
                              source=str(z["source"]), radius=float(radius),
                              unknown_cells=unpack(np.cumsum(z["unknown_steps"]), 3),
                              unknown_policy=str(z["unknown_policy"]),
@@ -156,7 +154,7 @@ def cached_world(cache_dir: str | None, map_path: str, lattice: str, cell_volume
 
     with atomic_path(f) as tmp, open(tmp, "wb") as fh:
         np.savez_compressed(fh, key_steps=steps(w.blocked), unknown_steps=steps(w.unknown),
-                            bounds=w.bounds, generator=w.lattice.generator,
+                            bounds=w.bounds,
                             source=np.array(str(w.source or "")),
                             unknown_policy=np.array(w.unknown_policy),
                             build_seconds=w.build_seconds or 0.0)
