@@ -388,8 +388,9 @@ class World(UnknownSpace):
         if len(c) != 1:
             raise PlanError(f"{what} must be one cell (i, j, k), got shape {c.shape}")
         c = c[0]
-        centre = self._lattice.to_world(c[None])[0]
-        self._require_free(c, f"{what} cell {c.tolist()} (centre {_fmt(centre)})")
+        if not self.is_free(c[None])[0]:  # the message only when needed: searches are short
+            centre = self._lattice.to_world(c[None])[0]
+            self._require_free(c, f"{what} cell {c.tolist()} (centre {_fmt(centre)})")
         return c
 
     def _require_free(self, cell: np.ndarray, label: str) -> None:

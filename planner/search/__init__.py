@@ -40,7 +40,6 @@ import numpy as np
 
 from planner import budget as _budget
 from planner.errors import PlanError
-from planner.keys import unpack
 from planner.search import _astar, _driver
 from planner.search._astar import SearchParams
 from planner.search._los import new_scratch, shortcut_kernel
@@ -236,22 +235,30 @@ def search(
     chk = world.checker
     node_cap = min(max_nodes, budget_nodes) if max_nodes else budget_nodes
     params = SearchParams(anyangle, node_cap, max_exp)
+    pocket: list[tuple[int, int]] = []
+
+    def goal_open() -> bool:  # asked once, by a search still going after PROBE_AFTER
+        p = _goal_pocket(world, ms, s, gl)
+        if p is not None:
+            pocket.append(p)
+        return p is None
+
     t0 = time.perf_counter()
-    pocket = _goal_pocket(world, ms, s, gl)
-    if pocket is not None:  # the goal is sealed in a small pocket: no search
-        secs = time.perf_counter() - t0
-        return SearchResult(False, np.zeros((0, 3), np.int64), math.inf, pocket[1] + 2, 0,
-                            0, secs, 0, f"goal unreachable: its free space is {pocket[0]} "
-                            "cells, closed off from the start", status="unreachable",
-                            guarantee=guarantee)
-    status, keys, cost, st, peak = _driver.run(chk.occupancy, chk.walk, ms, s, gl, params,
-                                               _span(world) if anyangle else 0.0)
+    status, cells, cost, st, peak = _driver.run(chk.occupancy, chk.walk, ms, s, gl, params,
+                                               _span(world) if anyangle else 0.0,
+                                               pause_at=PROBE_AFTER, keep_going=goal_open)
     secs = time.perf_counter() - t0
     exp, gen, look = int(st[ST_EXP]), int(st[ST_N]), int(st[ST_LOOK])
     world.cell_checks += look
     checks = look + 2  # and the two endpoint checks
     if status == _astar.RUN_FOUND:
-        return SearchResult(True, unpack(keys, 3), cost, checks, exp, gen, secs, peak,
+        return SearchResult(True, cells, cost, checks, exp, gen, secs, peak,
+                            guarantee=guarantee, compile_seconds=compile_s)
+    if status == _driver.RUN_STOPPED:  # the goal is sealed in a small pocket
+        cells, probe_look = pocket[0]
+        return SearchResult(False, np.zeros((0, 3), np.int64), math.inf, checks + probe_look,
+                            exp, gen, secs, peak, f"goal unreachable: its free space is "
+                            f"{cells} cells, closed off from the start", status="unreachable",
                             guarantee=guarantee, compile_seconds=compile_s)
     if status == _astar.RUN_EXHAUSTED:
         why, kind = f"goal unreachable: explored {gen} cells", "unreachable"
@@ -263,7 +270,10 @@ def search(
                         peak, why, status=kind, guarantee=guarantee, compile_seconds=compile_s)
 
 
-GOAL_PROBE = 256  # expansions of the search from the goal that precedes every search
+GOAL_PROBE = 256  # expansions of the search from the goal (the goal probe)
+#: expansions after which a search still going runs the goal probe: most searches end
+#: sooner and skip it; a longer one pays at most GOAL_PROBE / PROBE_AFTER extra
+PROBE_AFTER = 2048
 
 
 def _goal_pocket(world: World, ms, start, goal) -> tuple[int, int] | None:
@@ -275,7 +285,7 @@ def _goal_pocket(world: World, ms, start, goal) -> tuple[int, int] | None:
     The moves are symmetric (the same cells are checked either way), so this is exact."""
     chk = world.checker
     status, _, _, st, _ = _driver.run(chk.occupancy, chk.walk, ms, goal, start,
-                                      SearchParams(0, 0, GOAL_PROBE), 0.0)
+                                      SearchParams(0, 0, GOAL_PROBE), 0.0, dense=False)
     if status != _astar.RUN_EXHAUSTED:
         return None
     world.cell_checks += int(st[ST_LOOK])

@@ -158,6 +158,18 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st):
     nm = moves.shape[0]
     bits = nu <= MAX_BITS  # one mask test per move instead of its CSR list
     gk = pack3(goal[0], goal[1], goal[2])
+    # Dense grid: each stencil cell and move as one offset into the grid (x slowest), and a
+    # margin inside which no stencil cell can leave the box: an expansion there looks up
+    # its cells without bounds tests or index arithmetic.
+    uoff = np.empty(nu, np.int64)
+    reach = 0
+    for j in range(nu):
+        uoff[j] = (ust[j, 0] * d1 + ust[j, 1]) * d2 + ust[j, 2]
+        reach = max(reach, abs(ust[j, 0]), abs(ust[j, 1]), abs(ust[j, 2]))
+    moff = np.empty(nm, np.int64)
+    for m in range(nm):
+        moff[m] = (moves[m, 0] * d1 + moves[m, 1]) * d2 + moves[m, 2]
+    base = np.int64(0)
     fq = 1e-9 * mcost.min()
     fq_inv = 1.0 / fq
     n = st[ST_N]
@@ -179,12 +191,19 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st):
         if mode == 0:
             # Dense grid lookups written out here: numba does not reliably inline the
             # helper inside this large loop and a call costs ~50 ns of refcounting.
-            for j in range(nu):
-                a = u0 + ust[j, 0] - lo0
-                b = u1 + ust[j, 1] - lo1
-                c = u2 + ust[j, 2] - lo2
-                ufree[j] = (a >= 0 and b >= 0 and c >= 0 and a < d0 and b < d1 and c < d2
-                            and grid[(a * d1 + b) * d2 + c] != 0)
+            a0, b0, c0 = u0 - lo0, u1 - lo1, u2 - lo2
+            base = (a0 * d1 + b0) * d2 + c0
+            if (a0 >= reach and b0 >= reach and c0 >= reach and a0 < d0 - reach
+                    and b0 < d1 - reach and c0 < d2 - reach):
+                for j in range(nu):
+                    ufree[j] = grid[base + uoff[j]] != 0
+            else:
+                for j in range(nu):
+                    a = a0 + ust[j, 0]
+                    b = b0 + ust[j, 1]
+                    c = c0 + ust[j, 2]
+                    ufree[j] = (a >= 0 and b >= 0 and c >= 0 and a < d0 and b < d1
+                                and c < d2 and grid[(a * d1 + b) * d2 + c] != 0)
         else:
             for j in range(nu):
                 ufree[j] = _free(mode, grid, lo, dims, otable, otmask, gg, blo, bhi,
@@ -230,7 +249,7 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st):
             elif not move_allowed(ufree, mptr, midx, m):
                 continue
             if dense:
-                loc = ((v0 - lo0) * d1 + (v1 - lo1)) * d2 + (v2 - lo2)
+                loc = base + moff[m]
                 t = np.int64(dsl[loc]) - 1  # stored as slot + 1, 0 none
             else:
                 bk = block_key(v0, v1, v2)

@@ -105,16 +105,27 @@ def _give_dense(occ, a: np.ndarray) -> None:
         weakref.finalize(occ.grid, _forget, key)
 
 
-def run(occ, walk, ms, start, goal, params, span: float, cap: int = 4096):
+#: status of a search that ``keep_going`` stopped at its pause (not an ``_astar`` status)
+RUN_STOPPED = 5
+
+
+def run(occ, walk, ms, start, goal, params, span: float, cap: int = 4096, *,
+        dense: bool = True, pause_at: int = 0, keep_going=None):
     """Run one search to completion. ``span``: longest sight line (m) the any-angle scratch
     is sized for (0 for lattice A*).
+
+    ``dense=False`` keeps the search off the pooled dense slot array (a short search run
+    while another search on the same grid holds it). With ``keep_going`` (a callable
+    returning bool), a search still going after ``pause_at`` expansions pauses once and
+    asks it whether to go on; False stops it with :data:`RUN_STOPPED`. Short searches, most
+    of them, so never pay for the question.
 
     Returns
     -------
     status : int
-        ``_astar.RUN_*`` (never RUN_GROW).
-    keys : ndarray (K,) int64 or None
-        Packed path cells when found.
+        ``_astar.RUN_*`` (never RUN_GROW), or :data:`RUN_STOPPED`.
+    cells : ndarray (K, 3) int64 or None
+        Path cells from start to goal when found.
     cost : float
     st : ndarray (ST_SIZE,) int64
         Final kernel state (counts).
@@ -124,18 +135,30 @@ def run(occ, walk, ms, start, goal, params, span: float, cap: int = 4096):
     nodes = new_nodes(cap)
     heap = new_heap(cap)
     pcap = 64  # pages of the cell -> node slot map
-    dense = _take_dense(occ)
+    dense = _take_dense(occ) if dense else None
     slots = new_slots(pcap) if dense is None else new_slots(pcap, dense, occ.lo, occ.dims)
     st = np.zeros(ST_SIZE, np.int64)
     # The walk scratch serves the generic line of sight; cubic sight lines need none.
-    cubic = bool(np.array_equal(walk.g, walk.g[0, 0] * np.eye(3)))
-    sc = new_scratch(span, walk) if span > 0 and not cubic else _no_sight()
+    if span > 0 and not np.array_equal(walk.g, walk.g[0, 0] * np.eye(3)):
+        sc = new_scratch(span, walk)
+    else:
+        sc = _no_sight()
     ufree = np.empty(len(ms.union), np.bool_)
     ends = np.empty((2, 3), np.int64)
     ends[0], ends[1] = start, goal
-    nodes, heap, slots, status = _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params,
-                                       ends, st, cap, pcap)
-    peak = sum(a.nbytes for part in (nodes, heap, slots, sc) for a in part) + ufree.nbytes
+    first = params
+    if keep_going is not None and not 0 < params.max_expansions <= pause_at:
+        first = params._replace(max_expansions=pause_at)
+    parts = _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, first, ends, st, cap, pcap)
+    nodes, heap, slots, status = parts
+    if first is not params and status == _astar.RUN_BUDGET:
+        if keep_going():
+            parts = _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st,
+                          len(nodes.key), len(slots.bkeys))
+            nodes, heap, slots, status = parts
+        else:
+            status = RUN_STOPPED
+    peak = _nbytes(nodes) + _nbytes(heap) + _nbytes(slots) + _nbytes(sc) + ufree.nbytes
     peak += st.nbytes
     path = None
     if status == _astar.RUN_FOUND:
@@ -147,6 +170,13 @@ def run(occ, walk, ms, start, goal, params, span: float, cap: int = 4096):
     if path is None:
         return status, None, math.inf, st, peak
     return status, path, cost, st, peak
+
+
+def _nbytes(struct) -> int:
+    n = 0
+    for a in struct:
+        n += a.nbytes
+    return n
 
 
 def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st, cap, pcap):
@@ -172,4 +202,4 @@ def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st, cap, p
     return nodes, heap, slots, status
 
 
-__all__ = ["run", "ST_EXP"]
+__all__ = ["run", "ST_EXP", "RUN_STOPPED"]

@@ -157,16 +157,16 @@ def rehash(sm, npages):  # pragma: no cover - compiled
 
 @njit_cached
 def trace_path(nodes, goal_slot):  # pragma: no cover - compiled
-    """Packed keys from the start (its own parent) to ``goal_slot``."""
+    """(K, 3) int64 cells from the start (its own parent) to ``goal_slot``."""
     key, par = nodes.key, nodes.par
     k = 1
     x = goal_slot
     while par[x] != x:
         x = par[x]
         k += 1
-    path = np.empty(k, dtype=np.int64)
+    path = np.empty((k, 3), dtype=np.int64)
     x = goal_slot
     for i in range(k - 1, -1, -1):
-        path[i] = key[x]
+        path[i, 0], path[i, 1], path[i, 2] = unpack3(key[x])
         x = par[x]
     return path
