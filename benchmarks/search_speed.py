@@ -324,6 +324,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--compare", type=int, default=10, help="queries per map vs nx/Python")
     ap.add_argument("--pad", type=int, default=6, help="crop padding (cells) for nx/Python")
     ap.add_argument("--da1", type=int, default=1000, help="DA1 queries to time (0: skip)")
+    ap.add_argument("--workers", type=int, default=2,
+                    help="threads for the DA1 search_many line (besides 1)")
     ap.add_argument("--no-geb079", dest="geb079", action="store_false",
                     help="skip the geb079.bt OctoMap world")
     ap.add_argument("--geb-queries", type=int, default=20, help="geb079 queries (>= 10 m)")
@@ -382,9 +384,19 @@ def main(argv: list[str] | None = None) -> int:
     if a.da1:
         world, scen = load_warframe("DA1")
         S.search(world, scen[0, :3].astype(np.int64), scen[0, 3:6].astype(np.int64))
-        r = numba_batch(world, scen[: a.da1])
-        print(f"\n{a.da1} DA1 queries: {r['wall']:.2f} s wall ({r['ksec']:.2f} s in the kernel), "
-              f"{len(r['bad'])} mismatches")
+        qs = scen[: a.da1]
+        r = numba_batch(world, qs)
+        print(f"\n{a.da1} DA1 queries, one by one (search): {r['wall']:.2f} s wall "
+              f"({r['ksec']:.2f} s in the kernel), {len(r['bad'])} mismatches")
+        for workers in sorted({1, a.workers}):
+            t0 = time.perf_counter()
+            res = S.search_many(world, qs[:, :3].astype(np.int64), qs[:, 3:6].astype(np.int64),
+                                workers=workers)
+            wall = time.perf_counter() - t0
+            bad = sum(not x.found or abs(x.cost - q[6]) > 1e-6 * q[6]
+                      for x, q in zip(res, qs, strict=True))
+            print(f"{a.da1} DA1 queries, search_many with {workers} thread(s): {wall:.2f} s "
+                  f"wall, {bad} mismatches")
     if not a.compare:
         return 1 if total_bad else 0
 

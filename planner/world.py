@@ -390,13 +390,15 @@ class World(UnknownSpace):
         c = c[0]
         if not self.is_free(c[None])[0]:  # the message only when needed: searches are short
             centre = self._lattice.to_world(c[None])[0]
-            self._require_free(c, f"{what} cell {c.tolist()} (centre {_fmt(centre)})")
+            self._not_free(c, f"{what} cell {c.tolist()} (centre {_fmt(centre)})")
         return c
 
     def _require_free(self, cell: np.ndarray, label: str) -> None:
+        if not self.is_free(cell[None])[0]:
+            self._not_free(cell, label)
+
+    def _not_free(self, cell: np.ndarray, label: str) -> None:
         """The one endpoint message: which end, where, why, and the nearest free cell."""
-        if self.is_free(cell[None])[0]:
-            return
         if not self.in_bounds(cell[None])[0]:
             where = "outside the map bounds"
         elif self._near_unknown(cell):

@@ -456,3 +456,33 @@ def test_every_lattice_shares_one_compiled_kernel():
     # when other kernels call it, cheap and independent of the lattice.)
     for kernel in (_astar.search_run, _los.shortcut_kernel, free_many):
         assert len(kernel.signatures) == 1, (kernel, kernel.signatures)
+
+
+# -- many queries at once ------------------------------------------------------------------
+@pytest.mark.parametrize("method", ["astar", "lazy-theta"])
+@pytest.mark.parametrize("name", ["cubic", "fcc"])
+def test_search_many_gives_each_query_the_result_of_search(name, method):
+    rng = np.random.default_rng(7)
+    blocked = rng.integers(0, 12, size=(250, 3))
+    w = _box_world(name, n=12, blocked=blocked)
+    free = np.array([c for c in itertools.product(range(12), repeat=3)
+                     if w.is_free(np.array(c))])
+    pick = rng.choice(len(free), size=(24, 2))
+    starts, goals = free[pick[:, 0]], free[pick[:, 1]]
+    one = [S.search(w, s, g, method=method) for s, g in zip(starts, goals, strict=True)]
+    before = w.cell_checks
+    many = S.search_many(w, starts, goals, method=method, workers=2)
+    assert w.cell_checks - before == sum(r.cell_checks for r in one)  # as search counts
+    for a, b in zip(one, many, strict=True):
+        assert (a.status, a.expansions, a.cell_checks) == (b.status, b.expansions, b.cell_checks)
+        assert a.cost == b.cost and np.array_equal(a.cells, b.cells)
+
+
+def test_search_many_refuses_a_blocked_endpoint_before_searching():
+    w = _box_world(blocked=[(3, 3, 3)])
+    before = w.cell_checks
+    with pytest.raises(PlanError, match=r"query 1: goal cell \[3, 3, 3\]"):
+        S.search_many(w, [[0, 0, 0], [1, 1, 1]], [[5, 5, 5], [3, 3, 3]])
+    assert w.cell_checks - before <= 4  # endpoint checks only: no search ran
+    with pytest.raises(PlanError, match="same shape"):
+        S.search_many(w, [[0, 0, 0]], [[5, 5, 5], [1, 1, 1]])

@@ -55,8 +55,9 @@ from planner.search.stencils import (
 )
 from planner.world import World, _cells
 
-__all__ = ["SearchResult", "search", "shortcut", "warm_up", "move_stencils", "move_heuristic",
-           "METHODS", "carries_guarantee", "default_memory_budget", "default_max_expansions"]
+__all__ = ["SearchResult", "search", "search_many", "shortcut", "warm_up", "move_stencils",
+           "move_heuristic", "METHODS", "carries_guarantee", "default_memory_budget",
+           "default_max_expansions"]
 
 METHODS = ("astar", "dijkstra", "theta", "lazy-theta")
 _ANYANGLE = {"astar": 0, "dijkstra": 0, "theta": 1, "lazy-theta": 2}
@@ -232,9 +233,18 @@ def search(
         res = search_networkx(world, s, gl, ms, max_nodes or None)
         res.guarantee = guarantee
         return res
-    chk = world.checker
     node_cap = min(max_nodes, budget_nodes) if max_nodes else budget_nodes
-    params = SearchParams(anyangle, node_cap, max_exp)
+    res, look = _run(world, s, gl, ms, SearchParams(anyangle, node_cap, max_exp), max_nodes)
+    world.cell_checks += look
+    res.guarantee, res.compile_seconds = guarantee, compile_s
+    return res
+
+
+def _run(world: World, s: np.ndarray, gl: np.ndarray, ms, params: SearchParams,
+         max_nodes: int) -> tuple[SearchResult, int]:
+    """One kernel search between two free cells: the result and the lookups to add to
+    ``world.cell_checks`` (left to the caller, so that threads never write to the world)."""
+    chk = world.checker
     pocket: list[tuple[int, int]] = []
 
     def goal_open() -> bool:  # asked once, by a search still going after PROBE_AFTER
@@ -245,29 +255,107 @@ def search(
 
     t0 = time.perf_counter()
     status, cells, cost, st, peak = _driver.run(chk.occupancy, chk.walk, ms, s, gl, params,
-                                               _span(world) if anyangle else 0.0,
+                                               _span(world) if params.anyangle else 0.0,
                                                pause_at=PROBE_AFTER, keep_going=goal_open)
     secs = time.perf_counter() - t0
     exp, gen, look = int(st[ST_EXP]), int(st[ST_N]), int(st[ST_LOOK])
-    world.cell_checks += look
     checks = look + 2  # and the two endpoint checks
+    none = np.zeros((0, 3), np.int64)
     if status == _astar.RUN_FOUND:
-        return SearchResult(True, cells, cost, checks, exp, gen, secs, peak,
-                            guarantee=guarantee, compile_seconds=compile_s)
+        return SearchResult(True, cells, cost, checks, exp, gen, secs, peak), look
     if status == _driver.RUN_STOPPED:  # the goal is sealed in a small pocket
-        cells, probe_look = pocket[0]
-        return SearchResult(False, np.zeros((0, 3), np.int64), math.inf, checks + probe_look,
-                            exp, gen, secs, peak, f"goal unreachable: its free space is "
-                            f"{cells} cells, closed off from the start", status="unreachable",
-                            guarantee=guarantee, compile_seconds=compile_s)
+        n, probe_look = pocket[0]
+        return SearchResult(False, none, math.inf, checks + probe_look, exp, gen, secs, peak,
+                            f"goal unreachable: its free space is {n} cells, closed off "
+                            "from the start", status="unreachable"), look + probe_look
     if status == _astar.RUN_EXHAUSTED:
         why, kind = f"goal unreachable: explored {gen} cells", "unreachable"
     elif status == _astar.RUN_LIMIT and max_nodes and gen >= max_nodes:
         why, kind = f"node limit {max_nodes} reached after {exp} expansions", "budget"
     else:
         why, kind = f"search budget exhausted after {exp} expansions ({peak} bytes)", "budget"
-    return SearchResult(False, np.zeros((0, 3), np.int64), math.inf, checks, exp, gen, secs,
-                        peak, why, status=kind, guarantee=guarantee, compile_seconds=compile_s)
+    return SearchResult(False, none, math.inf, checks, exp, gen, secs, peak, why,
+                        status=kind), look
+
+
+def search_many(
+    world: World,
+    start_cells: np.ndarray,
+    goal_cells: np.ndarray,
+    *,
+    method: str = "astar",
+    neighbors: str = "full",
+    corner_cutting: bool = False,
+    workers: int | None = None,
+    max_nodes: int | None = None,
+    max_expansions: int | None = None,
+    memory_budget: int | None = None,
+) -> list[SearchResult]:
+    """Shortest paths for many start / goal pairs on one world, ``workers`` at a time.
+
+    Each pair gets the result :func:`search` would give it (same path, cost and counts).
+    The search kernel releases the GIL, so the threads search in parallel on the one
+    shared world: no copies, no processes.
+
+    Parameters
+    ----------
+    world : World
+    start_cells, goal_cells : array_like of int, shape (Q, 3)
+        Lattice indices, all free (checked before any search: PlanError naming the query).
+    method, neighbors, corner_cutting, max_nodes, max_expansions
+        As :func:`search` (numba backend).
+    workers : int, optional
+        Threads (default: the CPUs this process may use, at most Q).
+    memory_budget : int, optional
+        Bytes for all searches together (default :func:`default_memory_budget`): each of
+        the ``workers`` concurrent searches gets its share.
+
+    Returns
+    -------
+    list of SearchResult, length Q, in query order
+        Their lookups are also added to ``world.cell_checks``.
+    """
+    import os
+    from concurrent.futures import ThreadPoolExecutor
+
+    if method not in METHODS:
+        raise PlanError(f"unknown method {method!r}; expected one of {', '.join(METHODS)}")
+    a, b = _cells(start_cells), _cells(goal_cells)
+    if a.shape != b.shape:
+        raise PlanError(f"start_cells and goal_cells must have the same shape (Q, 3), got "
+                        f"{a.shape} and {b.shape}")
+    if workers is None:
+        cpus = os.sched_getaffinity(0) if hasattr(os, "sched_getaffinity") else None
+        workers = len(cpus) if cpus else (os.cpu_count() or 1)
+    workers = max(1, min(_limit(workers, "workers"), len(a)))
+    compile_s = warm_up()
+    max_nodes = _limit(max_nodes, "max_nodes")
+    budget = _limit(memory_budget, "memory_budget") or default_memory_budget()
+    budget_nodes = default_max_expansions(max(1, budget // workers))
+    max_exp = _limit(max_expansions, "max_expansions") or budget_nodes
+    for i in range(len(a)):
+        world.endpoint_cell(a[i], f"query {i}: start")
+        world.endpoint_cell(b[i], f"query {i}: goal")
+    guarantee = carries_guarantee(world.lattice, neighbors, corner_cutting)
+    ms = move_set(world.lattice, neighbors, corner_cutting, _HKIND[method])
+    node_cap = min(max_nodes, budget_nodes) if max_nodes else budget_nodes
+    params = SearchParams(_ANYANGLE[method], node_cap, max_exp)
+
+    def one(i: int) -> tuple[SearchResult, int]:
+        return _run(world, a[i], b[i], ms, params, max_nodes)
+
+    if workers == 1:
+        done = [one(i) for i in range(len(a))]
+    else:
+        with ThreadPoolExecutor(workers) as pool:
+            done = list(pool.map(one, range(len(a))))
+    out = []
+    for i, (res, look) in enumerate(done):
+        world.cell_checks += look
+        res.guarantee = guarantee
+        res.compile_seconds = compile_s if i == 0 else 0.0
+        out.append(res)
+    return out
 
 
 GOAL_PROBE = 256  # expansions of the search from the goal (the goal probe)
@@ -281,14 +369,13 @@ def _goal_pocket(world: World, ms, start, goal) -> tuple[int, int] | None:
     :data:`GOAL_PROBE` expansions) runs out of cells before reaching the start: the goal
     is sealed off, so an unbounded search from the start could only end at the budget.
     None otherwise; its lookups are then not counted (not part of the measured search;
-    its time, well under a millisecond, is).
+    its time, well under a millisecond, is). Nothing is written to the world.
     The moves are symmetric (the same cells are checked either way), so this is exact."""
     chk = world.checker
     status, _, _, st, _ = _driver.run(chk.occupancy, chk.walk, ms, goal, start,
                                       SearchParams(0, 0, GOAL_PROBE), 0.0, dense=False)
     if status != _astar.RUN_EXHAUSTED:
         return None
-    world.cell_checks += int(st[ST_LOOK])
     return int(st[ST_N]), int(st[ST_LOOK])
 
 

@@ -94,7 +94,7 @@ def search_init(start, goal, ms, g, nodes, heap, slots, st):  # pragma: no cover
     st[ST_N] = 1
 
 
-@njit_cached
+@njit_cached(nogil=True)  # threads search in parallel (search_many)
 def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st):
     # pragma: no cover - compiled
     """A* / Dijkstra / Theta* / Lazy Theta* over lattice cells, resumable.
