@@ -5,8 +5,9 @@ axes are the columns of a rotation ``R`` shared by all boxes: ``{C + R x : |x| <
 Cell geometry travels as a :class:`planner.voxels._kernels.CellPolytope` expressed in the
 boxes' frame (so a box is axis-aligned there).
 
-* :func:`overlap_keys`: cells whose Voronoi cell overlaps a box with positive volume, by the
-  separating axis theorem (the axes are the facet normals of the Minkowski sum box + V).
+* :func:`overlap_keys` / :func:`overlap_mark`: cells whose Voronoi cell overlaps a box with
+  positive volume, by the separating axis theorem (the axes are the facet normals of the
+  Minkowski sum box + V), as keys or marked in a dense grid.
 * :func:`within_mark`: cells whose closed Voronoi cell is closer than ``r`` to a box (3D),
   by ball bounds and, in the thin shell they leave undecided, GJK on support functions.
 """
@@ -20,6 +21,46 @@ import numpy as np
 from planner._jit import njit_cached
 
 
+@njit_cached(inline="always")
+def _overlap_thresholds(half_i, axes_box, support_v, packing, covering, tol, thr
+                        ):  # pragma: no cover - compiled
+    """Per-axis thresholds ``thr`` of one box (half sizes ``half_i``) and the radii
+    ``(r_in, r_out)`` of balls about its centre inside / around box + V."""
+    d = half_i.shape[0]
+    hmin = np.inf
+    h2 = 0.0
+    for j in range(d):
+        hmin = min(hmin, half_i[j])
+        h2 += half_i[j] * half_i[j]
+    for m in range(axes_box.shape[0]):
+        s = support_v[m] - tol
+        for j in range(d):
+            s += axes_box[m, j] * half_i[j]
+        thr[m] = s
+    return hmin + packing - tol, math.sqrt(h2) + covering + tol
+
+
+@njit_cached(inline="always")
+def _overlaps(centre_i, base_i, offs_o, axes, thr, r_in, r_out, x
+              ):  # pragma: no cover - compiled
+    """Does the cell centred at ``base_i + offs_o`` overlap the box (see overlap_keys)?"""
+    d = centre_i.shape[0]
+    r2 = 0.0
+    for j in range(d):
+        x[j] = base_i[j] + offs_o[j] - centre_i[j]
+        r2 += x[j] * x[j]
+    if r2 > r_out * r_out:
+        return False
+    if r2 >= r_in * r_in:
+        for m in range(axes.shape[0]):
+            s = 0.0
+            for j in range(d):
+                s += axes[m, j] * x[j]
+            if abs(s) >= thr[m]:
+                return False
+    return True
+
+
 @njit_cached
 def overlap_keys(centres, half, base_keys, base_world, offs_world, offs_key, axes, axes_box,
                  support_v, packing, covering, tol, out):  # pragma: no cover - compiled
@@ -31,47 +72,40 @@ def overlap_keys(centres, half, base_keys, base_world, offs_world, offs_key, axe
     ``support_v`` (m,): the cell's support along each axis; ``packing`` / ``covering``: the
     cell's radii. Overlap iff ``|a . x| < support
     - tol`` on every axis (``x`` cell centre minus box centre): mere touching does not count.
-    Returns the number of keys written to ``out``.
+    Balls about the box centre inside / around box + V accept / reject most candidates
+    first. Returns the number of keys written to ``out``.
     """
     n = 0
-    d = centres.shape[1]
-    m_axes = axes.shape[0]
-    x = np.empty(d)
-    thr = np.empty(m_axes)
+    x = np.empty(centres.shape[1])
+    thr = np.empty(axes.shape[0])
     for i in range(centres.shape[0]):
-        hmin = np.inf
-        h2 = 0.0
-        for j in range(d):
-            hmin = min(hmin, half[i, j])
-            h2 += half[i, j] * half[i, j]
-        for m in range(m_axes):
-            s = support_v[m] - tol
-            for j in range(d):
-                s += axes_box[m, j] * half[i, j]
-            thr[m] = s
-        # Balls about the box centre inside / around box + V: early accept / reject.
-        r_out = math.sqrt(h2) + covering + tol
-        r_in = hmin + packing - tol
+        r_in, r_out = _overlap_thresholds(half[i], axes_box, support_v, packing, covering,
+                                          tol, thr)
         for o in range(offs_world.shape[0]):
-            r2 = 0.0
-            for j in range(d):
-                x[j] = base_world[i, j] + offs_world[o, j] - centres[i, j]
-                r2 += x[j] * x[j]
-            if r2 > r_out * r_out:
-                continue
-            hit = True
-            if r2 >= r_in * r_in:
-                for m in range(m_axes):
-                    s = 0.0
-                    for j in range(d):
-                        s += axes[m, j] * x[j]
-                    if abs(s) >= thr[m]:
-                        hit = False
-                        break
-            if hit:
+            if _overlaps(centres[i], base_world[i], offs_world[o], axes, thr, r_in, r_out, x):
                 out[n] = base_keys[i] + offs_key[o]
                 n += 1
     return n
+
+
+@njit_cached
+def overlap_mark(centres, half, base_flat, base_world, offs_world, offs_flat, axes, axes_box,
+                 support_v, packing, covering, tol, grid):  # pragma: no cover - compiled
+    """:func:`overlap_keys` into a dense grid: OR 1 into ``grid[base_flat[i] +
+    offs_flat[o]]`` for every overlapping candidate and for each box's base cell; cells
+    already marked are not tested again. The grid must hold every candidate."""
+    x = np.empty(centres.shape[1])
+    thr = np.empty(axes.shape[0])
+    for i in range(centres.shape[0]):
+        grid[base_flat[i]] |= 1
+        r_in, r_out = _overlap_thresholds(half[i], axes_box, support_v, packing, covering,
+                                          tol, thr)
+        for o in range(offs_world.shape[0]):
+            f = base_flat[i] + offs_flat[o]
+            if grid[f] & 1:
+                continue
+            if _overlaps(centres[i], base_world[i], offs_world[o], axes, thr, r_in, r_out, x):
+                grid[f] |= 1
 
 
 @njit_cached

@@ -13,6 +13,7 @@ All cell geometry comes from :attr:`planner.Lattice.voronoi` (:class:`VoronoiCel
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
@@ -291,30 +292,53 @@ def _overlap_keys(centres: np.ndarray, half: np.ndarray, rot: np.ndarray, lat: L
     # box set whose key lists alone exceed the budget before enumerating anything.
     need = 8.0 * float(np.prod(2 * half, axis=1).sum()) / lat.cell_volume
     require(need, f"the cells of {len(centres)} boxes")
-    cell = lat.voronoi
-    tol = REL_TOL * max(cell_diameter(lat), 2 * float(half.max()))
-    axes = cell.separating_axes(rot)
-    support_v = np.abs(cell.vertices @ axes.T).max(axis=0)
-    reach = float(np.linalg.norm(half, axis=1).max()) + 2 * cell.covering_radius + tol
-    offs = offsets_within(lat, reach, None, reach)
+    t = overlap_tests(lat, half, rot)
+    offs = t.offsets
     ext = np.abs(offs).max(axis=0)
     check_range(base.min(axis=0) - ext, base.max(axis=0) + ext, d)
     base_world = lat.to_world(base)
-    offs_world = np.ascontiguousarray(offs @ lat.generator.T, dtype=float)
     offs_key = key_offsets(offs)
-    axes_box = np.ascontiguousarray(np.abs(axes @ rot))
     chunk = max(1, _BOX_CHUNK_KEYS // len(offs))
     parts = []
     buf = np.empty(min(chunk, len(centres)) * len(offs), dtype=np.int64)
     for i in range(0, len(centres), chunk):
         sl = slice(i, i + chunk)
         n = bk.overlap_keys(np.ascontiguousarray(centres[sl]), np.ascontiguousarray(half[sl]),
-                            base_keys[sl], np.ascontiguousarray(base_world[sl]), offs_world,
-                            offs_key, axes, axes_box, support_v, cell.packing_radius,
-                            cell.covering_radius, tol, buf)
+                            base_keys[sl], np.ascontiguousarray(base_world[sl]), t.offs_world,
+                            offs_key, t.axes, t.axes_box, t.support_v, t.packing, t.covering,
+                            t.tol, buf)
         parts.append(unique_keys(buf[:n]))  # per chunk: neighbouring boxes share cells
     parts.append(base_keys)  # the centre's cell, even for boxes thinner than the tolerance
     return unique_keys(np.concatenate(parts))
+
+
+class OverlapTests(NamedTuple):
+    """What the overlap kernels (:func:`bk.overlap_keys`, :func:`bk.overlap_mark`) need for
+    boxes of half sizes up to ``half`` on a lattice: candidate ``offsets`` (n, d) about a
+    box's base cell with their world vectors ``offs_world``, separating ``axes`` (m, d),
+    ``axes_box`` ``|axes @ R|``, the cell's ``support_v`` (m,), radii and tolerance."""
+
+    offsets: np.ndarray
+    offs_world: np.ndarray
+    axes: np.ndarray
+    axes_box: np.ndarray
+    support_v: np.ndarray
+    packing: float
+    covering: float
+    tol: float
+
+
+def overlap_tests(lat: Lattice, half: np.ndarray, rot: np.ndarray) -> OverlapTests:
+    """:class:`OverlapTests` for boxes of half sizes ``half`` (K, d) (m) in the frame ``rot``."""
+    cell = lat.voronoi
+    tol = REL_TOL * max(cell_diameter(lat), 2 * float(half.max()))
+    axes = cell.separating_axes(rot)
+    support_v = np.abs(cell.vertices @ axes.T).max(axis=0)
+    reach = float(np.linalg.norm(half, axis=1).max()) + 2 * cell.covering_radius + tol
+    offs = offsets_within(lat, reach, None, reach)
+    return OverlapTests(offs, np.ascontiguousarray(offs @ lat.generator.T, dtype=float), axes,
+                        np.ascontiguousarray(np.abs(axes @ rot)), support_v,
+                        cell.packing_radius, cell.covering_radius, tol)
 
 
 def _box_frame(lo, hi, rotation, translation, d: int) -> tuple[np.ndarray, ...]:
