@@ -10,15 +10,49 @@ boxes' frame (so a box is axis-aligned there).
   Minkowski sum box + V), as keys or marked in a dense grid.
 * :func:`within_mark`: cells whose closed Voronoi cell is closer than ``r`` to a box (3D),
   by ball bounds and, in the thin shell they leave undecided, GJK on support functions.
+
+:func:`overlap_tests` prepares the overlap kernels' inputs (:class:`OverlapTests`).
 """
 
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
 from planner._jit import njit_cached
+from planner.lattice import Lattice
+from planner.voxels._checks import REL_TOL, cell_diameter, offsets_within
+
+
+class OverlapTests(NamedTuple):
+    """What the overlap kernels (:func:`overlap_keys`, :func:`overlap_mark`) need for
+    boxes of half sizes up to ``half`` on a lattice: candidate ``offsets`` (n, d) about a
+    box's base cell with their world vectors ``offs_world``, separating ``axes`` (m, d),
+    ``axes_box`` ``|axes @ R|``, the cell's ``support_v`` (m,), radii and tolerance."""
+
+    offsets: np.ndarray
+    offs_world: np.ndarray
+    axes: np.ndarray
+    axes_box: np.ndarray
+    support_v: np.ndarray
+    packing: float
+    covering: float
+    tol: float
+
+
+def overlap_tests(lat: Lattice, half: np.ndarray, rot: np.ndarray) -> OverlapTests:
+    """:class:`OverlapTests` for boxes of half sizes ``half`` (K, d) (m) in the frame ``rot``."""
+    cell = lat.voronoi
+    tol = REL_TOL * max(cell_diameter(lat), 2 * float(half.max()))
+    axes = cell.separating_axes(rot)
+    support_v = np.abs(cell.vertices @ axes.T).max(axis=0)
+    reach = float(np.linalg.norm(half, axis=1).max()) + 2 * cell.covering_radius + tol
+    offs = offsets_within(lat, reach, None, reach)
+    return OverlapTests(offs, np.ascontiguousarray(offs @ lat.generator.T, dtype=float), axes,
+                        np.ascontiguousarray(np.abs(axes @ rot)), support_v,
+                        cell.packing_radius, cell.covering_radius, tol)
 
 
 @njit_cached(inline="always")
@@ -257,14 +291,16 @@ def gjk_within(p, half, verts, radius, tol, w, lam, scratch):  # pragma: no cove
 
 
 @njit_cached
-def within_mark(centres, half, rot, base_flat, base_world, cand_flat, cand_world, verts,
-                packing, covering, radius, tol, grid):  # pragma: no cover - compiled
+def within_mark(centres, half, rot, base_flat, base_world, sure_flat, cand_flat, cand_world,
+                verts, packing, covering, radius, tol, grid):  # pragma: no cover - compiled
     """Mark (set to 1) every grid cell whose closed Voronoi cell is closer than ``radius``
-    to some box (3D). Candidates of box i: flat ``base_flat[i] + cand_flat[o]``, centre
-    ``base_world[i] + cand_world[o]``. With ``d0`` the distance of the cell centre to the
-    box, ``d0 - covering <= dist <= max(d0 - packing, 0)`` decides most candidates, a
-    separating plane and the nearest cell vertex most others; GJK (:func:`gjk_within`, cell
-    vertices ``verts`` in the box frame) the rest. Returns the number of GJK calls."""
+    to some box (3D). Cells ``base_flat[i] + sure_flat`` are marked untested (the caller
+    knows every one passes the first bound below). Candidates of box i: flat
+    ``base_flat[i] + cand_flat[o]``, centre ``base_world[i] + cand_world[o]``. With ``d0``
+    the distance of the cell centre to the box, ``d0 - covering <= dist <= max(d0 -
+    packing, 0)`` decides most candidates, a separating plane and the nearest cell vertex
+    most others; GJK (:func:`gjk_within`, cell vertices ``verts`` in the box frame) the
+    rest. Returns the number of GJK calls."""
     p = np.empty(3)
     hb = np.empty(3)
     w = np.empty((4, 3))
@@ -277,6 +313,8 @@ def within_mark(centres, half, rot, base_flat, base_world, cand_flat, cand_world
     r2 = radius * radius
     calls = 0
     for i in range(centres.shape[0]):
+        for o in range(sure_flat.shape[0]):
+            grid[base_flat[i] + sure_flat[o]] = 1
         h0, h1, h2 = half[i, 0], half[i, 1], half[i, 2]
         # The base cell centre relative to the box centre, in the box frame.
         c0 = base_world[i, 0] - centres[i, 0]

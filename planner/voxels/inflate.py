@@ -13,7 +13,6 @@ All cell geometry comes from :attr:`planner.Lattice.voronoi` (:class:`VoronoiCel
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
 
 import numpy as np
 
@@ -292,7 +291,7 @@ def _overlap_keys(centres: np.ndarray, half: np.ndarray, rot: np.ndarray, lat: L
     # box set whose key lists alone exceed the budget before enumerating anything.
     need = 8.0 * float(np.prod(2 * half, axis=1).sum()) / lat.cell_volume
     require(need, f"the cells of {len(centres)} boxes")
-    t = overlap_tests(lat, half, rot)
+    t = bk.overlap_tests(lat, half, rot)
     offs = t.offsets
     ext = np.abs(offs).max(axis=0)
     check_range(base.min(axis=0) - ext, base.max(axis=0) + ext, d)
@@ -310,35 +309,6 @@ def _overlap_keys(centres: np.ndarray, half: np.ndarray, rot: np.ndarray, lat: L
         parts.append(unique_keys(buf[:n]))  # per chunk: neighbouring boxes share cells
     parts.append(base_keys)  # the centre's cell, even for boxes thinner than the tolerance
     return unique_keys(np.concatenate(parts))
-
-
-class OverlapTests(NamedTuple):
-    """What the overlap kernels (:func:`bk.overlap_keys`, :func:`bk.overlap_mark`) need for
-    boxes of half sizes up to ``half`` on a lattice: candidate ``offsets`` (n, d) about a
-    box's base cell with their world vectors ``offs_world``, separating ``axes`` (m, d),
-    ``axes_box`` ``|axes @ R|``, the cell's ``support_v`` (m,), radii and tolerance."""
-
-    offsets: np.ndarray
-    offs_world: np.ndarray
-    axes: np.ndarray
-    axes_box: np.ndarray
-    support_v: np.ndarray
-    packing: float
-    covering: float
-    tol: float
-
-
-def overlap_tests(lat: Lattice, half: np.ndarray, rot: np.ndarray) -> OverlapTests:
-    """:class:`OverlapTests` for boxes of half sizes ``half`` (K, d) (m) in the frame ``rot``."""
-    cell = lat.voronoi
-    tol = REL_TOL * max(cell_diameter(lat), 2 * float(half.max()))
-    axes = cell.separating_axes(rot)
-    support_v = np.abs(cell.vertices @ axes.T).max(axis=0)
-    reach = float(np.linalg.norm(half, axis=1).max()) + 2 * cell.covering_radius + tol
-    offs = offsets_within(lat, reach, None, reach)
-    return OverlapTests(offs, np.ascontiguousarray(offs @ lat.generator.T, dtype=float), axes,
-                        np.ascontiguousarray(np.abs(axes @ rot)), support_v,
-                        cell.packing_radius, cell.covering_radius, tol)
 
 
 def _box_frame(lo, hi, rotation, translation, d: int) -> tuple[np.ndarray, ...]:
@@ -384,6 +354,26 @@ def _split_boxes(centres: np.ndarray, half: np.ndarray, rot: np.ndarray, max_hal
         out_h.append(np.repeat(sub, len(steps), axis=0))
     return np.ascontiguousarray(np.concatenate(out_c)), np.ascontiguousarray(
         np.concatenate(out_h))
+
+
+def _sure_and_tested(cand_world: np.ndarray, half: np.ndarray, cell, r: float, tol: float
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """Masks of the candidates (box-frame offsets ``cand_world`` (n, 3), m) that
+    :func:`bk.within_mark` would mark for every box of half sizes among ``half`` (K, 3)
+    whatever the base cell's position (within the covering radius R of the box centre),
+    and of those it must test (the others it would skip for every box).
+
+    With ``c`` a candidate, ``b`` the base cell centre (``|b| <= R``) and ``dist(x, h)`` the
+    distance from x to ``[-h, h]``: ``dist(b + c, h_i) <= dist(c, h_min) + R`` and
+    ``>= dist(c, h_max) - R``, compared with the kernel's first bounds ``r + packing`` and
+    ``r + tol + R`` with a margin for rounding."""
+    def dist(h: np.ndarray) -> np.ndarray:
+        return np.linalg.norm(np.maximum(np.abs(cand_world) - h, 0.0), axis=1)
+
+    cov, slack = cell.covering_radius, 1e-9 * (1.0 + r)
+    sure = dist(half.min(axis=0)) + cov < r + cell.packing_radius - slack
+    test = ~sure & (dist(half.max(axis=0)) - cov < r + tol + cov + slack)
+    return sure, test
 
 
 def exact_box_inflation(lo: np.ndarray, hi: np.ndarray, lattice: Lattice, radius: float, *,
@@ -472,11 +462,14 @@ def exact_box_inflation(lo: np.ndarray, hi: np.ndarray, lattice: Lattice, radius
         order = sel[np.argsort(base_flat[sel], kind="stable")]
         cand_flat = cand @ strides
         corder = np.argsort(cand_flat, kind="stable")
+        cand_flat = cand_flat[corder]
+        cand_world = np.ascontiguousarray(cand[corder] @ lat.generator.T @ rot, dtype=float)
+        sure, test = _sure_and_tested(cand_world, half[sel], cell, r, tol)
         bk.within_mark(centres[order], half[order], rot,
                        np.ascontiguousarray(base_flat[order]),
                        np.ascontiguousarray(lat.to_world(base[order])),
-                       np.ascontiguousarray(cand_flat[corder]),
-                       np.ascontiguousarray(cand[corder] @ lat.generator.T @ rot, dtype=float),
+                       np.ascontiguousarray(cand_flat[sure]), np.ascontiguousarray(
+                           cand_flat[test]), np.ascontiguousarray(cand_world[test]),
                        verts, cell.packing_radius, cell.covering_radius, r, tol, grid)
     n = int(np.count_nonzero(grid))
     _check_result(r, cells, n, memory_budget)

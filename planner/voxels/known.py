@@ -221,7 +221,7 @@ def unknown_box_space(boxes: np.ndarray, box_sizes: np.ndarray, free_boxes: np.n
         or None without ``radius``; both distinct, in ascending key order. None when the
         grids do not fit ``budget``.
     """
-    from planner.voxels.inflate import _stencil_runs, inflation_stencil, overlap_tests
+    from planner.voxels.inflate import _stencil_runs, inflation_stencil
 
     lat = lattice
     g = np.ascontiguousarray(lat.generator, dtype=float)
@@ -239,7 +239,7 @@ def unknown_box_space(boxes: np.ndarray, box_sizes: np.ndarray, free_boxes: np.n
     edge = uk.edge_voxels(known, vdims)
     centres = np.ascontiguousarray(phase + (edge + g0 + 0.5) * res)
     half = np.full(centres.shape, res / 2)
-    tests = overlap_tests(lat, half, np.eye(3))
+    tests = bk.overlap_tests(lat, half, np.eye(3))
     base = lat.quantize(centres) if len(centres) else np.zeros((0, 3), dtype=np.int64)
     stencil = np.zeros((1, 3), dtype=np.int64) if not radius else inflation_stencil(
         lat, radius, budget)
@@ -260,10 +260,6 @@ def unknown_box_space(boxes: np.ndarray, box_sizes: np.ndarray, free_boxes: np.n
         return None
     strides = grid_strides(dims)
     grid = np.zeros(int(cells), dtype=np.uint8)
-    bk.overlap_mark(centres, half, np.ascontiguousarray((base - glo) @ strides),
-                    np.ascontiguousarray(lat.to_world(base)), tests.offs_world,
-                    np.ascontiguousarray(tests.offsets @ strides), tests.axes, tests.axes_box,
-                    tests.support_v, tests.packing, tests.covering, tests.tol, grid)
     # Cells whose centre lies in an unknown voxel of [lo, hi].
     single = np.count_nonzero(g, axis=1) <= 1  # G w then rounds the same in any order
     border = np.empty((1 << 16, 3), dtype=np.int64)
@@ -279,6 +275,11 @@ def unknown_box_space(boxes: np.ndarray, box_sizes: np.ndarray, free_boxes: np.n
         v = np.clip(v, 0, vdims - 1)
         w = w[known[v @ grid_strides(vdims)] == 0]
         grid[(w - glo) @ strides] |= 1
+    # Then the cells overlapping boundary voxels (those already marked are not tested).
+    bk.overlap_mark(centres, half, np.ascontiguousarray((base - glo) @ strides),
+                    np.ascontiguousarray(lat.to_world(base)), tests.offs_world,
+                    np.ascontiguousarray(tests.offsets @ strides), tests.axes, tests.axes_box,
+                    tests.support_v, tests.packing, tests.covering, tests.tol, grid)
     del known
     unknown = np.empty((int(np.count_nonzero(grid)), 3), dtype=np.int64)
     uk.grid_cells(grid, glo, dims, 1, unknown)
