@@ -292,7 +292,7 @@ def build_world(
     unknown_cells = None
     if obst.has_free_space:
         unknown_cells, near = _unknown_space(obst, lat, bounds, radius, d == 2,
-                                             policy == "blocked")
+                                             policy == "blocked", cells)
         if near is not None:
             cells = np.concatenate([cells, near])
     if d == 2:  # only the plane z = 0 is in bounds
@@ -370,9 +370,10 @@ def _unknown_region(lat: Lattice, bounds: np.ndarray, radius: float
 
 
 def _unknown_space(obst, lat: Lattice, bounds: np.ndarray, radius: float, planar: bool,
-                   blocked: bool) -> tuple[np.ndarray, np.ndarray | None]:
+                   blocked: bool, occupied: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
     """The (U, 3) cells meeting unknown space (:func:`_unknown_keys`) and, when unknown
-    space is blocked, the (N, 3) cells it blocks near the bounds (:func:`_cells_near`)."""
+    space is blocked, the (N, 3) cells it blocks near the bounds (:func:`_cells_near`;
+    grid maps: less the ``occupied`` ones, (M, 3), blocked already)."""
     from planner.keys import unpack
     from planner.voxels.known import unknown_box_space, unknown_inflation
 
@@ -381,7 +382,7 @@ def _unknown_space(obst, lat: Lattice, bounds: np.ndarray, radius: float, planar
         near = np.stack([bounds[0] - lat.covering_radius, bounds[1] + lat.covering_radius])
         got = unknown_box_space(obst.boxes, obst.box_sizes, obst.free_boxes,
                                 obst.free_box_sizes, res, lat, lo, hi,
-                                radius if blocked else None, near)
+                                radius if blocked else None, near, occupied)
         if got is not None:
             return got
     ukeys = _unknown_keys(obst, lat, bounds, radius, planar)

@@ -162,8 +162,8 @@ def grid_cells(grid, glo, dims, bit, out):  # pragma: no cover - compiled
 @njit_cached
 def cells_near(grid, glo, dims, g, lo, hi, single, eps, out, border
                ):  # pragma: no cover - compiled
-    """Indices of the marked (nonzero) cells of ``grid`` whose centre ``G w`` lies in
-    ``[lo, hi]``, in C order (ascending keys) into ``out``; ``border[n]`` is True for a
+    """Indices of the marked cells of ``grid`` (nonzero, bit 4 clear) whose centre ``G w``
+    lies in ``[lo, hi]``, in C order (ascending keys) into ``out``; ``border[n]`` is True for a
     cell whose centre lies within ``eps`` metres of a face of the box along an axis whose
     coordinate sums several terms (``single`` False): the caller decides those. Returns
     the number written."""
@@ -176,7 +176,7 @@ def cells_near(grid, glo, dims, g, lo, hi, single, eps, out, border
             w[1] = glo[1] + b
             for c in range(dims[2]):
                 p += 1
-                if grid[p - 1] == 0:
+                if grid[p - 1] == 0 or grid[p - 1] & 4:
                     continue
                 w[2] = glo[2] + c
                 unsure = False

@@ -330,7 +330,10 @@ def _box_frame(lo, hi, rotation, translation, d: int) -> tuple[np.ndarray, ...]:
     t = np.zeros(d) if translation is None else np.asarray(translation, dtype=float).ravel()
     if t.shape != (d,) or not np.isfinite(t).all():
         raise MapError(f"translation must be {d} finite numbers (m), got {translation!r}")
-    centres = np.ascontiguousarray((a + b) / 2 @ rot.T + t)
+    mid = (a + b) / 2
+    # No product with the identity (the same numbers; a small BLAS call can cost more than
+    # the whole inflation on a loaded machine).
+    centres = np.ascontiguousarray((mid if rotation is None else mid @ rot.T) + t)
     return centres, np.ascontiguousarray((b - a) / 2), np.ascontiguousarray(rot)
 
 

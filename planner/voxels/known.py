@@ -196,7 +196,8 @@ def unknown_box_keys(boxes: np.ndarray, box_sizes: np.ndarray, free_boxes: np.nd
 def unknown_box_space(boxes: np.ndarray, box_sizes: np.ndarray, free_boxes: np.ndarray,
                       free_sizes: np.ndarray, resolution: float, lattice: Lattice,
                       lo: np.ndarray, hi: np.ndarray, radius: float | None = None,
-                      near: np.ndarray | None = None, budget: float | None = DEFAULT_BUDGET,
+                      near: np.ndarray | None = None, exclude: np.ndarray | None = None,
+                      budget: float | None = DEFAULT_BUDGET,
                       ) -> tuple[np.ndarray, np.ndarray | None] | None:
     """The cells of :func:`unknown_box_keys` and, with ``radius``, those of
     :func:`unknown_inflation` of its keys whose centre lies in the box ``near``: the same
@@ -211,6 +212,8 @@ def unknown_box_space(boxes: np.ndarray, box_sizes: np.ndarray, free_boxes: np.n
         Robot radius (m, >= 0): also return the blocked cells.
     near : ndarray, shape (2, 3), optional
         ``[min, max]`` (m) of the blocked cells' centres returned (default: all).
+    exclude : ndarray, shape (E, 3), int, optional
+        Cells left out of the blocked cells returned (those already blocked otherwise).
     budget : float, optional
         Bytes the dense grids may use (default: the memory budget).
 
@@ -295,6 +298,9 @@ def unknown_box_space(boxes: np.ndarray, box_sizes: np.ndarray, free_boxes: np.n
         else:
             vk.dilate(grid, occ, stencil @ strides, full @ strides)
         del occ
+    if exclude is not None and len(exclude):  # bit 4: left out of the blocked cells
+        inside = np.all((exclude >= glo) & (exclude <= ghi), axis=1)
+        grid[(exclude[inside] - glo) @ strides] |= 4
     box = np.array([[-np.inf] * 3, [np.inf] * 3]) if near is None else np.asarray(near, float)
     eps = _EPS_METRES * (1.0 + float(np.abs(box[np.isfinite(box)]).max(initial=0.0)))
     out = np.empty((int(np.count_nonzero(grid)), 3), dtype=np.int64)
