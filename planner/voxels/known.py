@@ -242,7 +242,7 @@ def unknown_box_space(boxes: np.ndarray, box_sizes: np.ndarray, free_boxes: np.n
     edge = uk.edge_voxels(known, vdims)
     centres = np.ascontiguousarray(phase + (edge + g0 + 0.5) * res)
     half = np.full(centres.shape, res / 2)
-    tests = bk.overlap_tests(lat, half, np.eye(3))
+    tests = bk.overlap_tests(lat, np.full((1, 3), res / 2), np.eye(3))  # all voxels alike
     base = lat.quantize(centres) if len(centres) else np.zeros((0, 3), dtype=np.int64)
     stencil = np.zeros((1, 3), dtype=np.int64) if not radius else inflation_stencil(
         lat, radius, budget)
