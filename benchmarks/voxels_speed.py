@@ -22,8 +22,13 @@ disturbed by other processes on a shared machine), blocked cells, and for compar
 exact inflation of the leaf centres as points. Compilation is excluded (a warm-up call per
 lattice first; numba caches to disk).
 
+A last table times the whole world build of geb079 at 0.08**3 m^3 cells, radius
+``--box-radius``, unknown space blocked (:func:`planner.build_world`: load, exact box
+inflation, unknown-space classification and inflation), wall and CPU seconds, best of
+``--repeats``, after a warm-up build at the same cell volume.
+
 Run: ``python benchmarks/voxels_speed.py [--lattices fcc bcc] [--baseline-seconds 60]``
-(``--only-boxes`` for the box table alone).
+(``--only-boxes`` / ``--only-world`` for one table alone).
 """
 
 from __future__ import annotations
@@ -185,6 +190,36 @@ def _box_table(data: Path, names: list[str], radius: float) -> str:
     return "\n".join(lines)
 
 
+def _world_table(data: Path, names: list[str], radius: float, repeats: int) -> str:
+    """:func:`planner.build_world` on geb079.bt at 0.08**3 m^3 cells (the map's resolution
+    cubed), radius ``radius``, unknown space blocked: load + quantize + exact inflation of
+    the leaves + unknown-space classification and its inflation, per lattice (best of
+    ``repeats``)."""
+    import os
+
+    from planner import build_world
+
+    geb = data / "octomap" / "geb079.bt"
+    if not geb.exists():
+        return f"geb079.bt: not found under {data}, world table skipped"
+    vol = 0.08**3
+    lines = [f"build_world(geb079.bt, cell volume 0.08**3 m^3, radius {radius:g} m, unknown "
+             f"blocked), best of {repeats}; load average "
+             f"{', '.join(f'{x:.1f}' for x in os.getloadavg())}:",
+             f"  {'lattice':7s} {'wall s':>7s} {'cpu s':>7s} {'blocked':>11s} {'unknown':>11s}"]
+    for name in names:
+        # Compile / load kernels and derive the lattice geometry at this scale first.
+        build_world(geb, name, cell_volume=vol, radius=radius, bounds=[[0, 0, 0], [1, 1, 1]])
+        best = (np.inf, np.inf)
+        for _ in range(repeats):
+            t0, c0 = time.perf_counter(), time.process_time()
+            w = build_world(geb, name, cell_volume=vol, radius=radius)
+            best = min(best, (time.perf_counter() - t0, time.process_time() - c0))
+        lines.append(f"  {name:7s} {best[0]:7.3f} {best[1]:7.3f} {w.n_blocked:11,} "
+                     f"{w.n_unknown:11,}")
+    return "\n".join(lines)
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--data", type=Path, default=DATA, help="shared data folder")
@@ -198,9 +233,14 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--box-radius", type=float, default=0.2,
                    help="radius (m) of the geb079 exact box inflation table")
     p.add_argument("--only-boxes", action="store_true", help="only the box inflation table")
+    p.add_argument("--only-world", action="store_true", help="only the geb079 world table")
+    p.add_argument("--repeats", type=int, default=3, help="world builds per lattice (best)")
     args = p.parse_args(argv)
     if args.only_boxes:
         print(_box_table(args.data, args.lattices, args.box_radius))
+        return 0
+    if args.only_world:
+        print(_world_table(args.data, args.lattices, args.box_radius, args.repeats))
         return 0
     rows = []
     for label, pts, vol in _datasets(args.data):
@@ -220,6 +260,8 @@ def main(argv: list[str] | None = None) -> int:
     print(_random_build(args.lattices, args.random_points))
     print()
     print(_box_table(args.data, args.lattices, args.box_radius))
+    print()
+    print(_world_table(args.data, args.lattices, args.box_radius, args.repeats))
     return 0
 
 

@@ -291,21 +291,14 @@ def build_world(
         raise type(exc)(f"{obst.source}: {exc}") from None
     unknown_cells = None
     if obst.has_free_space:
-        ukeys = _unknown_keys(obst, lat, bounds, radius, d == 2)
-        if policy == "blocked":
-            from planner.voxels.known import unknown_inflation
-
-            blocked = unknown_inflation(ukeys, lat, radius)
-            cells = np.concatenate([cells, _cells_near(blocked, lat, bounds)])
-        unknown_cells = ukeys
+        unknown_cells, near = _unknown_space(obst, lat, bounds, radius, d == 2,
+                                             policy == "blocked", cells)
+        if near is not None:
+            cells = np.concatenate([cells, near])
     if d == 2:  # only the plane z = 0 is in bounds
         cells = cells[cells[:, 2] == 0]
-    if unknown_cells is not None:
-        from planner.keys import unpack
-
-        unknown_cells = unpack(unknown_cells, 3)
-        if d == 2:
-            unknown_cells = unknown_cells[unknown_cells[:, 2] == 0]
+    if unknown_cells is not None and d == 2:
+        unknown_cells = unknown_cells[unknown_cells[:, 2] == 0]
     world = World(lat, cells, bounds, source=obst.source, radius=float(radius), obstacles=obst,
                   build_seconds=time.perf_counter() - t0, unknown_cells=unknown_cells,
                   unknown_policy=policy, dim=d)
@@ -376,6 +369,38 @@ def _unknown_region(lat: Lattice, bounds: np.ndarray, radius: float
     return bounds[0] - pad, bounds[1] + pad
 
 
+def _unknown_space(obst, lat: Lattice, bounds: np.ndarray, radius: float, planar: bool,
+                   blocked: bool, occupied: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+    """The (U, 3) cells meeting unknown space (:func:`_unknown_keys`) and, when unknown
+    space is blocked, the (N, 3) cells it blocks near the bounds (:func:`_cells_near`;
+    grid maps: less the ``occupied`` ones, (M, 3), blocked already)."""
+    from planner.keys import unpack
+    from planner.voxels.known import unknown_box_space, unknown_inflation
+
+    if obst.origins is None and len(obst.free_boxes):  # a grid map: on dense grids
+        lo, hi, res = _box_region(obst, lat, bounds, radius, planar)
+        near = np.stack([bounds[0] - lat.covering_radius, bounds[1] + lat.covering_radius])
+        got = unknown_box_space(obst.boxes, obst.box_sizes, obst.free_boxes,
+                                obst.free_box_sizes, res, lat, lo, hi,
+                                radius if blocked else None, near, occupied)
+        if got is not None:
+            return got
+    ukeys = _unknown_keys(obst, lat, bounds, radius, planar)
+    near = _cells_near(unknown_inflation(ukeys, lat, radius), lat, bounds) if blocked else None
+    return unpack(ukeys, 3), near
+
+
+def _box_region(obst, lat: Lattice, bounds: np.ndarray, radius: float, planar: bool
+                ) -> tuple[np.ndarray, np.ndarray, float]:
+    """:func:`_unknown_region` and the voxel edge (m) of a map with free boxes."""
+    lo, hi = _unknown_region(lat, bounds, radius)
+    res = obst.resolution or float(np.min(np.concatenate([obst.box_sizes,
+                                                          obst.free_box_sizes])))
+    if planar:
+        lo[2], hi[2] = -res / 2, res / 2  # a lifted 2D map: one layer of voxels
+    return lo, hi, res
+
+
 def _unknown_keys(obst, lat: Lattice, bounds: np.ndarray, radius: float, planar: bool
                   ) -> np.ndarray:
     """Keys of the cells meeting unknown space over :func:`_unknown_region`."""
@@ -385,10 +410,7 @@ def _unknown_keys(obst, lat: Lattice, bounds: np.ndarray, radius: float, planar:
     lo, hi = _unknown_region(lat, bounds, radius)
     parts = []
     if len(obst.free_boxes):
-        res = obst.resolution or float(np.min(np.concatenate([obst.box_sizes,
-                                                              obst.free_box_sizes])))
-        if planar:
-            lo[2], hi[2] = -res / 2, res / 2  # a lifted 2D map: one layer of voxels
+        lo, hi, res = _box_region(obst, lat, bounds, radius, planar)
         parts.append(unknown_box_keys(obst.boxes, obst.box_sizes, obst.free_boxes,
                                       obst.free_box_sizes, res, lat, lo, hi))
     if obst.origins is not None:

@@ -5,19 +5,94 @@ axes are the columns of a rotation ``R`` shared by all boxes: ``{C + R x : |x| <
 Cell geometry travels as a :class:`planner.voxels._kernels.CellPolytope` expressed in the
 boxes' frame (so a box is axis-aligned there).
 
-* :func:`overlap_keys`: cells whose Voronoi cell overlaps a box with positive volume, by the
-  separating axis theorem (the axes are the facet normals of the Minkowski sum box + V).
+* :func:`overlap_keys` / :func:`overlap_mark`: cells whose Voronoi cell overlaps a box with
+  positive volume, by the separating axis theorem (the axes are the facet normals of the
+  Minkowski sum box + V), as keys or marked in a dense grid.
 * :func:`within_mark`: cells whose closed Voronoi cell is closer than ``r`` to a box (3D),
   by ball bounds and, in the thin shell they leave undecided, GJK on support functions.
+
+:func:`overlap_tests` prepares the overlap kernels' inputs (:class:`OverlapTests`).
 """
 
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
 from planner._jit import njit_cached
+from planner.lattice import Lattice
+from planner.voxels._checks import REL_TOL, cell_diameter, offsets_within
+
+
+class OverlapTests(NamedTuple):
+    """What the overlap kernels (:func:`overlap_keys`, :func:`overlap_mark`) need for
+    boxes of half sizes up to ``half`` on a lattice: candidate ``offsets`` (n, d) about a
+    box's base cell with their world vectors ``offs_world``, separating ``axes`` (m, d),
+    ``axes_box`` ``|axes @ R|``, the cell's ``support_v`` (m,), radii and tolerance."""
+
+    offsets: np.ndarray
+    offs_world: np.ndarray
+    axes: np.ndarray
+    axes_box: np.ndarray
+    support_v: np.ndarray
+    packing: float
+    covering: float
+    tol: float
+
+
+def overlap_tests(lat: Lattice, half: np.ndarray, rot: np.ndarray) -> OverlapTests:
+    """:class:`OverlapTests` for boxes of half sizes ``half`` (K, d) (m) in the frame ``rot``."""
+    cell = lat.voronoi
+    tol = REL_TOL * max(cell_diameter(lat), 2 * float(half.max()))
+    axes = cell.separating_axes(rot)
+    support_v = np.abs(cell.vertices @ axes.T).max(axis=0)
+    reach = float(np.linalg.norm(half, axis=1).max()) + 2 * cell.covering_radius + tol
+    offs = offsets_within(lat, reach, None, reach)
+    return OverlapTests(offs, np.ascontiguousarray(offs @ lat.generator.T, dtype=float), axes,
+                        np.ascontiguousarray(np.abs(axes @ rot)), support_v,
+                        cell.packing_radius, cell.covering_radius, tol)
+
+
+@njit_cached(inline="always")
+def _overlap_thresholds(half_i, axes_box, support_v, packing, covering, tol, thr
+                        ):  # pragma: no cover - compiled
+    """Per-axis thresholds ``thr`` of one box (half sizes ``half_i``) and the radii
+    ``(r_in, r_out)`` of balls about its centre inside / around box + V."""
+    d = half_i.shape[0]
+    hmin = np.inf
+    h2 = 0.0
+    for j in range(d):
+        hmin = min(hmin, half_i[j])
+        h2 += half_i[j] * half_i[j]
+    for m in range(axes_box.shape[0]):
+        s = support_v[m] - tol
+        for j in range(d):
+            s += axes_box[m, j] * half_i[j]
+        thr[m] = s
+    return hmin + packing - tol, math.sqrt(h2) + covering + tol
+
+
+@njit_cached(inline="always")
+def _overlaps(centre_i, base_i, offs_o, axes, thr, r_in, r_out, x
+              ):  # pragma: no cover - compiled
+    """Does the cell centred at ``base_i + offs_o`` overlap the box (see overlap_keys)?"""
+    d = centre_i.shape[0]
+    r2 = 0.0
+    for j in range(d):
+        x[j] = base_i[j] + offs_o[j] - centre_i[j]
+        r2 += x[j] * x[j]
+    if r2 > r_out * r_out:
+        return False
+    if r2 >= r_in * r_in:
+        for m in range(axes.shape[0]):
+            s = 0.0
+            for j in range(d):
+                s += axes[m, j] * x[j]
+            if abs(s) >= thr[m]:
+                return False
+    return True
 
 
 @njit_cached
@@ -31,47 +106,40 @@ def overlap_keys(centres, half, base_keys, base_world, offs_world, offs_key, axe
     ``support_v`` (m,): the cell's support along each axis; ``packing`` / ``covering``: the
     cell's radii. Overlap iff ``|a . x| < support
     - tol`` on every axis (``x`` cell centre minus box centre): mere touching does not count.
-    Returns the number of keys written to ``out``.
+    Balls about the box centre inside / around box + V accept / reject most candidates
+    first. Returns the number of keys written to ``out``.
     """
     n = 0
-    d = centres.shape[1]
-    m_axes = axes.shape[0]
-    x = np.empty(d)
-    thr = np.empty(m_axes)
+    x = np.empty(centres.shape[1])
+    thr = np.empty(axes.shape[0])
     for i in range(centres.shape[0]):
-        hmin = np.inf
-        h2 = 0.0
-        for j in range(d):
-            hmin = min(hmin, half[i, j])
-            h2 += half[i, j] * half[i, j]
-        for m in range(m_axes):
-            s = support_v[m] - tol
-            for j in range(d):
-                s += axes_box[m, j] * half[i, j]
-            thr[m] = s
-        # Balls about the box centre inside / around box + V: early accept / reject.
-        r_out = math.sqrt(h2) + covering + tol
-        r_in = hmin + packing - tol
+        r_in, r_out = _overlap_thresholds(half[i], axes_box, support_v, packing, covering,
+                                          tol, thr)
         for o in range(offs_world.shape[0]):
-            r2 = 0.0
-            for j in range(d):
-                x[j] = base_world[i, j] + offs_world[o, j] - centres[i, j]
-                r2 += x[j] * x[j]
-            if r2 > r_out * r_out:
-                continue
-            hit = True
-            if r2 >= r_in * r_in:
-                for m in range(m_axes):
-                    s = 0.0
-                    for j in range(d):
-                        s += axes[m, j] * x[j]
-                    if abs(s) >= thr[m]:
-                        hit = False
-                        break
-            if hit:
+            if _overlaps(centres[i], base_world[i], offs_world[o], axes, thr, r_in, r_out, x):
                 out[n] = base_keys[i] + offs_key[o]
                 n += 1
     return n
+
+
+@njit_cached
+def overlap_mark(centres, half, base_flat, base_world, offs_world, offs_flat, axes, axes_box,
+                 support_v, packing, covering, tol, grid):  # pragma: no cover - compiled
+    """:func:`overlap_keys` into a dense grid: OR 1 into ``grid[base_flat[i] +
+    offs_flat[o]]`` for every overlapping candidate and for each box's base cell; cells
+    already marked are not tested again. The grid must hold every candidate."""
+    x = np.empty(centres.shape[1])
+    thr = np.empty(axes.shape[0])
+    for i in range(centres.shape[0]):
+        grid[base_flat[i]] |= 1
+        r_in, r_out = _overlap_thresholds(half[i], axes_box, support_v, packing, covering,
+                                          tol, thr)
+        for o in range(offs_world.shape[0]):
+            f = base_flat[i] + offs_flat[o]
+            if grid[f] & 1:
+                continue
+            if _overlaps(centres[i], base_world[i], offs_world[o], axes, thr, r_in, r_out, x):
+                grid[f] |= 1
 
 
 @njit_cached
@@ -223,14 +291,16 @@ def gjk_within(p, half, verts, radius, tol, w, lam, scratch):  # pragma: no cove
 
 
 @njit_cached
-def within_mark(centres, half, rot, base_flat, base_world, cand_flat, cand_world, verts,
-                packing, covering, radius, tol, grid):  # pragma: no cover - compiled
+def within_mark(centres, half, rot, base_flat, base_world, sure_flat, cand_flat, cand_world,
+                verts, packing, covering, radius, tol, grid):  # pragma: no cover - compiled
     """Mark (set to 1) every grid cell whose closed Voronoi cell is closer than ``radius``
-    to some box (3D). Candidates of box i: flat ``base_flat[i] + cand_flat[o]``, centre
-    ``base_world[i] + cand_world[o]``. With ``d0`` the distance of the cell centre to the
-    box, ``d0 - covering <= dist <= max(d0 - packing, 0)`` decides most candidates, a
-    separating plane and the nearest cell vertex most others; GJK (:func:`gjk_within`, cell
-    vertices ``verts`` in the box frame) the rest. Returns the number of GJK calls."""
+    to some box (3D). Cells ``base_flat[i] + sure_flat`` are marked untested (the caller
+    knows every one passes the first bound below). Candidates of box i: flat
+    ``base_flat[i] + cand_flat[o]``, centre ``base_world[i] + cand_world[o]``. With ``d0``
+    the distance of the cell centre to the box, ``d0 - covering <= dist <= max(d0 -
+    packing, 0)`` decides most candidates, a separating plane and the nearest cell vertex
+    most others; GJK (:func:`gjk_within`, cell vertices ``verts`` in the box frame) the
+    rest. Returns the number of GJK calls."""
     p = np.empty(3)
     hb = np.empty(3)
     w = np.empty((4, 3))
@@ -243,6 +313,8 @@ def within_mark(centres, half, rot, base_flat, base_world, cand_flat, cand_world
     r2 = radius * radius
     calls = 0
     for i in range(centres.shape[0]):
+        for o in range(sure_flat.shape[0]):
+            grid[base_flat[i] + sure_flat[o]] = 1
         h0, h1, h2 = half[i, 0], half[i, 1], half[i, 2]
         # The base cell centre relative to the box centre, in the box frame.
         c0 = base_world[i, 0] - centres[i, 0]

@@ -189,19 +189,21 @@ def grid_keys(grid, lo, dims, bits, limit, out):  # pragma: no cover - compiled
     """Packed keys of the nonzero cells of ``grid`` in C order (ascending keys) into ``out``.
     Returns the number written."""
     d = dims.shape[0]
-    w = np.zeros(d, dtype=np.int64)
+    w = np.zeros(d, dtype=np.int64)  # the index of p, counted up (no divisions)
     n = 0
     for p in range(grid.shape[0]):
         if grid[p] != 0:
-            q = p
-            for j in range(d - 1, -1, -1):
-                w[j] = q % dims[j]
-                q //= dims[j]
             key = np.int64(0)
             for j in range(d):
                 key = (key << bits) | (w[j] + lo[j] + limit)
             out[n] = key
             n += 1
+        j = d - 1
+        w[j] += 1
+        while j > 0 and w[j] == dims[j]:
+            w[j] = 0
+            j -= 1
+            w[j] += 1
     return n
 
 

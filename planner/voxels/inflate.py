@@ -291,27 +291,21 @@ def _overlap_keys(centres: np.ndarray, half: np.ndarray, rot: np.ndarray, lat: L
     # box set whose key lists alone exceed the budget before enumerating anything.
     need = 8.0 * float(np.prod(2 * half, axis=1).sum()) / lat.cell_volume
     require(need, f"the cells of {len(centres)} boxes")
-    cell = lat.voronoi
-    tol = REL_TOL * max(cell_diameter(lat), 2 * float(half.max()))
-    axes = cell.separating_axes(rot)
-    support_v = np.abs(cell.vertices @ axes.T).max(axis=0)
-    reach = float(np.linalg.norm(half, axis=1).max()) + 2 * cell.covering_radius + tol
-    offs = offsets_within(lat, reach, None, reach)
+    t = bk.overlap_tests(lat, half, rot)
+    offs = t.offsets
     ext = np.abs(offs).max(axis=0)
     check_range(base.min(axis=0) - ext, base.max(axis=0) + ext, d)
     base_world = lat.to_world(base)
-    offs_world = np.ascontiguousarray(offs @ lat.generator.T, dtype=float)
     offs_key = key_offsets(offs)
-    axes_box = np.ascontiguousarray(np.abs(axes @ rot))
     chunk = max(1, _BOX_CHUNK_KEYS // len(offs))
     parts = []
     buf = np.empty(min(chunk, len(centres)) * len(offs), dtype=np.int64)
     for i in range(0, len(centres), chunk):
         sl = slice(i, i + chunk)
         n = bk.overlap_keys(np.ascontiguousarray(centres[sl]), np.ascontiguousarray(half[sl]),
-                            base_keys[sl], np.ascontiguousarray(base_world[sl]), offs_world,
-                            offs_key, axes, axes_box, support_v, cell.packing_radius,
-                            cell.covering_radius, tol, buf)
+                            base_keys[sl], np.ascontiguousarray(base_world[sl]), t.offs_world,
+                            offs_key, t.axes, t.axes_box, t.support_v, t.packing, t.covering,
+                            t.tol, buf)
         parts.append(unique_keys(buf[:n]))  # per chunk: neighbouring boxes share cells
     parts.append(base_keys)  # the centre's cell, even for boxes thinner than the tolerance
     return unique_keys(np.concatenate(parts))
@@ -336,7 +330,10 @@ def _box_frame(lo, hi, rotation, translation, d: int) -> tuple[np.ndarray, ...]:
     t = np.zeros(d) if translation is None else np.asarray(translation, dtype=float).ravel()
     if t.shape != (d,) or not np.isfinite(t).all():
         raise MapError(f"translation must be {d} finite numbers (m), got {translation!r}")
-    centres = np.ascontiguousarray((a + b) / 2 @ rot.T + t)
+    mid = (a + b) / 2
+    # No product with the identity (the same numbers; a small BLAS call can cost more than
+    # the whole inflation on a loaded machine).
+    centres = np.ascontiguousarray((mid if rotation is None else mid @ rot.T) + t)
     return centres, np.ascontiguousarray((b - a) / 2), np.ascontiguousarray(rot)
 
 
@@ -360,6 +357,26 @@ def _split_boxes(centres: np.ndarray, half: np.ndarray, rot: np.ndarray, max_hal
         out_h.append(np.repeat(sub, len(steps), axis=0))
     return np.ascontiguousarray(np.concatenate(out_c)), np.ascontiguousarray(
         np.concatenate(out_h))
+
+
+def _sure_and_tested(cand_world: np.ndarray, half: np.ndarray, cell, r: float, tol: float
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """Masks of the candidates (box-frame offsets ``cand_world`` (n, 3), m) that
+    :func:`bk.within_mark` would mark for every box of half sizes among ``half`` (K, 3)
+    whatever the base cell's position (within the covering radius R of the box centre),
+    and of those it must test (the others it would skip for every box).
+
+    With ``c`` a candidate, ``b`` the base cell centre (``|b| <= R``) and ``dist(x, h)`` the
+    distance from x to ``[-h, h]``: ``dist(b + c, h_i) <= dist(c, h_min) + R`` and
+    ``>= dist(c, h_max) - R``, compared with the kernel's first bounds ``r + packing`` and
+    ``r + tol + R`` with a margin for rounding."""
+    def dist(h: np.ndarray) -> np.ndarray:
+        return np.linalg.norm(np.maximum(np.abs(cand_world) - h, 0.0), axis=1)
+
+    cov, slack = cell.covering_radius, 1e-9 * (1.0 + r)
+    sure = dist(half.min(axis=0)) + cov < r + cell.packing_radius - slack
+    test = ~sure & (dist(half.max(axis=0)) - cov < r + tol + cov + slack)
+    return sure, test
 
 
 def exact_box_inflation(lo: np.ndarray, hi: np.ndarray, lattice: Lattice, radius: float, *,
@@ -448,11 +465,14 @@ def exact_box_inflation(lo: np.ndarray, hi: np.ndarray, lattice: Lattice, radius
         order = sel[np.argsort(base_flat[sel], kind="stable")]
         cand_flat = cand @ strides
         corder = np.argsort(cand_flat, kind="stable")
+        cand_flat = cand_flat[corder]
+        cand_world = np.ascontiguousarray(cand[corder] @ lat.generator.T @ rot, dtype=float)
+        sure, test = _sure_and_tested(cand_world, half[sel], cell, r, tol)
         bk.within_mark(centres[order], half[order], rot,
                        np.ascontiguousarray(base_flat[order]),
                        np.ascontiguousarray(lat.to_world(base[order])),
-                       np.ascontiguousarray(cand_flat[corder]),
-                       np.ascontiguousarray(cand[corder] @ lat.generator.T @ rot, dtype=float),
+                       np.ascontiguousarray(cand_flat[sure]), np.ascontiguousarray(
+                           cand_flat[test]), np.ascontiguousarray(cand_world[test]),
                        verts, cell.packing_radius, cell.covering_radius, r, tol, grid)
     n = int(np.count_nonzero(grid))
     _check_result(r, cells, n, memory_budget)

@@ -30,10 +30,24 @@ from planner._jit import njit_cached
 from planner.errors import MapError
 from planner.keys import pack
 from planner.lattice import Lattice
-from planner.voxels._checks import DEFAULT_BUDGET, grid_strides, resolve_budget, unique_keys
+from planner.voxels import _box_kernels as bk
+from planner.voxels import _kernels as vk
+from planner.voxels import _unknown_kernels as uk
+from planner.voxels._checks import (
+    DEFAULT_BUDGET,
+    check_range,
+    grid_strides,
+    resolve_budget,
+    unique_keys,
+)
 
-__all__ = ["cells_in_box", "ray_free_keys", "unknown_box_keys", "unknown_cell_keys",
-           "unknown_inflation"]
+# Margins within which another summation order of G w could decide a voxel face (voxels)
+# or a bounds face (m, relative to the bounds' size) the other way: numpy decides those.
+_EPS_VOXEL = 1e-6
+_EPS_METRES = 1e-9
+
+__all__ = ["cells_in_box", "ray_free_keys", "unknown_box_keys", "unknown_box_space",
+           "unknown_cell_keys", "unknown_inflation"]
 
 
 @njit_cached
@@ -62,6 +76,15 @@ def _box_cells(g, ilo, idims, lo, hi, out, fill):  # pragma: no cover - compiled
     return n
 
 
+def _index_box(g: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(ilo, idims)``: an index box holding every cell whose centre lies in ``[lo, hi]``."""
+    corners = np.array([[(lo, hi)[c][a] for a, c in enumerate(bits)]
+                        for bits in np.ndindex(2, 2, 2)])
+    w = corners @ np.linalg.inv(g).T
+    ilo = np.floor(w.min(axis=0)).astype(np.int64) - 1
+    return ilo, np.ceil(w.max(axis=0)).astype(np.int64) + 1 - ilo + 1
+
+
 def cells_in_box(lattice: Lattice, lo: np.ndarray, hi: np.ndarray,
                  budget: float | None = DEFAULT_BUDGET) -> np.ndarray:
     """Every cell of a 3D lattice whose centre lies in the closed box ``[lo, hi]`` (m,
@@ -74,11 +97,7 @@ def cells_in_box(lattice: Lattice, lo: np.ndarray, hi: np.ndarray,
     lo = np.ascontiguousarray(lo, dtype=float)
     hi = np.ascontiguousarray(hi, dtype=float)
     g = np.ascontiguousarray(lattice.generator, dtype=float)
-    corners = np.array([[(lo, hi)[c][a] for a, c in enumerate(bits)]
-                        for bits in np.ndindex(2, 2, 2)])
-    w = corners @ np.linalg.inv(g).T
-    ilo = np.floor(w.min(axis=0)).astype(np.int64) - 1
-    idims = np.ceil(w.max(axis=0)).astype(np.int64) + 1 - ilo + 1
+    ilo, idims = _index_box(g, lo, hi)
     out = np.zeros((0, 3), dtype=np.int64)
     n = _box_cells(g, ilo, idims, lo, hi, out, False)
     budget = resolve_budget(budget)
@@ -91,6 +110,24 @@ def cells_in_box(lattice: Lattice, lo: np.ndarray, hi: np.ndarray,
 
 
 # -- boxes on a voxel grid ---------------------------------------------------------------------
+def _voxel_frame(boxes: np.ndarray, box_sizes: np.ndarray, free_boxes: np.ndarray,
+                 free_sizes: np.ndarray, res: float, lo: np.ndarray, hi: np.ndarray, d: int
+                 ) -> tuple[np.ndarray, ...]:
+    """The voxel grid of the known boxes over ``[lo, hi]``: ``(phase (d,), g0 (d,), dims
+    (d,), first (K, d), n (K,))``: voxel v spans ``phase + res * [v, v + 1)``, the grid holds
+    voxels ``g0 + [0, dims)``, known box k covers grid voxels ``first[k] + [0, n[k])^d``."""
+    known_c = np.concatenate([boxes, free_boxes]).reshape(-1, d)
+    known_s = np.concatenate([box_sizes, free_sizes])
+    # Grid aligned to the boxes.
+    ref = known_c[0] - known_s[0] / 2 if len(known_c) else np.zeros(d)
+    phase = ref - res * np.floor(ref / res)
+    g0 = np.floor((np.asarray(lo) - phase) / res).astype(np.int64)
+    g1 = np.ceil((np.asarray(hi) - phase) / res).astype(np.int64)
+    n = np.maximum(np.rint(known_s / res).astype(np.int64), 1)
+    first = np.rint((known_c - n[:, None] * res / 2 - phase) / res).astype(np.int64) - g0
+    return phase, g0, g1 - g0, first, n
+
+
 def unknown_box_keys(boxes: np.ndarray, box_sizes: np.ndarray, free_boxes: np.ndarray,
                      free_sizes: np.ndarray, resolution: float, lattice: Lattice,
                      lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
@@ -122,18 +159,10 @@ def unknown_box_keys(boxes: np.ndarray, box_sizes: np.ndarray, free_boxes: np.nd
 
     d = lattice.dim
     res = float(resolution)
-    known_c = np.concatenate([boxes, free_boxes]).reshape(-1, d)
-    known_s = np.concatenate([box_sizes, free_sizes])
-    # Grid aligned to the boxes: voxel v spans phase + res * [v, v + 1).
-    ref = known_c[0] - known_s[0] / 2 if len(known_c) else np.zeros(d)
-    phase = ref - res * np.floor(ref / res)
-    g0 = np.floor((np.asarray(lo) - phase) / res).astype(np.int64)
-    g1 = np.ceil((np.asarray(hi) - phase) / res).astype(np.int64)
-    dims = g1 - g0
+    phase, g0, dims, first, n = _voxel_frame(boxes, box_sizes, free_boxes, free_sizes, res, lo,
+                                             hi, d)
     known = np.zeros(tuple(int(x) for x in dims), dtype=bool)
-    if len(known_c):
-        n = np.maximum(np.rint(known_s / res).astype(np.int64), 1)
-        first = np.rint((known_c - n[:, None] * res / 2 - phase) / res).astype(np.int64) - g0
+    if len(first):
         for m in np.unique(n):
             sel = first[n == m]
             steps = np.stack(np.meshgrid(*[np.arange(m)] * d, indexing="ij"), -1).reshape(-1, d)
@@ -162,6 +191,128 @@ def unknown_box_keys(boxes: np.ndarray, box_sizes: np.ndarray, free_boxes: np.nd
     if not parts:
         return np.zeros(0, dtype=np.int64)
     return unique_keys(np.concatenate(parts))
+
+
+def unknown_box_space(boxes: np.ndarray, box_sizes: np.ndarray, free_boxes: np.ndarray,
+                      free_sizes: np.ndarray, resolution: float, lattice: Lattice,
+                      lo: np.ndarray, hi: np.ndarray, radius: float | None = None,
+                      near: np.ndarray | None = None, exclude: np.ndarray | None = None,
+                      budget: float | None = DEFAULT_BUDGET,
+                      ) -> tuple[np.ndarray, np.ndarray | None] | None:
+    """The cells of :func:`unknown_box_keys` and, with ``radius``, those of
+    :func:`unknown_inflation` of its keys whose centre lies in the box ``near``: the same
+    sets, computed on dense grids (voxels of the map's grid, cells of the lattice's index
+    box) instead of sorted key lists. 3D lattices.
+
+    Parameters
+    ----------
+    boxes, free_boxes, box_sizes, free_sizes, resolution, lattice, lo, hi
+        As for :func:`unknown_box_keys`.
+    radius : float, optional
+        Robot radius (m, >= 0): also return the blocked cells.
+    near : ndarray, shape (2, 3), optional
+        ``[min, max]`` (m) of the blocked cells' centres returned (default: all).
+    exclude : ndarray, shape (E, 3), int, optional
+        Cells left out of the blocked cells returned (those already blocked otherwise).
+    budget : float, optional
+        Bytes the dense grids may use (default: the memory budget).
+
+    Returns
+    -------
+    (unknown, blocked) or None
+        ``unknown`` (U, 3) int64: the cells meeting unknown space; ``blocked`` (B, 3) int64,
+        or None without ``radius``; both distinct, in ascending key order. None when the
+        grids do not fit ``budget``.
+    """
+    from planner.voxels.inflate import _stencil_runs, inflation_stencil
+
+    lat = lattice
+    g = np.ascontiguousarray(lat.generator, dtype=float)
+    res = float(resolution)
+    lo = np.ascontiguousarray(lo, dtype=float)
+    hi = np.ascontiguousarray(hi, dtype=float)
+    phase, g0, vdims, first, n = _voxel_frame(boxes, box_sizes, free_boxes, free_sizes, res, lo,
+                                              hi, 3)
+    budget = resolve_budget(budget)
+    if float(np.prod(vdims.astype(float))) > budget:
+        return None
+    known = np.zeros(int(np.prod(vdims)), dtype=np.uint8)
+    uk.fill_known(known, vdims, np.ascontiguousarray(first), np.ascontiguousarray(n))
+    # Boundary unknown voxels as boxes (as unknown_box_keys): their cells by overlap tests.
+    edge = uk.edge_voxels(known, vdims)
+    centres = np.ascontiguousarray(phase + (edge + g0 + 0.5) * res)
+    half = np.full(centres.shape, res / 2)
+    tests = bk.overlap_tests(lat, np.full((1, 3), res / 2), np.eye(3))  # all voxels alike
+    base = lat.quantize(centres) if len(centres) else np.zeros((0, 3), dtype=np.int64)
+    stencil = np.zeros((1, 3), dtype=np.int64) if not radius else inflation_stencil(
+        lat, radius, budget)
+    full = lat.neighbors("full")
+    # The grid holds every candidate of the overlap tests and the dilation's reach past
+    # every cell marked (no bounds checks in the kernels).
+    e_dil = np.maximum(np.abs(stencil).max(axis=0), np.abs(full).max(axis=0)) + 1
+    e_box = np.abs(tests.offsets).max(axis=0) + e_dil
+    ilo, idims = _index_box(g, lo, hi)
+    glo, ghi = ilo - e_dil, ilo + idims - 1 + e_dil
+    if len(base):
+        glo = np.minimum(glo, base.min(axis=0) - e_box)
+        ghi = np.maximum(ghi, base.max(axis=0) + e_box)
+    check_range(glo, ghi, 3)
+    dims = ghi - glo + 1
+    cells = float(np.prod(dims.astype(float)))
+    if known.nbytes + cells * (5 if radius else 1) > budget:
+        return None
+    strides = grid_strides(dims)
+    grid = np.zeros(int(cells), dtype=np.uint8)
+    # Cells whose centre lies in an unknown voxel of [lo, hi].
+    single = np.count_nonzero(g, axis=1) <= 1  # G w then rounds the same in any order
+    border = np.empty((1 << 16, 3), dtype=np.int64)
+    while True:
+        nb = uk.mark_unknown_centres(g, ilo, idims, lo, hi, phase, res, g0, known, vdims,
+                                     single, _EPS_VOXEL, grid, glo, strides, border)
+        if nb <= len(border):
+            break
+        border = np.empty((nb, 3), dtype=np.int64)
+    if nb:  # decided as unknown_box_keys does
+        w = border[:nb]
+        v = np.floor((w @ g.T - phase) / res).astype(np.int64) - g0
+        v = np.clip(v, 0, vdims - 1)
+        w = w[known[v @ grid_strides(vdims)] == 0]
+        grid[(w - glo) @ strides] |= 1
+    # Then the cells overlapping boundary voxels (those already marked are not tested).
+    bk.overlap_mark(centres, half, np.ascontiguousarray((base - glo) @ strides),
+                    np.ascontiguousarray(lat.to_world(base)), tests.offs_world,
+                    np.ascontiguousarray(tests.offsets @ strides), tests.axes, tests.axes_box,
+                    tests.support_v, tests.packing, tests.covering, tests.tol, grid)
+    del known
+    unknown = np.empty((int(np.count_nonzero(grid)), 3), dtype=np.int64)
+    uk.grid_cells(grid, glo, dims, 1, unknown)
+    if radius is None:
+        return unknown, None
+    if radius > 0 and len(unknown):
+        occ = np.flatnonzero(grid)
+        runs = _stencil_runs(stencil)
+        if runs is not None:
+            diff = np.zeros(grid.size + 1, dtype=np.int32)
+            vk.dilate_rows(grid, occ, full @ strides, runs[0] @ strides, runs[1], diff)
+            del diff
+        else:
+            vk.dilate(grid, occ, stencil @ strides, full @ strides)
+        del occ
+    if exclude is not None and len(exclude):  # bit 4: left out of the blocked cells
+        inside = np.all((exclude >= glo) & (exclude <= ghi), axis=1)
+        grid[(exclude[inside] - glo) @ strides] |= 4
+    box = np.array([[-np.inf] * 3, [np.inf] * 3]) if near is None else np.asarray(near, float)
+    eps = _EPS_METRES * (1.0 + float(np.abs(box[np.isfinite(box)]).max(initial=0.0)))
+    out = np.empty((int(np.count_nonzero(grid)), 3), dtype=np.int64)
+    unsure = np.empty(len(out), dtype=bool)
+    m = uk.cells_near(grid, glo, dims, g, box[0], box[1], single, eps, out, unsure)
+    out, unsure = out[:m], unsure[:m]
+    if unsure.any():  # decided as planner.api does, on lat.to_world
+        c = lat.to_world(out[unsure])
+        keep = np.ones(m, dtype=bool)
+        keep[unsure] = np.all((c >= box[0]) & (c <= box[1]), axis=1)
+        out = out[keep]
+    return unknown, out
 
 
 # -- rays --------------------------------------------------------------------------------------
