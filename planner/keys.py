@@ -13,12 +13,21 @@ from planner._jit import njit_cached
 from planner.errors import MapError
 
 BITS = {2: 31, 3: 21}
-__all__ = ["BITS", "index_limit", "pack", "unpack", "pack3", "unpack3"]
+__all__ = ["BITS", "index_limit", "check_range", "pack", "unpack", "pack3", "unpack3"]
 
 
 def index_limit(dim: int) -> int:
     """Indices must lie in ``[-limit, limit)`` on every axis to be packable."""
     return 1 << (BITS[dim] - 1)
+
+
+def check_range(w: np.ndarray) -> None:
+    """MapError unless the (N, d) int64 indices ``w`` are packable (:func:`index_limit`)."""
+    lim = index_limit(w.shape[1])
+    if len(w) and (w.min() < -lim or w.max() >= lim):
+        raise MapError(
+            f"lattice indices exceed +-{lim} cells per axis; use a larger cell volume"
+        )
 
 
 def pack(indices: np.ndarray) -> np.ndarray:
@@ -28,10 +37,7 @@ def pack(indices: np.ndarray) -> np.ndarray:
         raise MapError(f"indices must have shape (N, 2) or (N, 3), got {w.shape}")
     d = w.shape[1]
     bits, lim = BITS[d], index_limit(d)
-    if len(w) and (w.min() < -lim or w.max() >= lim):
-        raise MapError(
-            f"lattice indices exceed +-{lim} cells per axis; use a larger cell volume"
-        )
+    check_range(w)
     key = np.zeros(len(w), dtype=np.int64)
     for j in range(d):
         key = (key << bits) | (w[:, j] + lim)

@@ -28,7 +28,7 @@ from planner import _world_kernels as wk
 from planner._world_kernels import Occupancy, Walk
 from planner.errors import MapError, PlanError
 from planner.io._obstacles import UNKNOWN_POLICIES
-from planner.keys import pack
+from planner.keys import check_range, pack
 from planner.lattice import Lattice
 from planner.lattice._quantize import Quantizer
 from planner.voxels._checks import unique_keys
@@ -203,7 +203,7 @@ class World(UnknownSpace):
             raise MapError(f"radius must be a non-negative number of metres, got {radius!r}")
         self._lattice = lattice
         self._blocked = np.ascontiguousarray(b, dtype=np.int64)
-        pack(self._blocked)  # range check now, not inside a kernel
+        check_range(self._blocked)  # now, not inside a kernel
         self._bounds = bb
         self.source = source
         self.radius = r
