@@ -56,9 +56,11 @@ class DNodes(NamedTuple):
     rhs: np.ndarray  # (cap,) float64 one-step lookahead (m)
     mask: np.ndarray  # (cap,) int64 bit m: edge to key + moves[m] exists; -1 unknown
     pos: np.ndarray  # (cap,) int64 heap position, -1 not queued
-    stamp: np.ndarray  # (cap,) int64 last update batch that collected the node
-    batch: np.ndarray  # (cap,) int64 the node's row in that batch
+    stamp: np.ndarray  # (cap,) int32 last update batch that collected the node
+    batch: np.ndarray  # (cap,) int32 the node's row in that batch
     near: np.ndarray  # (cap,) int64 -pid: on stored path pid; +pid: next to it; else other
+    sup: np.ndarray  # (cap,) int8 a move m with rhs = c(m) + g(key + moves[m]); -1 none
+    lazy: np.ndarray  # (cap,) int8 1: rhs may be too low (:func:`update_vertex`)
 
 
 class DBox(NamedTuple):
@@ -73,21 +75,26 @@ class DBox(NamedTuple):
     blk: np.ndarray  # (prod(bdims),) uint8 block marks
     bdims: np.ndarray  # (3,) int64 blocks per axis
     ext: np.ndarray  # (3,) int64 largest |union-stencil offset| per axis
+    inv: np.ndarray  # (M,) int64 the move back: moves[inv[m]] = -moves[m]
 
 
-def new_box(lo: np.ndarray, dims: np.ndarray, union: np.ndarray) -> DBox:
-    """Empty node map over the box ``lo + [0, dims)`` for the union stencil (U, 3)."""
+def new_box(lo: np.ndarray, dims: np.ndarray, ms) -> DBox:
+    """Empty node map over the box ``lo + [0, dims)`` for the move set ``ms``."""
     dims = np.asarray(dims, np.int64).copy()
     bdims = (dims + (1 << BSH) - 1) >> BSH
+    union, moves = ms.union, ms.moves
     ext = np.abs(union).max(axis=0).astype(np.int64) if len(union) else np.zeros(3, np.int64)
+    back = {tuple(m): i for i, m in enumerate((-moves).tolist())}
+    inv = np.array([back[tuple(m)] for m in moves.tolist()], np.int64)
     return DBox(np.full(int(np.prod(dims)), -1, np.int32), np.asarray(lo, np.int64).copy(),
-                dims, np.zeros(int(np.prod(bdims)), np.uint8), bdims, ext)
+                dims, np.zeros(int(np.prod(bdims)), np.uint8), bdims, ext, inv)
 
 
 #: one node's record: the fields of :class:`DNodes` and padding to a cache line
 NODE = np.dtype([("key", np.int64), ("g", np.float64), ("rhs", np.float64),
-                 ("mask", np.int64), ("pos", np.int64), ("stamp", np.int64),
-                 ("batch", np.int64), ("near", np.int64)])
+                 ("mask", np.int64), ("pos", np.int64), ("near", np.int64),
+                 ("stamp", np.int32), ("batch", np.int32), ("sup", np.int8),
+                 ("lazy", np.int8), ("pad", np.int8, (6,))])
 
 
 def new_nodes(cap: int, keep: DNodes | None = None, n: int = 0) -> DNodes:
@@ -131,6 +138,8 @@ def node(bx, nd, st, v0, v1, v2, create):  # pragma: no cover - compiled
     nd.pos[s] = -1
     nd.stamp[s] = 0
     nd.near[s] = 0
+    nd.sup[s] = -1
+    nd.lazy[s] = 0
     return s
 
 
@@ -193,15 +202,16 @@ def _h(ms, start, v0, v1, v2):  # pragma: no cover - compiled
 
 
 @njit(cache=True, inline="always")
-def _key1(ms, g, rhs, hv, km):  # pragma: no cover - compiled
-    """First key of a queued node. An underconsistent node (g < rhs) goes ahead of every
+def _key1(ms, g, rhs, hv, km, under):  # pragma: no cover - compiled
+    """First key of a queued node. An underconsistent node (``under``: g < rhs, or a
+    lazy node's rhs that may be too low) goes ahead of every
     key equal to its own up to float noise (``_BIAS``): its stale low g may carry the
     start's path, and two sums of the same moves can round to neighbouring grid steps of
     :func:`_k1`, which would otherwise queue it one step behind an overconsistent tie (or
     the start itself) and let the search stop on a stale value."""
     x = min(g, rhs) + hv + km
     k = _k1(ms, x)
-    if g < rhs:
+    if under:
         k -= _BIAS * (1.0 + abs(x))
     return k
 
@@ -237,14 +247,21 @@ def update_vertex(ms, nd, heap, st, km, start, s):  # pragma: no cover - compile
     Queue order: first key ascending, then the tie-break ``tb`` descending (module
     docstring): an underconsistent node (g < rhs: its g is stale and low) comes first
     among ties, then the one with the larger ``min(g, rhs)`` (nearest the start, A*'s
-    dive)."""
+    dive).
+
+    A *lazy* node (its rhs may be too low, never too high: it lost a move its rhs rested
+    on and was not recomputed) stays queued, as an underconsistent one, until
+    :func:`compute_path` pops it and recomputes its rhs: its key is a lower bound of its
+    true key, so it is popped no later than it should be."""
     pos = nd.pos
     g, rhs = nd.g[s], nd.rhs[s]
-    if g != rhs:
+    lazy = nd.lazy[s] != 0
+    if g != rhs or lazy:
         gm = min(g, rhs)
         u0, u1, u2 = unpack3(nd.key[s])
-        k1 = _key1(ms, g, rhs, _h(ms, start, u0, u1, u2), km)
-        tb = np.inf if g < rhs else gm
+        under = g < rhs or lazy
+        k1 = _key1(ms, g, rhs, _h(ms, start, u0, u1, u2), km, under)
+        tb = np.inf if under else gm
         if pos[s] >= 0:
             i = pos[s]
             heap.f[i] = k1
@@ -259,12 +276,13 @@ def update_vertex(ms, nd, heap, st, km, start, s):  # pragma: no cover - compile
 
 @njit(cache=True)
 def best_successor(occ, ms, ufree, bx, nd, st, s):  # pragma: no cover - compiled
-    """``(min_m c(s, s + m) + g(s + m), node of the argmin or -1, its edge cost)``."""
+    """``(min_m c(s, s + m) + g(s + m), node of the argmin or -1, its edge cost, m)``."""
     mk = edges(occ, ms, ufree, bx, nd, st, s)
     u0, u1, u2 = unpack3(nd.key[s])
     best = np.inf
     arg = np.int64(-1)
     bc = np.inf
+    bm = -1
     for m in range(ms.moves.shape[0]):
         if (mk >> np.int64(m)) & 1:
             v = node(bx, nd, st, u0 + ms.moves[m, 0], u1 + ms.moves[m, 1], u2 + ms.moves[m, 2],
@@ -275,7 +293,17 @@ def best_successor(occ, ms, ufree, bx, nd, st, s):  # pragma: no cover - compile
                     best = c
                     arg = v
                     bc = ms.cost[m]
-    return best, arg, bc
+                    bm = m
+    return best, arg, bc, bm
+
+
+@njit(cache=True)
+def recompute_rhs(occ, ms, ufree, bx, nd, st, s):  # pragma: no cover - compiled
+    """rhs(s) = min over its moves of c + g (looks its edges up if needed): exact again."""
+    best, _, _, m = best_successor(occ, ms, ufree, bx, nd, st, s)
+    nd.rhs[s] = best
+    nd.sup[s] = m
+    nd.lazy[s] = 0
 
 
 @njit(cache=True)
@@ -294,8 +322,8 @@ def compute_path(occ, ms, ufree, bx, nd, heap, st, km, start, check_start):
     goal = st[S_GOAL]
     heap_f, heap_g, heap_s = heap.f, heap.g, heap.slot
     ss = node(bx, nd, st, start[0], start[1], start[2], False)
-    if ss >= 0 and ss != goal and nd.mask[ss] < 0:  # its rhs may be stale (lazy_rhs)
-        nd.rhs[ss] = best_successor(occ, ms, ufree, bx, nd, st, ss)[0]
+    if ss >= 0 and ss != goal and (nd.mask[ss] < 0 or nd.lazy[ss]):  # rhs may be low
+        recompute_rhs(occ, ms, ufree, bx, nd, st, ss)
         update_vertex(ms, nd, heap, st, km, start, ss)
     while st[S_HN] > 0:
         if st[S_N] + nm > cap:
@@ -319,17 +347,17 @@ def compute_path(occ, ms, ufree, bx, nd, heap, st, km, start, check_start):
             break
         u = heap_s[0]
         st[S_EXP] += 1
+        if (nd.mask[u] < 0 or nd.lazy[u]) and u != goal:
+            # never looked up, or lazy: its rhs may be too low; requeue it exact
+            recompute_rhs(occ, ms, ufree, bx, nd, st, u)
+            update_vertex(ms, nd, heap, st, km, start, u)
+            continue
         u0, u1, u2 = unpack3(nd.key[u])
-        k1n = _key1(ms, nd.g[u], nd.rhs[u], _h(ms, start, u0, u1, u2), km)
+        k1n = _key1(ms, nd.g[u], nd.rhs[u], _h(ms, start, u0, u1, u2), km,
+                    nd.g[u] < nd.rhs[u])
         if k1o < k1n:  # a key from an earlier start: requeue (the tie-break is current)
             update_vertex(ms, nd, heap, st, km, start, u)
             continue
-        if nd.mask[u] < 0 and u != goal:  # never looked up: its rhs may be stale
-            r = best_successor(occ, ms, ufree, bx, nd, st, u)[0]
-            if r != nd.rhs[u]:
-                nd.rhs[u] = r
-                update_vertex(ms, nd, heap, st, km, start, u)
-                continue
         mk = edges(occ, ms, ufree, bx, nd, st, u)
         if _near_path(nd, st, u):  # its g changes: the stored path may not hold
             st[S_PVALID] = 0
@@ -346,6 +374,7 @@ def compute_path(occ, ms, ufree, bx, nd, heap, st, km, start, check_start):
                     c = ms.cost[m] + gu
                     if s != goal and c < nd.rhs[s]:
                         nd.rhs[s] = c
+                        nd.sup[s] = bx.inv[m]
                         update_vertex(ms, nd, heap, st, km, start, s)
         else:
             g_old = nd.g[u]
@@ -358,7 +387,7 @@ def compute_path(occ, ms, ufree, bx, nd, heap, st, km, start, check_start):
                         continue
                     c = ms.cost[m] + g_old
                     if abs(nd.rhs[s] - c) <= _TOL * c:
-                        nd.rhs[s] = best_successor(occ, ms, ufree, bx, nd, st, s)[0]
+                        recompute_rhs(occ, ms, ufree, bx, nd, st, s)
                         update_vertex(ms, nd, heap, st, km, start, s)
             update_vertex(ms, nd, heap, st, km, start, u)
     return DONE

@@ -18,7 +18,6 @@ from numba import njit
 
 from planner.keys import unpack3
 from planner.search._dstar import (
-    _TOL,
     BLOCKED,
     BSH,
     DONE,
@@ -37,9 +36,9 @@ from planner.search._dstar import (
     S_PLEN,
     S_PVALID,
     S_STAMP,
+    _box,
     _near_path,
     _remove,
-    best_successor,
     compute_path,
     edges,
     node,
@@ -187,21 +186,34 @@ def collect(ms, affect, bx, nd, st, cells, blocked, out_s, out_old, out_redo):
     st[S_STAMP] += 1
     stamp = st[S_STAMP]
     ust = ms.union
+    nu = ust.shape[0]
     pid = st[S_PID]
+    lo0, lo1, lo2 = bx.lo[0], bx.lo[1], bx.lo[2]
+    d0, d1, d2 = bx.dims[0], bx.dims[1], bx.dims[2]
+    b1, b2 = bx.bdims[1], bx.bdims[2]
+    e0, e1, e2 = bx.ext[0], bx.ext[1], bx.ext[2]
+    blk, slot = bx.blk, bx.slot
+    # slot-map offset of each stencil node from the changed cell (cells away from the
+    # box faces need no bounds checks)
+    off = np.empty(nu, np.int64)
+    for j in range(nu):
+        off[j] = (ust[j, 0] * d1 + ust[j, 1]) * d2 + ust[j, 2]
     n = 0
     for i in range(cells.shape[0]):
         c0, c1, c2 = cells[i, 0], cells[i, 1], cells[i, 2]
-        a, b, c = c0 - bx.lo[0], c1 - bx.lo[1], c2 - bx.lo[2]
-        if (a >= 0 and b >= 0 and c >= 0 and a < bx.dims[0] and b < bx.dims[1]
-                and c < bx.dims[2] and bx.blk[((a >> BSH) * bx.bdims[1] + (b >> BSH))
-                                             * bx.bdims[2] + (c >> BSH)] == 0):
+        a, b, c = c0 - lo0, c1 - lo1, c2 - lo2
+        inner = (a >= e0 and b >= e1 and c >= e2 and a < d0 - e0 and b < d1 - e1
+                 and c < d2 - e2)
+        if inner and blk[((a >> BSH) * b1 + (b >> BSH)) * b2 + (c >> BSH)] == 0:
             continue  # no cached stencil reaches this cell
-        for j in range(-1, ust.shape[0]):
-            if j < 0:
-                x0, x1, x2 = c0, c1, c2
+        base = (a * d1 + b) * d2 + c
+        for j in range(-1, nu):
+            if inner:
+                s = np.int64(slot[base if j < 0 else base - off[j]])
+            elif j < 0:
+                s = node(bx, nd, st, c0, c1, c2, False)
             else:
-                x0, x1, x2 = c0 - ust[j, 0], c1 - ust[j, 1], c2 - ust[j, 2]
-            s = node(bx, nd, st, x0, x1, x2, False)
+                s = node(bx, nd, st, c0 - ust[j, 0], c1 - ust[j, 1], c2 - ust[j, 2], False)
             if s < 0 or nd.mask[s] < 0:
                 continue
             if nd.stamp[s] != stamp:
@@ -224,15 +236,12 @@ def collect(ms, affect, bx, nd, st, cells, blocked, out_s, out_old, out_redo):
 
 
 @njit(cache=True, inline="always")
-def _touch(nd, u, stamp, touched, nt, redo):  # pragma: no cover - compiled
-    """List node ``u`` once per repair (``nd.batch`` 1: its rhs needs a recompute)."""
+def _touch(nd, u, stamp, touched, nt):  # pragma: no cover - compiled
+    """List node ``u`` once per repair (its queue entry is updated after all flips)."""
     if nd.stamp[u] != stamp:
         nd.stamp[u] = stamp
-        nd.batch[u] = 0
         touched[nt] = u
         nt += 1
-    if redo:
-        nd.batch[u] = 1
     return nt
 
 
@@ -259,8 +268,10 @@ def apply_changes(occ, ms, ufree, bx, nd, heap, st, km, start, ss, old, redo, n,
             nd.mask[ss[i]] = -1
             edges(occ, ms, ufree, bx, nd, st, ss[i])
     # Each flipped edge x <-> v with a live x (fig. 4, lines 31-36): a freed edge lowers
-    # rhs at once; a lost support (rhs = c + g of the other end) marks the rhs for one
-    # recompute after all flips (g does not change meanwhile).
+    # rhs at once (both ends); a node that lost the move its rhs rests on (``sup``)
+    # turns lazy: queued with its old, lower, key until the search pops it and
+    # recomputes (the other end of a lost edge, when it has a cached mask, is collected
+    # too and checks its own support; a dead one has nothing to repair).
     st[S_STAMP] += 1
     stamp = st[S_STAMP]
     goal = st[S_GOAL]
@@ -276,53 +287,57 @@ def apply_changes(occ, ms, ufree, bx, nd, heap, st, km, start, ss, old, redo, n,
             # an end never looked up (mask -1) keeps its rhs, stale, until it is
             # expanded (compute_path recomputes it first).
             continue
+        lost = diff & old[i]
+        if lost and x != goal and nd.rhs[x] < np.inf and (
+                nd.sup[x] < 0 or (lost >> np.int64(nd.sup[x])) & 1):
+            nd.lazy[x] = 1
+            nt = _touch(nd, x, stamp, touched, nt)
+        gained = diff & mx
+        if gained == 0:
+            continue
         x0, x1, x2 = unpack3(nd.key[x])
         gx = nd.g[x]
         for m in range(ms.moves.shape[0]):
-            bit = np.int64(1) << np.int64(m)
-            if not diff & bit:
+            if not (gained >> np.int64(m)) & 1:
                 continue
             c = ms.cost[m]
             v0, v1, v2 = x0 + ms.moves[m, 0], x1 + ms.moves[m, 1], x2 + ms.moves[m, 2]
             v = node(bx, nd, st, v0, v1, v2, False)
             gv = nd.g[v] if v >= 0 else np.inf
-            if mx & bit:  # freed
-                if gv < np.inf and x != goal and c + gv < nd.rhs[x]:
-                    nd.rhs[x] = c + gv
-                    nt = _touch(nd, x, stamp, touched, nt, False)
-                if gx < np.inf:
-                    if v < 0:
-                        v = node(bx, nd, st, v0, v1, v2, True)
-                    if v != goal and c + gx < nd.rhs[v]:
-                        nd.rhs[v] = c + gx
-                        nt = _touch(nd, v, stamp, touched, nt, False)
-            else:  # blocked
-                if gv < np.inf and x != goal and abs(nd.rhs[x] - (c + gv)) <= _TOL * (c + gv):
-                    nt = _touch(nd, x, stamp, touched, nt, True)
-                if (gx < np.inf and v >= 0 and v != goal and nd.mask[v] > 0
-                        and abs(nd.rhs[v] - (c + gx)) <= _TOL * (c + gx)):
-                    nt = _touch(nd, v, stamp, touched, nt, True)
+            if gv < np.inf and x != goal and c + gv < nd.rhs[x]:
+                nd.rhs[x] = c + gv
+                nd.sup[x] = m
+                nt = _touch(nd, x, stamp, touched, nt)
+            if gx < np.inf:
+                if v < 0:
+                    v = node(bx, nd, st, v0, v1, v2, True)
+                if v != goal and c + gx < nd.rhs[v]:
+                    nd.rhs[v] = c + gx
+                    nd.sup[v] = bx.inv[m]
+                    nt = _touch(nd, v, stamp, touched, nt)
     for i in range(n):  # after the live ends read their g
         x = ss[i]
         if nd.mask[x] == 0 and x != goal:
-            _settle(nd, heap, st, x)
+            _settle(bx, nd, heap, st, x)
     for i in range(nt):
         u = touched[i]
         if nd.mask[u] == 0:
-            _settle(nd, heap, st, u)
+            _settle(bx, nd, heap, st, u)
             continue
-        if nd.batch[u] == 1:
-            nd.rhs[u] = best_successor(occ, ms, ufree, bx, nd, st, u)[0]
         update_vertex(ms, nd, heap, st, km, start, u)
 
 
 @njit(cache=True, inline="always")
-def _settle(nd, heap, st, u):  # pragma: no cover - compiled
+def _settle(bx, nd, heap, st, u):  # pragma: no cover - compiled
     """A node without edges: no rhs reads its g any more, so it is consistent at inf
-    without queueing it."""
+    without queueing it, and it leaves the node map (later changes near it need not
+    visit it; a cell freed again gets a fresh node when a search reaches it)."""
     if nd.g[u] < np.inf and _near_path(nd, st, u):
         st[S_PVALID] = 0
     nd.g[u] = np.inf
     nd.rhs[u] = np.inf
+    nd.lazy[u] = 0
     if nd.pos[u] >= 0:
         _remove(heap, nd.pos, st, u)
+    u0, u1, u2 = unpack3(nd.key[u])
+    bx.slot[_box(bx, u0, u1, u2)] = -1

@@ -87,7 +87,7 @@ class DStarLite:
         occ = world.occupancy
         if occ.mode != 0:
             raise PlanError("D* Lite needs dense occupancy storage (a smaller world)")
-        self._bx = dk.new_box(occ.lo, occ.dims, self._ms.union)
+        self._bx = dk.new_box(occ.lo, occ.dims, self._ms)
         self._nd = dk.new_nodes(4096)
         self._heap = new_heap(4096)
         i8 = np.int64
@@ -233,8 +233,10 @@ class DStarLite:
         planner makes all arrays but the world's occupancy and ``start``, so the entry
         point is looked up again only when one of those two objects is replaced."""
         occ, start = args[0], args[8]
+        disp = dr.replan
+        if not hasattr(disp, "overloads"):  # not a numba dispatcher (NUMBA_DISABLE_JIT)
+            return disp(*args)
         if self._entry is None or occ is not self._entry[1] or start is not self._entry[2]:
-            disp = dr.replan
             sig = tuple(disp.typeof_pyval(a) for a in args)
             if sig not in disp.overloads:
                 disp.compile(sig)
