@@ -74,7 +74,8 @@ def replan(occ, ms, bx, nd, heap, sc, st, fs, start, cells, blocked):
     st[S_NEED] = 0
     st[S_NEEDT] = 0
     if st[S_PHASE] == PH_COLLECT:
-        st[S_NC] = collect(ms, sc.affect, bx, nd, st, cells, blocked, sc.ss, sc.old, sc.redo)
+        st[S_NC] = collect(occ, ms, sc.affect, bx, nd, st, cells, blocked, sc.ss, sc.old,
+                           sc.redo)
         st[S_PHASE] = PH_APPLY
     if st[S_PHASE] == PH_APPLY:
         n = st[S_NC]
@@ -176,13 +177,16 @@ def _descend(occ, ms, ufree, bx, nd, st, s, pid):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def collect(ms, affect, bx, nd, st, cells, blocked, out_s, out_old, out_redo):
+def collect(occ, ms, affect, bx, nd, st, cells, blocked, out_s, out_old, out_redo):
     # pragma: no cover - compiled
     """Nodes with a cached edge mask whose stencil holds a changed cell, each once, in
     ``out_s[:n]`` with their old masks (``out_old``); returns n. A newly blocked cell at
     union offset j clears the moves ``affect[j]`` needs (all moves when it is the node's
     own cell): no lookup. A newly freed cell marks the node for a fresh lookup
-    (``out_redo``)."""
+    (``out_redo``). A stencil node whose own cell is blocked has no edges to lose
+    (blocked in this batch: its own cell's visit kills it; earlier: it died then), so
+    away from the box faces one byte of the dense occupancy grid (``occ``, the node
+    map's box) skips it without touching its row."""
     st[S_STAMP] += 1
     stamp = st[S_STAMP]
     ust = ms.union
@@ -192,7 +196,7 @@ def collect(ms, affect, bx, nd, st, cells, blocked, out_s, out_old, out_redo):
     d0, d1, d2 = bx.dims[0], bx.dims[1], bx.dims[2]
     b1, b2 = bx.bdims[1], bx.bdims[2]
     e0, e1, e2 = bx.ext[0], bx.ext[1], bx.ext[2]
-    blk, slot = bx.blk, bx.slot
+    blk, slot, grid = bx.blk, bx.slot, occ.grid
     # slot-map offset of each stencil node from the changed cell (cells away from the
     # box faces need no bounds checks)
     off = np.empty(nu, np.int64)
@@ -209,7 +213,12 @@ def collect(ms, affect, bx, nd, st, cells, blocked, out_s, out_old, out_redo):
         base = (a * d1 + b) * d2 + c
         for j in range(-1, nu):
             if inner:
-                s = np.int64(slot[base if j < 0 else base - off[j]])
+                if j < 0:
+                    s = np.int64(slot[base])
+                elif grid[base - off[j]] == 0:
+                    continue
+                else:
+                    s = np.int64(slot[base - off[j]])
             elif j < 0:
                 s = node(bx, nd, st, c0, c1, c2, False)
             else:

@@ -104,8 +104,11 @@ class DStarLite:
         dk.update_vertex(self._ms, self._nd, self._heap, self._st, 0.0, self.start, g)
         self._mark = (0, 0)  # lookups, expansions at the last plan
         self._seconds = 0.0  # time of update() calls since the last plan
-        self._pending: list[tuple[np.ndarray, np.ndarray]] = []  # changes since then
+        self._pending: list[tuple[np.ndarray, np.ndarray | bool]] = []  # since then
         self._entry: tuple | None = None  # see _replan
+        self._fl = {True: np.ones(1024, np.bool_), False: np.zeros(1024, np.bool_)}
+        self._peak = 0
+        self._sized()
 
     # -- storage -----------------------------------------------------------------------
     def _room(self, extra: int) -> None:
@@ -127,6 +130,7 @@ class DStarLite:
         if len(sc.touched) < need:
             sc = sc._replace(touched=np.empty(max(need, 2 * len(sc.touched)), np.int64))
         self._sc = sc
+        self._sized()
 
     def _collect_room(self, k: int) -> None:
         """Scratch to collect the nodes of ``k`` changed cells (each once per stencil
@@ -137,6 +141,7 @@ class DStarLite:
             size = max(size, 2 * len(sc.ss))
             self._sc = sc._replace(ss=np.empty(size, np.int64), old=np.empty(size, np.int64),
                                    redo=np.empty(size, np.bool_))
+            self._sized()
 
     @property
     def nodes(self) -> int:
@@ -145,9 +150,14 @@ class DStarLite:
 
     @property
     def peak_bytes(self) -> int:
-        """Bytes of the planner's own arrays."""
-        return (len(self._nd.key) * dk.NODE.itemsize
-                + sum(a.nbytes for part in (self._heap, self._bx) for a in part))
+        """Bytes of the planner's own arrays (they only grow)."""
+        return self._peak
+
+    def _sized(self) -> None:
+        """Recount :attr:`peak_bytes` (after arrays grew)."""
+        self._peak = (len(self._nd.key) * dk.NODE.itemsize
+                      + sum(a.nbytes for part in (self._heap, self._bx, self._sc)
+                            for a in part))
 
     # -- the three operations ------------------------------------------------------------
     def move_start(self, cell) -> None:
@@ -169,16 +179,19 @@ class DStarLite:
         of that plan (as D* Lite's main loop: move, scan, update, compute).
         """
         t0 = time.perf_counter()
-        c = _cells(changed_cells) if len(changed_cells) else _NONE
+        c = changed_cells
+        if not (type(c) is np.ndarray and c.dtype == np.int64 and c.ndim == 2
+                and c.shape[1] == 3 and c.flags.c_contiguous and c.flags.writeable):
+            c = _cells(c) if len(c) else _NONE
+            if not c.flags.writeable:  # the kernel's signature takes writeable arrays
+                c = c.copy()
         if not len(c):
             return
-        if not c.flags.writeable:  # the kernel's signature takes writeable arrays
-            c = c.copy()
         if blocked is None:
             state = ~self.world.checker.cells_free(c)
             self._st[dk.S_LOOK] += len(c)
         else:
-            state = np.full(len(c), bool(blocked))
+            state = bool(blocked)  # made an array in plan()
         self._pending.append((c, state))
         self._seconds += time.perf_counter() - t0
 
@@ -195,11 +208,13 @@ class DStarLite:
         """
         t0 = time.perf_counter()
         st, pend = self._st, self._pending
-        if len(pend) == 1:
-            cells, state = pend[0]
+        if len(pend) == 1 and isinstance(pend[0][1], bool):
+            cells = pend[0][0]
+            state = self._flags(len(cells), pend[0][1])
         elif pend:
             cells = np.concatenate([p[0] for p in pend])
-            state = np.concatenate([p[1] for p in pend])
+            state = np.concatenate([np.full(len(c), b) if isinstance(b, bool) else b
+                                    for c, b in pend])
         else:
             cells, state = _NONE, _NONE_B
         self._pending = []
@@ -224,6 +239,13 @@ class DStarLite:
                                 f"goal unreachable: explored {self.nodes} cells",
                                 "unreachable")
         return self._result(self._sc.path[j:k].copy(), float(self._fs[1]), t0, "", "found")
+
+    def _flags(self, k: int, value: bool) -> np.ndarray:
+        """``np.full(k, value)`` as a view of an array kept for the purpose."""
+        a = self._fl[value]
+        if len(a) < k:
+            a = self._fl[value] = np.full(max(k, 2 * len(a)), value)
+        return a[:k]
 
     def _replan(self, args: tuple) -> int:
         """``dr.replan(*args)`` through the compiled entry point of its signature.
