@@ -8,6 +8,12 @@ from ``u`` is free; the touched cells of a segment do not depend on its directio
 -1 = not looked up yet): one lookup of the node's own cell plus one per union-stencil
 offset, made once and redone only when a changed cell lies in that stencil.
 
+Lazy rhs: each node keeps a move ``sup`` its rhs rests on. A node that loses that move
+(or was never looked up) may hold an rhs that is too low, never too high; it stays queued
+with the key of that rhs, a lower bound of its true key, and :func:`compute_path`
+recomputes it when it is popped (or, for the start, before searching). Repairs after a
+scan then touch only the nodes whose stencils changed, not both ends of every lost edge.
+
 Priority queue: the indexed binary heap of :mod:`planner.search._heap` ordered by the
 first key ``k1`` (on a grid of 1e-9 move lengths), ties broken by ``tb`` descending:
 ``inf`` for underconsistent nodes, else ``k2 = min(g, rhs)`` (the paper breaks ties the
@@ -347,15 +353,15 @@ def compute_path(occ, ms, ufree, bx, nd, heap, st, km, start, check_start):
             break
         u = heap_s[0]
         st[S_EXP] += 1
+        u0, u1, u2 = unpack3(nd.key[u])
+        k1n = _key1(ms, nd.g[u], nd.rhs[u], _h(ms, start, u0, u1, u2), km,
+                    nd.g[u] < nd.rhs[u] or nd.lazy[u] != 0)
+        if k1o < k1n:  # a key from an earlier start: requeue (the tie-break is current)
+            update_vertex(ms, nd, heap, st, km, start, u)
+            continue
         if (nd.mask[u] < 0 or nd.lazy[u]) and u != goal:
             # never looked up, or lazy: its rhs may be too low; requeue it exact
             recompute_rhs(occ, ms, ufree, bx, nd, st, u)
-            update_vertex(ms, nd, heap, st, km, start, u)
-            continue
-        u0, u1, u2 = unpack3(nd.key[u])
-        k1n = _key1(ms, nd.g[u], nd.rhs[u], _h(ms, start, u0, u1, u2), km,
-                    nd.g[u] < nd.rhs[u])
-        if k1o < k1n:  # a key from an earlier start: requeue (the tie-break is current)
             update_vertex(ms, nd, heap, st, km, start, u)
             continue
         mk = edges(occ, ms, ufree, bx, nd, st, u)

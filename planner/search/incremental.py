@@ -5,7 +5,10 @@ The graph, safe rule, edge costs (m) and heuristic are those of
 runs from the goal towards the start, so the start may move (:meth:`DStarLite.move_start`)
 and changed cells (:meth:`DStarLite.update`, after the world was mutated, e.g. with
 :meth:`planner.world.World.set_cells`) repair only the vertices whose edges they touch.
-Kernels and data layout: :mod:`planner.search._dstar`.
+Kernels and data layout: :mod:`planner.search._dstar`; the changes' repair, the path and
+the one compiled call a replan makes: :mod:`planner.search._dstar_run`. :meth:`update`
+only takes the changed cells; :meth:`plan` repairs, searches and extracts the path, and
+reuses the previous path from the new start on while nothing it was read from changed.
 
 Cell checks count every occupancy lookup actually made, as A* does: a node's edges cost one
 lookup of its own cell plus one per union-stencil offset (A* skips the own cell, which it
