@@ -9,13 +9,15 @@ Usage::
 For each map and lattice the robot explores from the query's start to its goal
 (:func:`planner.explore.explore`); after every sensing step that changed the known map the
 repaired D* Lite plan and an A* from scratch on the same map state (same process) are timed
-and their cell checks counted. Printed per run: status, moves, distance, replans, the median
-over replans (after the first plan) of incremental / from-scratch time and cell checks, the
-ratio of the totals, mismatches (costs that differ: the run fails if any) and contacts
-(moves that touched an obstacle the sensor had not seen); D*chk, A*chk, D*ms, A*ms are the
-medians over the same replans of each search's cell checks and milliseconds. The first
-plan of a run also loads the compiled kernels; it is left out of the medians. No timed
-assertions: figures only.
+and their cell checks counted: D* Lite's time is the wall time of its ``update`` and
+``plan`` calls (repair, search, path extraction, Python included), A*'s the engine's own
+``SearchResult.seconds`` (its kernel calls). Printed per run: status, moves, distance,
+replans, the median over replans (after the first plan) of incremental / from-scratch time
+and cell checks, the ratio of the totals, mismatches (costs that differ: the run fails if
+any) and contacts (moves that touched an obstacle the sensor had not seen); D*chk, A*chk,
+D*ms, A*ms are the medians over the same replans of each search's cell checks and
+milliseconds. The first plan of a run also loads the compiled kernels; it is left out of
+the medians. No timed assertions: figures only.
 """
 
 from __future__ import annotations

@@ -53,8 +53,10 @@ class ExploreResult:
     changed, dstar_checks, astar_checks, dstar_expansions, astar_expansions : ndarray (R,)
         Per replan: cells whose state changed, occupancy lookups, expansions.
     dstar_seconds, astar_seconds, dstar_cost, astar_cost : ndarray (R,) float
-        Per replan: wall time of the repair (update + plan) and of the scratch A* (s),
-        path costs (m, inf when unreachable).
+        Per replan: wall time of the repair (``update`` + ``plan``: the changes' repair,
+        the search and the path, Python included) and the scratch A*'s own time
+        (:attr:`planner.search.SearchResult.seconds`: its kernel calls, without the
+        argument checks around them) (s); path costs (m, inf when unreachable).
     mismatches : int
         Replans whose two costs differ by more than 1e-9 m (or only one is unreachable).
     contacts : int
@@ -320,14 +322,15 @@ def _warm_up(lat: Lattice, neighbors: str, dstar) -> None:
 
 
 def _scratch_astar(search, world, cur, goal, neighbors) -> tuple[float, int, int, float]:
-    """(wall seconds, cell checks, expansions, cost) of A* from scratch; a blocked end is
-    unreachable (one lookup each, as A*'s endpoint check)."""
+    """(seconds, cell checks, expansions, cost) of A* from scratch: the engine's own
+    timing of the search (``SearchResult.seconds``); a blocked end is unreachable (one
+    lookup each, as A*'s endpoint check; the wall time of that refusal)."""
     t0 = time.perf_counter()
     try:
         r = search(world, cur, goal, method="astar", neighbors=neighbors)
     except PlanError:
         return time.perf_counter() - t0, 2, 0, math.inf
-    return time.perf_counter() - t0, r.cell_checks, r.expansions, r.cost
+    return r.seconds, r.cell_checks, r.expansions, r.cost
 
 
 def _same(a: float, b: float) -> bool:

@@ -91,6 +91,47 @@ def test_dstar_lite_matches_astar_after_every_batch(name, neighbors, seed=0):
     assert checked >= 3  # most batches have a path to compare
 
 
+@pytest.mark.parametrize("neighbors", ["face", "full"])
+@pytest.mark.parametrize("name", NAMED_LATTICES)
+def test_walking_robot_with_small_changes_near_and_far_keeps_an_optimal_path(name, neighbors):
+    # A robot steps along its plan while a few cells flip per step, on the path, next to
+    # it or anywhere: the plan it gets (often the rest of the previous one) is always a
+    # valid path from where it stands, as short as A* from scratch.
+    rng = np.random.default_rng(zlib.crc32(f"walk/{name}/{neighbors}".encode()))
+    lat = Lattice.named(name, 1.0)
+    world = World(lat, np.zeros((0, 3), np.int64), [[0, 0, 0], [12, 5, 3]])
+    cells = _in_bounds_cells(world)
+    world.set_cells(cells[rng.random(len(cells)) < 0.08], blocked=True)
+    free = _free_cells(world)
+    x = lat.to_world(free)[:, 0]
+    start, goal = free[np.argmin(x)], free[np.argmax(x)]
+    dl = DStarLite(world, start, goal, neighbors=neighbors)
+    compared = 0
+    for step in range(30):
+        r = dl.plan()
+        want = _astar_cost(world, dl.start, goal, neighbors)
+        assert (math.isinf(want) and not r.found) or abs(r.cost - want) <= 1e-9, (step, r.cost,
+                                                                                 want)
+        if not r.found:
+            break
+        compared += 1
+        assert np.array_equal(r.cells[0], dl.start) and np.array_equal(r.cells[-1], goal)
+        assert abs(_assert_valid(world, r.cells, neighbors) - r.cost) <= 1e-9
+        if len(r.cells) > 2:
+            dl.move_start(r.cells[1])
+        near = r.cells[1:-1] + rng.integers(-1, 2, (len(r.cells) - 2, 3))
+        pool = [cells, near] if len(near) else [cells]
+        pick = pool[step % len(pool)]
+        flip = pick[rng.integers(0, len(pick), int(rng.integers(0, 4)))]
+        flip = flip[world.in_bounds(flip)]
+        flip = flip[~((flip == dl.start).all(1) | (flip == goal).all(1))]
+        now_free = world.is_free(flip)
+        dl.update(world.set_cells(flip[now_free], True), blocked=True)
+        if step % 3 == 0:  # sometimes a cell opens up too
+            dl.update(world.set_cells(flip[~now_free], False), blocked=False)
+    assert compared >= 10
+
+
 def test_unchanged_world_costs_like_astar_and_counts_checks():
     lat = Lattice.named("fcc", 1.0)
     world = World(lat, [[3, 0, 1], [2, 2, 0]], [[0, 0, 0], [8, 8, 8]])

@@ -8,6 +8,12 @@ from ``u`` is free; the touched cells of a segment do not depend on its directio
 -1 = not looked up yet): one lookup of the node's own cell plus one per union-stencil
 offset, made once and redone only when a changed cell lies in that stencil.
 
+Lazy rhs: each node keeps a move ``sup`` its rhs rests on. A node that loses that move
+(or was never looked up) may hold an rhs that is too low, never too high; it stays queued
+with the key of that rhs, a lower bound of its true key, and :func:`compute_path`
+recomputes it when it is popped (or, for the start, before searching). Repairs after a
+scan then touch only the nodes whose stencils changed, not both ends of every lost edge.
+
 Priority queue: the indexed binary heap of :mod:`planner.search._heap` ordered by the
 first key ``k1`` (on a grid of 1e-9 move lengths), ties broken by ``tb`` descending:
 ``inf`` for underconsistent nodes, else ``k2 = min(g, rhs)`` (the paper breaks ties the
@@ -15,7 +21,8 @@ other way, by the smaller k2; that expands every node of the equal-cost region b
 and start, which on a lattice is most of it).
 Nodes live in a table in creation order, found through a dense slot map over the world's
 index box. The kernels never grow arrays: :class:`planner.search.incremental.DStarLite`
-makes room before each call (``GROW`` asks for more).
+makes room before each call (``GROW`` asks for more). Repair after changed cells, path
+extraction and the one call per replan: :mod:`planner.search._dstar_run`.
 """
 
 from __future__ import annotations
@@ -30,38 +37,82 @@ from planner.keys import pack3, unpack3
 from planner.search._heap import push, sift_down, sift_up
 from planner.search.stencils import move_allowed
 
-# int64 state vector: node count, heap size, expansions, lookups, update stamp, goal slot
+# int64 state vector: node count, heap size, expansions, lookups, update stamp, goal slot;
+# the stored path (:mod:`planner.search._dstar_run`): its id, whether it is still valid, its
+# length and the start's index in it; the replan's phase, collected nodes, room it needs
+# (nodes, repair scratch) and whether the start's own cell is still to be checked.
 S_N, S_HN, S_EXP, S_LOOK, S_STAMP, S_GOAL = 0, 1, 2, 3, 4, 5
-S_SIZE = 6
+S_PID, S_PVALID, S_PLEN, S_PAT = 6, 7, 8, 9
+S_PHASE, S_NC, S_NEED, S_NEEDT, S_CHK = 10, 11, 12, 13, 14
+S_PJ, S_PK = 15, 16  # the replan's path: rows [S_PJ, S_PK) of the path buffer
+S_SIZE = 17
 DONE, GROW, BLOCKED = 0, 1, 2
+BSH = 2  # block bitmap: blocks of 2**BSH cells per axis
 _TOL = 1e-9  # relative: "rhs(s) = c + g_old" tested with slack (a spare recompute is safe)
 _BIAS = 4 * _TOL  # relative: an underconsistent node's key ahead of the ties (_key1)
 
 
 class DNodes(NamedTuple):
-    """One row per node (capacity ``len(key)``)."""
+    """One row per node (capacity ``len(key)``): the fields are strided views of one record
+    array (:data:`NODE`, 64 bytes, cache-line aligned), so touching a node costs one cache
+    line instead of one per field (the repair visits thousands of scattered nodes)."""
 
     key: np.ndarray  # (cap,) int64 packed cell
     g: np.ndarray  # (cap,) float64 cost-to-goal estimate (m)
     rhs: np.ndarray  # (cap,) float64 one-step lookahead (m)
     mask: np.ndarray  # (cap,) int64 bit m: edge to key + moves[m] exists; -1 unknown
     pos: np.ndarray  # (cap,) int64 heap position, -1 not queued
-    stamp: np.ndarray  # (cap,) int64 last update batch that collected the node
-    batch: np.ndarray  # (cap,) int64 the node's row in that batch
+    stamp: np.ndarray  # (cap,) int32 last update batch that collected the node
+    batch: np.ndarray  # (cap,) int32 the node's row in that batch
+    near: np.ndarray  # (cap,) int64 -pid: on stored path pid; +pid: next to it; else other
+    sup: np.ndarray  # (cap,) int8 a move m with rhs = c(m) + g(key + moves[m]); -1 none
+    lazy: np.ndarray  # (cap,) int8 1: rhs may be too low (:func:`update_vertex`)
 
 
 class DBox(NamedTuple):
-    """Dense cell -> node map over the world's index box."""
+    """Dense cell -> node map over the world's index box, and a bitmap of the blocks
+    (``2**BSH`` cells a side) within ``ext`` cells of a node with a cached edge mask: a
+    changed cell in an unmarked block lies in no cached stencil (:func:`collect` skips it
+    without touching the node map)."""
 
     slot: np.ndarray  # (prod(dims),) int32 node of each cell, -1 none
     lo: np.ndarray  # (3,) int64
     dims: np.ndarray  # (3,) int64
+    blk: np.ndarray  # (prod(bdims),) uint8 block marks
+    bdims: np.ndarray  # (3,) int64 blocks per axis
+    ext: np.ndarray  # (3,) int64 largest |union-stencil offset| per axis
+    inv: np.ndarray  # (M,) int64 the move back: moves[inv[m]] = -moves[m]
 
 
-def new_nodes(cap: int) -> DNodes:
-    i8, f8 = np.int64, np.float64
-    return DNodes(np.empty(cap, i8), np.empty(cap, f8), np.empty(cap, f8), np.empty(cap, i8),
-                  np.empty(cap, i8), np.zeros(cap, i8), np.zeros(cap, i8))
+def new_box(lo: np.ndarray, dims: np.ndarray, ms) -> DBox:
+    """Empty node map over the box ``lo + [0, dims)`` for the move set ``ms``."""
+    dims = np.asarray(dims, np.int64).copy()
+    bdims = (dims + (1 << BSH) - 1) >> BSH
+    union, moves = ms.union, ms.moves
+    ext = np.abs(union).max(axis=0).astype(np.int64) if len(union) else np.zeros(3, np.int64)
+    back = {tuple(m): i for i, m in enumerate((-moves).tolist())}
+    inv = np.array([back[tuple(m)] for m in moves.tolist()], np.int64)
+    return DBox(np.full(int(np.prod(dims)), -1, np.int32), np.asarray(lo, np.int64).copy(),
+                dims, np.zeros(int(np.prod(bdims)), np.uint8), bdims, ext, inv)
+
+
+#: one node's record: the fields of :class:`DNodes` and padding to a cache line
+NODE = np.dtype([("key", np.int64), ("g", np.float64), ("rhs", np.float64),
+                 ("mask", np.int64), ("pos", np.int64), ("near", np.int64),
+                 ("stamp", np.int32), ("batch", np.int32), ("sup", np.int8),
+                 ("lazy", np.int8), ("pad", np.int8, (6,))])
+
+
+def new_nodes(cap: int, keep: DNodes | None = None, n: int = 0) -> DNodes:
+    """Node table for ``cap`` nodes; the first ``n`` rows copied from ``keep``."""
+    raw = np.zeros(cap * NODE.itemsize + 64, np.uint8)
+    off = -raw.ctypes.data % 64
+    rec = raw[off:off + cap * NODE.itemsize].view(NODE)
+    nd = DNodes(*(rec[name] for name in DNodes._fields))
+    if keep is not None:
+        for a, b in zip(nd, keep, strict=True):
+            a[:n] = b[:n]
+    return nd
 
 
 @njit(cache=True, inline="always")
@@ -92,15 +143,40 @@ def node(bx, nd, st, v0, v1, v2, create):  # pragma: no cover - compiled
     nd.mask[s] = -1
     nd.pos[s] = -1
     nd.stamp[s] = 0
+    nd.near[s] = 0
+    nd.sup[s] = -1
+    nd.lazy[s] = 0
     return s
 
 
+@njit(cache=True, inline="always")
+def _mark(bx, u0, u1, u2):  # pragma: no cover - compiled
+    """Mark the blocks within ``ext`` of a node's cell (it now has a cached mask)."""
+    a0 = max(u0 - bx.ext[0] - bx.lo[0], 0) >> BSH
+    a1 = min(u0 + bx.ext[0] - bx.lo[0], bx.dims[0] - 1) >> BSH
+    b0 = max(u1 - bx.ext[1] - bx.lo[1], 0) >> BSH
+    b1 = min(u1 + bx.ext[1] - bx.lo[1], bx.dims[1] - 1) >> BSH
+    c0 = max(u2 - bx.ext[2] - bx.lo[2], 0) >> BSH
+    c1 = min(u2 + bx.ext[2] - bx.lo[2], bx.dims[2] - 1) >> BSH
+    for i in range(a0, a1 + 1):
+        for j in range(b0, b1 + 1):
+            for k in range(c0, c1 + 1):
+                bx.blk[(i * bx.bdims[1] + j) * bx.bdims[2] + k] = 1
+
+
+@njit(cache=True, inline="always")
+def _near_path(nd, st, u):  # pragma: no cover - compiled
+    """The stored path's extraction read ``u`` (on the path or next to it)."""
+    return nd.near[u] == st[S_PID] or nd.near[u] == -st[S_PID]
+
+
 @njit(cache=True)
-def edges(occ, ms, ufree, nd, st, s):  # pragma: no cover - compiled
+def edges(occ, ms, ufree, bx, nd, st, s):  # pragma: no cover - compiled
     """Edge mask of node ``s`` (looked up once, then cached)."""
     if nd.mask[s] >= 0:
         return nd.mask[s]
     u0, u1, u2 = unpack3(nd.key[s])
+    _mark(bx, u0, u1, u2)
     st[S_LOOK] += 1
     m = np.int64(0)
     if occ_free(occ, u0, u1, u2):
@@ -132,15 +208,16 @@ def _h(ms, start, v0, v1, v2):  # pragma: no cover - compiled
 
 
 @njit(cache=True, inline="always")
-def _key1(ms, g, rhs, hv, km):  # pragma: no cover - compiled
-    """First key of a queued node. An underconsistent node (g < rhs) goes ahead of every
+def _key1(ms, g, rhs, hv, km, under):  # pragma: no cover - compiled
+    """First key of a queued node. An underconsistent node (``under``: g < rhs, or a
+    lazy node's rhs that may be too low) goes ahead of every
     key equal to its own up to float noise (``_BIAS``): its stale low g may carry the
     start's path, and two sums of the same moves can round to neighbouring grid steps of
     :func:`_k1`, which would otherwise queue it one step behind an overconsistent tie (or
     the start itself) and let the search stop on a stale value."""
     x = min(g, rhs) + hv + km
     k = _k1(ms, x)
-    if g < rhs:
+    if under:
         k -= _BIAS * (1.0 + abs(x))
     return k
 
@@ -176,14 +253,21 @@ def update_vertex(ms, nd, heap, st, km, start, s):  # pragma: no cover - compile
     Queue order: first key ascending, then the tie-break ``tb`` descending (module
     docstring): an underconsistent node (g < rhs: its g is stale and low) comes first
     among ties, then the one with the larger ``min(g, rhs)`` (nearest the start, A*'s
-    dive)."""
+    dive).
+
+    A *lazy* node (its rhs may be too low, never too high: it lost a move its rhs rested
+    on and was not recomputed) stays queued, as an underconsistent one, until
+    :func:`compute_path` pops it and recomputes its rhs: its key is a lower bound of its
+    true key, so it is popped no later than it should be."""
     pos = nd.pos
     g, rhs = nd.g[s], nd.rhs[s]
-    if g != rhs:
+    lazy = nd.lazy[s] != 0
+    if g != rhs or lazy:
         gm = min(g, rhs)
         u0, u1, u2 = unpack3(nd.key[s])
-        k1 = _key1(ms, g, rhs, _h(ms, start, u0, u1, u2), km)
-        tb = np.inf if g < rhs else gm
+        under = g < rhs or lazy
+        k1 = _key1(ms, g, rhs, _h(ms, start, u0, u1, u2), km, under)
+        tb = np.inf if under else gm
         if pos[s] >= 0:
             i = pos[s]
             heap.f[i] = k1
@@ -198,12 +282,13 @@ def update_vertex(ms, nd, heap, st, km, start, s):  # pragma: no cover - compile
 
 @njit(cache=True)
 def best_successor(occ, ms, ufree, bx, nd, st, s):  # pragma: no cover - compiled
-    """``(min_m c(s, s + m) + g(s + m), node of the argmin or -1, its edge cost)``."""
-    mk = edges(occ, ms, ufree, nd, st, s)
+    """``(min_m c(s, s + m) + g(s + m), node of the argmin or -1, its edge cost, m)``."""
+    mk = edges(occ, ms, ufree, bx, nd, st, s)
     u0, u1, u2 = unpack3(nd.key[s])
     best = np.inf
     arg = np.int64(-1)
     bc = np.inf
+    bm = -1
     for m in range(ms.moves.shape[0]):
         if (mk >> np.int64(m)) & 1:
             v = node(bx, nd, st, u0 + ms.moves[m, 0], u1 + ms.moves[m, 1], u2 + ms.moves[m, 2],
@@ -214,7 +299,17 @@ def best_successor(occ, ms, ufree, bx, nd, st, s):  # pragma: no cover - compile
                     best = c
                     arg = v
                     bc = ms.cost[m]
-    return best, arg, bc
+                    bm = m
+    return best, arg, bc, bm
+
+
+@njit(cache=True)
+def recompute_rhs(occ, ms, ufree, bx, nd, st, s):  # pragma: no cover - compiled
+    """rhs(s) = min over its moves of c + g (looks its edges up if needed): exact again."""
+    best, _, _, m = best_successor(occ, ms, ufree, bx, nd, st, s)
+    nd.rhs[s] = best
+    nd.sup[s] = m
+    nd.lazy[s] = 0
 
 
 @njit(cache=True)
@@ -232,6 +327,10 @@ def compute_path(occ, ms, ufree, bx, nd, heap, st, km, start, check_start):
     nm = ms.moves.shape[0]
     goal = st[S_GOAL]
     heap_f, heap_g, heap_s = heap.f, heap.g, heap.slot
+    ss = node(bx, nd, st, start[0], start[1], start[2], False)
+    if ss >= 0 and ss != goal and (nd.mask[ss] < 0 or nd.lazy[ss]):  # rhs may be low
+        recompute_rhs(occ, ms, ufree, bx, nd, st, ss)
+        update_vertex(ms, nd, heap, st, km, start, ss)
     while st[S_HN] > 0:
         if st[S_N] + nm > cap:
             return GROW
@@ -255,11 +354,19 @@ def compute_path(occ, ms, ufree, bx, nd, heap, st, km, start, check_start):
         u = heap_s[0]
         st[S_EXP] += 1
         u0, u1, u2 = unpack3(nd.key[u])
-        k1n = _key1(ms, nd.g[u], nd.rhs[u], _h(ms, start, u0, u1, u2), km)
+        k1n = _key1(ms, nd.g[u], nd.rhs[u], _h(ms, start, u0, u1, u2), km,
+                    nd.g[u] < nd.rhs[u] or nd.lazy[u] != 0)
         if k1o < k1n:  # a key from an earlier start: requeue (the tie-break is current)
             update_vertex(ms, nd, heap, st, km, start, u)
             continue
-        mk = edges(occ, ms, ufree, nd, st, u)
+        if (nd.mask[u] < 0 or nd.lazy[u]) and u != goal:
+            # never looked up, or lazy: its rhs may be too low; requeue it exact
+            recompute_rhs(occ, ms, ufree, bx, nd, st, u)
+            update_vertex(ms, nd, heap, st, km, start, u)
+            continue
+        mk = edges(occ, ms, ufree, bx, nd, st, u)
+        if _near_path(nd, st, u):  # its g changes: the stored path may not hold
+            st[S_PVALID] = 0
         if nd.g[u] > nd.rhs[u]:
             gu = nd.rhs[u]
             nd.g[u] = gu
@@ -268,9 +375,12 @@ def compute_path(occ, ms, ufree, bx, nd, heap, st, km, start, check_start):
                 if (mk >> np.int64(m)) & 1:
                     s = node(bx, nd, st, u0 + ms.moves[m, 0], u1 + ms.moves[m, 1],
                              u2 + ms.moves[m, 2], True)
+                    if nd.near[s] == -st[S_PID]:  # u (maybe new) is next to the path
+                        st[S_PVALID] = 0
                     c = ms.cost[m] + gu
                     if s != goal and c < nd.rhs[s]:
                         nd.rhs[s] = c
+                        nd.sup[s] = bx.inv[m]
                         update_vertex(ms, nd, heap, st, km, start, s)
         else:
             g_old = nd.g[u]
@@ -283,170 +393,7 @@ def compute_path(occ, ms, ufree, bx, nd, heap, st, km, start, check_start):
                         continue
                     c = ms.cost[m] + g_old
                     if abs(nd.rhs[s] - c) <= _TOL * c:
-                        nd.rhs[s] = best_successor(occ, ms, ufree, bx, nd, st, s)[0]
+                        recompute_rhs(occ, ms, ufree, bx, nd, st, s)
                         update_vertex(ms, nd, heap, st, km, start, s)
             update_vertex(ms, nd, heap, st, km, start, u)
     return DONE
-
-
-@njit(cache=True)
-def collect(ms, affect, bx, nd, st, cells, blocked, out_s, out_old, out_redo):
-    # pragma: no cover - compiled
-    """Nodes with a cached edge mask whose stencil holds a changed cell, each once, in
-    ``out_s[:n]`` with their old masks (``out_old``); returns n. A newly blocked cell at
-    union offset j clears the moves ``affect[j]`` needs (all moves when it is the node's
-    own cell): no lookup. A newly freed cell marks the node for a fresh lookup
-    (``out_redo``)."""
-    st[S_STAMP] += 1
-    stamp = st[S_STAMP]
-    ust = ms.union
-    n = 0
-    for i in range(cells.shape[0]):
-        c0, c1, c2 = cells[i, 0], cells[i, 1], cells[i, 2]
-        for j in range(-1, ust.shape[0]):
-            if j < 0:
-                x0, x1, x2 = c0, c1, c2
-            else:
-                x0, x1, x2 = c0 - ust[j, 0], c1 - ust[j, 1], c2 - ust[j, 2]
-            s = node(bx, nd, st, x0, x1, x2, False)
-            if s < 0 or nd.mask[s] < 0:
-                continue
-            if nd.stamp[s] != stamp:
-                nd.stamp[s] = stamp
-                out_s[n] = s
-                out_old[n] = nd.mask[s]
-                out_redo[n] = False
-                nd.batch[s] = n
-                n += 1
-            if blocked[i]:
-                nd.mask[s] = 0 if j < 0 else nd.mask[s] & ~affect[j]
-            else:
-                out_redo[nd.batch[s]] = True
-    return n
-
-
-@njit(cache=True, inline="always")
-def _touch(nd, u, stamp, touched, nt, redo):  # pragma: no cover - compiled
-    """List node ``u`` once per repair (``nd.batch`` 1: its rhs needs a recompute)."""
-    if nd.stamp[u] != stamp:
-        nd.stamp[u] = stamp
-        nd.batch[u] = 0
-        touched[nt] = u
-        nt += 1
-    if redo:
-        nd.batch[u] = 1
-    return nt
-
-
-@njit(cache=True)
-def apply_changes(occ, ms, ufree, bx, nd, heap, st, km, start, ss, old, redo, n, touched):
-    # pragma: no cover - compiled
-    """Look up the edge masks of the collected nodes marked ``redo``, then repair every
-    edge whose state flipped, recomputing each affected rhs once.
-    Needs room for ``n * len(moves)`` new nodes; ``touched``: scratch of 2 n len(moves).
-
-    A collected node left without edges (its own cell blocked, or walled in) is *dead*:
-    no rhs can read its g any more (edges are symmetric), so it settles at inf at once and
-    its flipped edges are seen from the live end only. Inside a newly blocked region (most
-    of a scan's cells) that skips every edge between two dead nodes.
-    """
-    for i in range(n):
-        if redo[i]:
-            nd.mask[ss[i]] = -1
-            edges(occ, ms, ufree, nd, st, ss[i])
-    # Each flipped edge x <-> v with a live x (fig. 4, lines 31-36): a freed edge lowers
-    # rhs at once; a lost support (rhs = c + g of the other end) marks the rhs for one
-    # recompute after all flips (g does not change meanwhile).
-    st[S_STAMP] += 1
-    stamp = st[S_STAMP]
-    goal = st[S_GOAL]
-    nt = 0
-    for i in range(n):
-        x = ss[i]
-        mx = nd.mask[x]
-        diff = old[i] ^ mx
-        if diff == 0:
-            continue
-        dead = mx == 0 and x != goal
-        x0, x1, x2 = unpack3(nd.key[x])
-        gx = nd.g[x]
-        if dead and gx == np.inf:
-            continue  # no rhs can rest on it
-        for m in range(ms.moves.shape[0]):
-            bit = np.int64(1) << np.int64(m)
-            if not diff & bit:
-                continue
-            c = ms.cost[m]
-            v0, v1, v2 = x0 + ms.moves[m, 0], x1 + ms.moves[m, 1], x2 + ms.moves[m, 2]
-            v = node(bx, nd, st, v0, v1, v2, False)
-            if dead:
-                # A live end with a cached mask is collected too and sees this edge; one
-                # never looked up (mask -1) may still rest its rhs on x.
-                if (v >= 0 and v != goal and nd.mask[v] < 0
-                        and abs(nd.rhs[v] - (c + gx)) <= _TOL * (c + gx)):
-                    nt = _touch(nd, v, stamp, touched, nt, True)
-                continue
-            gv = nd.g[v] if v >= 0 else np.inf
-            if mx & bit:  # freed
-                if gv < np.inf and x != goal and c + gv < nd.rhs[x]:
-                    nd.rhs[x] = c + gv
-                    nt = _touch(nd, x, stamp, touched, nt, False)
-                if gx < np.inf:
-                    if v < 0:
-                        v = node(bx, nd, st, v0, v1, v2, True)
-                    if v != goal and c + gx < nd.rhs[v]:
-                        nd.rhs[v] = c + gx
-                        nt = _touch(nd, v, stamp, touched, nt, False)
-            else:  # blocked
-                if gv < np.inf and x != goal and abs(nd.rhs[x] - (c + gv)) <= _TOL * (c + gv):
-                    nt = _touch(nd, x, stamp, touched, nt, True)
-                if (gx < np.inf and v >= 0 and v != goal and nd.mask[v] != 0
-                        and abs(nd.rhs[v] - (c + gx)) <= _TOL * (c + gx)):
-                    nt = _touch(nd, v, stamp, touched, nt, True)
-    for i in range(n):  # after the live ends read their g
-        x = ss[i]
-        if nd.mask[x] == 0 and x != goal:
-            _settle(nd, heap, st, x)
-    for i in range(nt):
-        u = touched[i]
-        if nd.mask[u] == 0:
-            _settle(nd, heap, st, u)
-            continue
-        if nd.batch[u] == 1:
-            nd.rhs[u] = best_successor(occ, ms, ufree, bx, nd, st, u)[0]
-        update_vertex(ms, nd, heap, st, km, start, u)
-
-
-@njit(cache=True, inline="always")
-def _settle(nd, heap, st, u):  # pragma: no cover - compiled
-    """A node without edges: no rhs reads its g any more, so it is consistent at inf
-    without queueing it."""
-    nd.g[u] = np.inf
-    nd.rhs[u] = np.inf
-    if nd.pos[u] >= 0:
-        _remove(heap, nd.pos, st, u)
-
-
-@njit(cache=True)
-def extract(occ, ms, ufree, bx, nd, st, start, out):  # pragma: no cover - compiled
-    """Greedy descent from the start: next = argmin c(s, s') + g(s'), to the goal.
-    Writes packed keys to ``out``; returns (count, cost), count 0 when unreachable or
-    when the descent does not reach the goal within ``len(out)`` steps."""
-    s = node(bx, nd, st, start[0], start[1], start[2], False)
-    if s < 0 or nd.rhs[s] == np.inf:  # the start may stay overconsistent (fig. 4)
-        return 0, np.inf
-    goal = st[S_GOAL]
-    cost = 0.0
-    out[0] = nd.key[s]
-    k = 1
-    while s != goal:
-        if k >= out.shape[0]:
-            return 0, np.inf
-        best, v, c = best_successor(occ, ms, ufree, bx, nd, st, s)
-        if v < 0 or best == np.inf:
-            return 0, np.inf
-        cost += c
-        out[k] = nd.key[v]
-        k += 1
-        s = v
-    return k, cost

@@ -5,7 +5,10 @@ The graph, safe rule, edge costs (m) and heuristic are those of
 runs from the goal towards the start, so the start may move (:meth:`DStarLite.move_start`)
 and changed cells (:meth:`DStarLite.update`, after the world was mutated, e.g. with
 :meth:`planner.world.World.set_cells`) repair only the vertices whose edges they touch.
-Kernels and data layout: :mod:`planner.search._dstar`.
+Kernels and data layout: :mod:`planner.search._dstar`; the changes' repair, the path and
+the one compiled call a replan makes: :mod:`planner.search._dstar_run`. :meth:`update`
+only takes the changed cells; :meth:`plan` repairs, searches and extracts the path, and
+reuses the previous path from the new start on while nothing it was read from changed.
 
 Cell checks count every occupancy lookup actually made, as A* does: a node's edges cost one
 lookup of its own cell plus one per union-stencil offset (A* skips the own cell, which it
@@ -33,9 +36,9 @@ import time
 import numpy as np
 
 from planner.errors import PlanError
-from planner.keys import unpack
 from planner.search import SearchResult
 from planner.search import _dstar as dk
+from planner.search import _dstar_run as dr
 from planner.search._heap import Heap, new_heap
 from planner.search.stencils import H_GAUGE, carries_guarantee, move_set
 from planner.world import World, _cells
@@ -80,48 +83,68 @@ class DStarLite:
                             f"has {nm}")
         self.guarantee = carries_guarantee(lat, neighbors, corner_cutting)
         # affect[j]: the moves whose safe-rule cells include union offset j
-        self._affect = np.zeros(len(self._ms.union), np.int64)
+        affect = np.zeros(len(self._ms.union), np.int64)
         for m in range(nm):
             for e in self._ms.idx[self._ms.ptr[m]:self._ms.ptr[m + 1]]:
-                self._affect[e] |= np.int64(1) << np.int64(m)
+                affect[e] |= np.int64(1) << np.int64(m)
         occ = world.occupancy
         if occ.mode != 0:
             raise PlanError("D* Lite needs dense occupancy storage (a smaller world)")
-        self._bx = dk.DBox(np.full(int(np.prod(occ.dims)), -1, np.int32), occ.lo.copy(),
-                           occ.dims.copy())
+        self._bx = dk.new_box(occ.lo, occ.dims, self._ms)
         self._nd = dk.new_nodes(4096)
         self._heap = new_heap(4096)
-        self._ufree = np.empty(len(self._ms.union), np.bool_)
+        i8 = np.int64
+        self._sc = dr.DScratch(np.empty(len(self._ms.union), np.bool_), affect,
+                               np.empty(1024, i8), np.empty(1024, i8),
+                               np.empty(1024, np.bool_), np.empty(1024, i8),
+                               np.empty((4097, 3), i8), np.empty(4097, np.float64))
         self._st = np.zeros(dk.S_SIZE, np.int64)
-        self._km = 0.0
+        self._fs = np.zeros(2)  # km, the last path's cost
         self._last = self.start.copy()
         g = dk.node(self._bx, self._nd, self._st, *(int(x) for x in self.goal), True)
         self._st[dk.S_GOAL] = g
         self._nd.rhs[g] = 0.0
-        dk.update_vertex(self._ms, self._nd, self._heap, self._st, self._km, self.start, g)
+        dk.update_vertex(self._ms, self._nd, self._heap, self._st, 0.0, self.start, g)
         self._mark = (0, 0)  # lookups, expansions at the last plan
-        self._seconds = 0.0  # kernel time since the last plan
-        self._scr: dict[str, np.ndarray] = {}  # scratch kept between repairs
+        self._seconds = 0.0  # time of update() calls since the last plan
+        self._pending: list[tuple[np.ndarray, np.ndarray | bool]] = []  # since then
+        self._entry: tuple | None = None  # see _replan
+        self._fl = {True: np.ones(1024, np.bool_), False: np.zeros(1024, np.bool_)}
+        self._peak = 0
+        self._sized()
 
     # -- storage -----------------------------------------------------------------------
     def _room(self, extra: int) -> None:
+        """Room for ``extra`` more nodes, a path through every node, and the repair
+        scratch the kernel asked for (``S_NEEDT``)."""
         n = int(self._st[dk.S_N])
         cap = len(self._nd.key)
-        if n + extra <= cap:
-            return
-        while cap < n + extra:
-            cap *= 2
-        self._nd = dk.DNodes(*(_grown(a, cap, n) for a in self._nd))
-        self._heap = Heap(*(_grown(a, cap, int(self._st[dk.S_HN])) for a in self._heap))
+        if n + extra > cap:
+            while cap < n + extra:
+                cap *= 2
+            self._nd = dk.new_nodes(cap, self._nd, n)
+            self._heap = Heap(*(_grown(a, cap, int(self._st[dk.S_HN])) for a in self._heap))
+        sc = self._sc
+        if len(sc.path) < n + 1:  # keeps the stored path
+            k = int(self._st[dk.S_PLEN])
+            sc = sc._replace(path=_grown(sc.path, 2 * n + 1, k),
+                             step=_grown(sc.step, 2 * n + 1, k))
+        need = int(self._st[dk.S_NEEDT])
+        if len(sc.touched) < need:
+            sc = sc._replace(touched=np.empty(max(need, 2 * len(sc.touched)), np.int64))
+        self._sc = sc
+        self._sized()
 
-    def _scratch(self, name: str, size: int, dtype) -> np.ndarray:
-        """A scratch array of at least ``size`` items, reused between calls (a replan
-        should not pay for allocating buffers sized to the whole node table)."""
-        a = self._scr.get(name)
-        if a is None or len(a) < size:
-            a = np.empty(max(size, 2 * len(a) if a is not None else 1024), dtype)
-            self._scr[name] = a
-        return a
+    def _collect_room(self, k: int) -> None:
+        """Scratch to collect the nodes of ``k`` changed cells (each once per stencil
+        offset at most): reused between replans, grown by doubling."""
+        size = k * (len(self._ms.union) + 1)
+        sc = self._sc
+        if len(sc.ss) < size:
+            size = max(size, 2 * len(sc.ss))
+            self._sc = sc._replace(ss=np.empty(size, np.int64), old=np.empty(size, np.int64),
+                                   redo=np.empty(size, np.bool_))
+            self._sized()
 
     @property
     def nodes(self) -> int:
@@ -130,47 +153,49 @@ class DStarLite:
 
     @property
     def peak_bytes(self) -> int:
-        """Bytes of the planner's own arrays."""
-        return sum(a.nbytes for part in (self._nd, self._heap, self._bx) for a in part)
+        """Bytes of the planner's own arrays (they only grow)."""
+        return self._peak
+
+    def _sized(self) -> None:
+        """Recount :attr:`peak_bytes` (after arrays grew)."""
+        self._peak = (len(self._nd.key) * dk.NODE.itemsize
+                      + sum(a.nbytes for part in (self._heap, self._bx, self._sc)
+                            for a in part))
 
     # -- the three operations ------------------------------------------------------------
     def move_start(self, cell) -> None:
         """The robot moved to ``cell`` ((3,) int): keys stay valid through ``km``."""
         c = _cells(cell)[0]
-        self._km += float(_gauge(self._ms.hmat, c - self._last))
+        self._fs[0] += float(_gauge(self._ms.hmat, c - self._last))
         self._last = c.copy()
-        self.start = c.copy()
+        self.start[:] = c  # in place: the replan's entry point is keyed on this array
 
     def update(self, changed_cells, blocked: bool | None = None) -> None:
-        """Repair after the cells ``changed_cells`` ((K, 3) int) flipped between free and
-        blocked in the world (already mutated).
+        """Take the cells ``changed_cells`` ((K, 3) int) that flipped between free and
+        blocked in the world (already mutated); the next :meth:`plan` repairs.
 
         ``blocked`` says what they all became (as :meth:`World.set_cells` was told);
         None looks each one up (K cell checks). Nodes whose edge stencil holds a newly
         blocked cell drop the moves it serves without a lookup; nodes near a newly freed
         cell look their stencil up again; edges that flipped repair their end nodes.
+        Batches taken before one plan are repaired together, with the start and ``km``
+        of that plan (as D* Lite's main loop: move, scan, update, compute).
         """
-        c = _cells(changed_cells) if len(changed_cells) else np.zeros((0, 3), np.int64)
+        t0 = time.perf_counter()
+        c = changed_cells
+        if not (type(c) is np.ndarray and c.dtype == np.int64 and c.ndim == 2
+                and c.shape[1] == 3 and c.flags.c_contiguous and c.flags.writeable):
+            c = _cells(c) if len(c) else _NONE
+            if not c.flags.writeable:  # the kernel's signature takes writeable arrays
+                c = c.copy()
         if not len(c):
             return
-        t0 = time.perf_counter()
         if blocked is None:
             state = ~self.world.checker.cells_free(c)
             self._st[dk.S_LOOK] += len(c)
         else:
-            state = self._scratch("state", len(c), np.bool_)
-            state[:len(c)] = bool(blocked)
-        size = len(c) * (len(self._ms.union) + 1)
-        ss = self._scratch("ss", size, np.int64)
-        old = self._scratch("old", size, np.int64)
-        redo = self._scratch("redo", size, np.bool_)
-        n = dk.collect(self._ms, self._affect, self._bx, self._nd, self._st, c, state, ss,
-                       old, redo)
-        nm = len(self._ms.moves)
-        self._room(n * nm + 1)
-        dk.apply_changes(self.world.occupancy, self._ms, self._ufree, self._bx, self._nd,
-                         self._heap, self._st, self._km, self.start, ss, old, redo, n,
-                         self._scratch("touched", 2 * n * nm + 1, np.int64))
+            state = bool(blocked)  # made an array in plan()
+        self._pending.append((c, state))
         self._seconds += time.perf_counter() - t0
 
     def plan(self) -> SearchResult:
@@ -180,30 +205,68 @@ class DStarLite:
         -------
         SearchResult
             ``cell_checks``, ``expansions`` and ``seconds`` cover the work since the
-            previous :meth:`plan` (the updates included); ``generated`` counts every node
+            previous :meth:`plan` (the updates included: they are repaired here, in one
+            compiled call with the search and the path); ``generated`` counts every node
             ever created.
         """
         t0 = time.perf_counter()
-        occ = self.world.occupancy
-        st = self._st
-        first = True  # the start's own cell is looked up once, as A*'s endpoint check
+        st, pend = self._st, self._pending
+        if len(pend) == 1 and isinstance(pend[0][1], bool):
+            cells = pend[0][0]
+            state = self._flags(len(cells), pend[0][1])
+        elif pend:
+            cells = np.concatenate([p[0] for p in pend])
+            state = np.concatenate([np.full(len(c), b) if isinstance(b, bool) else b
+                                    for c, b in pend])
+        else:
+            cells, state = _NONE, _NONE_B
+        self._pending = []
+        if len(cells):
+            self._collect_room(len(cells))
+            st[dk.S_PHASE] = dr.PH_COLLECT
+        else:
+            st[dk.S_PHASE] = dr.PH_SEARCH
+        st[dk.S_CHK] = 1  # the start's own cell: one lookup, as A*'s endpoint check
         while True:
-            self._room(len(self._ms.moves) + 1)
-            done = dk.compute_path(occ, self._ms, self._ufree, self._bx, self._nd,
-                                   self._heap, st, self._km, self.start, first)
-            if done == dk.BLOCKED:
-                return self._result(None, math.inf, t0, "start cell is blocked", "blocked")
-            if done == dk.DONE:
+            done = self._replan((self.world.occupancy, self._ms, self._bx, self._nd,
+                                 self._heap, self._sc, st, self._fs, self.start, cells,
+                                 state))
+            if done != dk.GROW:
                 break
-            first = False
-        out = self._scratch("path", self.nodes + 1, np.int64)
-        k, cost = dk.extract(occ, self._ms, self._ufree, self._bx, self._nd, st, self.start,
-                             out)
-        if k == 0:
+            self._room(int(st[dk.S_NEED]))
+        if done == dk.BLOCKED:
+            return self._result(None, math.inf, t0, "start cell is blocked", "blocked")
+        j, k = int(st[dk.S_PJ]), int(st[dk.S_PK])
+        if k == j:
             return self._result(None, math.inf, t0,
                                 f"goal unreachable: explored {self.nodes} cells",
                                 "unreachable")
-        return self._result(unpack(out[:k], 3), float(cost), t0, "", "found")
+        return self._result(self._sc.path[j:k].copy(), float(self._fs[1]), t0, "", "found")
+
+    def _flags(self, k: int, value: bool) -> np.ndarray:
+        """``np.full(k, value)`` as a view of an array kept for the purpose."""
+        a = self._fl[value]
+        if len(a) < k:
+            a = self._fl[value] = np.full(max(k, 2 * len(a)), value)
+        return a[:k]
+
+    def _replan(self, args: tuple) -> int:
+        """``dr.replan(*args)`` through the compiled entry point of its signature.
+
+        numba's dispatcher types every argument on every call (~15 us for these ~45
+        arrays, most of a replan that reuses its path). The types here are fixed: the
+        planner makes all arrays but the world's occupancy and ``start``, so the entry
+        point is looked up again only when one of those two objects is replaced."""
+        occ, start = args[0], args[8]
+        disp = dr.replan
+        if not hasattr(disp, "overloads"):  # not a numba dispatcher (NUMBA_DISABLE_JIT)
+            return disp(*args)
+        if self._entry is None or occ is not self._entry[1] or start is not self._entry[2]:
+            sig = tuple(disp.typeof_pyval(a) for a in args)
+            if sig not in disp.overloads:
+                disp.compile(sig)
+            self._entry = (disp.overloads[sig].entry_point, occ, start)
+        return self._entry[0](*args)
 
     def _result(self, cells, cost, t0, why, status) -> SearchResult:
         look, exp = int(self._st[dk.S_LOOK]), int(self._st[dk.S_EXP])
@@ -218,11 +281,16 @@ class DStarLite:
                             status=status, guarantee=self.guarantee)
 
 
+_NONE = np.zeros((0, 3), np.int64)
+_NONE_B = np.zeros(0, np.bool_)
+
+
 def _gauge(hmat: np.ndarray, e: np.ndarray) -> float:
     return max(0.0, float((hmat @ e.astype(float)).max()))
 
 
 def _grown(a: np.ndarray, size: int, keep: int) -> np.ndarray:
-    b = np.empty(size, a.dtype)
+    """``a`` with room for ``size`` rows, its first ``keep`` rows kept."""
+    b = np.empty((size, *a.shape[1:]), a.dtype)
     b[:keep] = a[:keep]
     return b
