@@ -190,9 +190,10 @@ def explore(
     ExploreResult
     """
     from planner import io
-    from planner.api import _sidecar, as_obstacles, build_world, inflated_obstacles
+    from planner.api import _sidecar, as_obstacles, build_world
     from planner.search import search
     from planner.search.incremental import DStarLite
+    from planner.voxels.obstacles import inflated_obstacles
     from planner.world import _walk
 
     if isinstance(source, str | Path):  # a bundled map by name ("office"), as build_world

@@ -5,7 +5,9 @@
   sets of obstacle points (:func:`exact_inflation`) and (rotated) boxes
   (:func:`exact_box_inflation`, :func:`box_keys`);
 * :mod:`planner.voxels._kernels`, :mod:`planner.voxels._box_kernels`: compiled kernels;
-* :mod:`planner.voxels._checks`: input checks and key helpers shared by the above.
+* :mod:`planner.voxels._checks`: input checks and key helpers shared by the above;
+* :mod:`planner.voxels.obstacles`: a map's obstacles and free space as lattice cells (blocked
+  for a robot radius, meeting unknown space), the parts :func:`planner.build_world` joins.
 
 All cell geometry comes from :attr:`planner.Lattice.voronoi`.
 """
