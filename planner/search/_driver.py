@@ -117,8 +117,8 @@ def run(occ, walk, ms, start, goal, params, span: float, cap: int = 4096, *,
     ``dense=False`` keeps the search off the pooled dense slot array (a short search run
     while another search on the same grid holds it). With ``keep_going`` (a callable
     returning bool), a search still going after ``pause_at`` expansions pauses once and
-    asks it whether to go on; False stops it with :data:`RUN_STOPPED`. Short searches, most
-    of them, so never pay for the question.
+    asks it whether to go on; False stops it with :data:`RUN_STOPPED`. Most searches are
+    shorter and never pay for the question.
 
     Returns
     -------
@@ -147,7 +147,7 @@ def run(occ, walk, ms, start, goal, params, span: float, cap: int = 4096, *,
     ends = np.empty((2, 3), np.int64)
     ends[0], ends[1] = start, goal
     first = params
-    if keep_going is not None and not 0 < params.max_expansions <= pause_at:
+    if keep_going is not None and pause_at > 0 and not 0 < params.max_expansions <= pause_at:
         first = params._replace(max_expansions=pause_at)
     parts = _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, first, ends, st, cap, pcap)
     nodes, heap, slots, status = parts
