@@ -21,13 +21,12 @@ def index_limit(dim: int) -> int:
     return 1 << (BITS[dim] - 1)
 
 
-def check_range(w: np.ndarray) -> None:
-    """MapError unless the (N, d) int64 indices ``w`` are packable (:func:`index_limit`)."""
-    lim = index_limit(w.shape[1])
-    if len(w) and (w.min() < -lim or w.max() >= lim):
-        raise MapError(
-            f"lattice indices exceed +-{lim} cells per axis; use a larger cell volume"
-        )
+def check_range(lo: np.ndarray, hi: np.ndarray, dim: int) -> None:
+    """MapError unless every index between ``lo`` and ``hi`` (arrays of d-dimensional
+    indices, e.g. a box's corners or ``(w, w)`` for an index list ``w``) is packable."""
+    lim = index_limit(dim)
+    if lo.min() < -lim or hi.max() >= lim:
+        raise MapError(f"lattice indices exceed +-{lim} cells per axis; use a larger cell volume")
 
 
 def pack(indices: np.ndarray) -> np.ndarray:
@@ -37,7 +36,8 @@ def pack(indices: np.ndarray) -> np.ndarray:
         raise MapError(f"indices must have shape (N, 2) or (N, 3), got {w.shape}")
     d = w.shape[1]
     bits, lim = BITS[d], index_limit(d)
-    check_range(w)
+    if len(w):
+        check_range(w, w, d)
     key = np.zeros(len(w), dtype=np.int64)
     for j in range(d):
         key = (key << bits) | (w[:, j] + lim)

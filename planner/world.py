@@ -203,7 +203,8 @@ class World(UnknownSpace):
             raise MapError(f"radius must be a non-negative number of metres, got {radius!r}")
         self._lattice = lattice
         self._blocked = np.ascontiguousarray(b, dtype=np.int64)
-        check_range(self._blocked)  # now, not inside a kernel
+        if len(b):  # now, not inside a kernel
+            check_range(self._blocked, self._blocked, 3)
         self._bounds = bb
         self.source = source
         self.radius = r

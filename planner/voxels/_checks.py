@@ -8,7 +8,7 @@ import numpy as np
 
 from planner.budget import memory_budget
 from planner.errors import LatticeError, MapError
-from planner.keys import BITS, index_limit
+from planner.keys import BITS
 from planner.lattice import Lattice
 
 DEFAULT_BUDGET = None  # bytes of scratch + result an inflation may use: planner.budget's
@@ -93,12 +93,6 @@ def key_offsets(offsets: np.ndarray) -> np.ndarray:
     for j in range(d):
         out += offsets[:, j].astype(np.int64) << (bits * (d - 1 - j))
     return out
-
-
-def check_range(lo: np.ndarray, hi: np.ndarray, dim: int) -> None:
-    lim = index_limit(dim)
-    if lo.min() < -lim or hi.max() >= lim:
-        raise MapError(f"lattice indices exceed +-{lim} cells per axis; use a larger cell volume")
 
 
 def resolve_budget(budget: float | None) -> float:

@@ -18,7 +18,7 @@ import numpy as np
 
 from planner.budget import require
 from planner.errors import MapError
-from planner.keys import BITS, index_limit, pack, unpack
+from planner.keys import BITS, check_range, index_limit, pack, unpack
 from planner.lattice import Lattice
 from planner.voxels import _box_kernels as bk
 from planner.voxels import _kernels as vk
@@ -29,7 +29,6 @@ from planner.voxels._checks import (
     cell_diameter,
     check_lattice,
     check_radius,
-    check_range,
     grid_strides,
     key_offsets,
     offsets_within,

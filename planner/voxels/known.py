@@ -28,14 +28,13 @@ import numpy as np
 from planner import _world_kernels as wk
 from planner._jit import njit_cached
 from planner.errors import MapError
-from planner.keys import pack
+from planner.keys import check_range, pack
 from planner.lattice import Lattice
 from planner.voxels import _box_kernels as bk
 from planner.voxels import _kernels as vk
 from planner.voxels import _unknown_kernels as uk
 from planner.voxels._checks import (
     DEFAULT_BUDGET,
-    check_range,
     grid_strides,
     resolve_budget,
     unique_keys,
