@@ -241,7 +241,7 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st):
                     v1 = u1 + moves[m, 1]
                     v2 = u2 + moves[m, 2]
                     if dense:  # an allowed move's target is free, hence inside the box
-                        t = np.int64(dsl[((v0 - lo0) * d1 + (v1 - lo1)) * d2 + (v2 - lo2)]) - 1
+                        t = np.int64(dsl[base + moff[m]]) - 1
                     else:
                         t = find_slot(slots, v0, v1, v2)
                     if t == _EMPTY or npos[t] != -1:
