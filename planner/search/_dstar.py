@@ -47,7 +47,6 @@ S_PHASE, S_NC, S_NEED, S_NEEDT, S_CHK = 10, 11, 12, 13, 14
 S_PJ, S_PK = 15, 16  # the replan's path: rows [S_PJ, S_PK) of the path buffer
 S_SIZE = 17
 DONE, GROW, BLOCKED = 0, 1, 2
-BSH = 2  # block bitmap: blocks of 2**BSH cells per axis
 _TOL = 1e-9  # relative: "rhs(s) = c + g_old" tested with slack (a spare recompute is safe)
 _BIAS = 4 * _TOL  # relative: an underconsistent node's key ahead of the ties (_key1)
 
@@ -70,16 +69,15 @@ class DNodes(NamedTuple):
 
 
 class DBox(NamedTuple):
-    """Dense cell -> node map over the world's index box, and a bitmap of the blocks
-    (``2**BSH`` cells a side) within ``ext`` cells of a node with a cached edge mask: a
-    changed cell in an unmarked block lies in no cached stencil (:func:`collect` skips it
-    without touching the node map)."""
+    """Dense cell -> node map over the world's index box, and a map of the cells that lie
+    in the stencil (or are the own cell) of a node with a cached edge mask: an unmarked
+    changed cell touches no cached edge, so :func:`collect` skips it with one byte read
+    (a scan's cells mostly lie off the searched region or deep in a blocked blob)."""
 
     slot: np.ndarray  # (prod(dims),) int32 node of each cell, -1 none
     lo: np.ndarray  # (3,) int64
     dims: np.ndarray  # (3,) int64
-    blk: np.ndarray  # (prod(bdims),) uint8 block marks
-    bdims: np.ndarray  # (3,) int64 blocks per axis
+    reach: np.ndarray  # (prod(dims),) uint8 1: in a cached stencil (marks only grow)
     ext: np.ndarray  # (3,) int64 largest |union-stencil offset| per axis
     inv: np.ndarray  # (M,) int64 the move back: moves[inv[m]] = -moves[m]
 
@@ -87,13 +85,12 @@ class DBox(NamedTuple):
 def new_box(lo: np.ndarray, dims: np.ndarray, ms) -> DBox:
     """Empty node map over the box ``lo + [0, dims)`` for the move set ``ms``."""
     dims = np.asarray(dims, np.int64).copy()
-    bdims = (dims + (1 << BSH) - 1) >> BSH
     union, moves = ms.union, ms.moves
     ext = np.abs(union).max(axis=0).astype(np.int64) if len(union) else np.zeros(3, np.int64)
     back = {tuple(m): i for i, m in enumerate((-moves).tolist())}
     inv = np.array([back[tuple(m)] for m in moves.tolist()], np.int64)
     return DBox(np.full(int(np.prod(dims)), -1, np.int32), np.asarray(lo, np.int64).copy(),
-                dims, np.zeros(int(np.prod(bdims)), np.uint8), bdims, ext, inv)
+                dims, np.zeros(int(np.prod(dims)), np.uint8), ext, inv)
 
 
 #: one node's record: the fields of :class:`DNodes` and padding to a cache line
@@ -150,21 +147,6 @@ def node(bx, nd, st, v0, v1, v2, create):  # pragma: no cover - compiled
 
 
 @njit(cache=True, inline="always")
-def _mark(bx, u0, u1, u2):  # pragma: no cover - compiled
-    """Mark the blocks within ``ext`` of a node's cell (it now has a cached mask)."""
-    a0 = max(u0 - bx.ext[0] - bx.lo[0], 0) >> BSH
-    a1 = min(u0 + bx.ext[0] - bx.lo[0], bx.dims[0] - 1) >> BSH
-    b0 = max(u1 - bx.ext[1] - bx.lo[1], 0) >> BSH
-    b1 = min(u1 + bx.ext[1] - bx.lo[1], bx.dims[1] - 1) >> BSH
-    c0 = max(u2 - bx.ext[2] - bx.lo[2], 0) >> BSH
-    c1 = min(u2 + bx.ext[2] - bx.lo[2], bx.dims[2] - 1) >> BSH
-    for i in range(a0, a1 + 1):
-        for j in range(b0, b1 + 1):
-            for k in range(c0, c1 + 1):
-                bx.blk[(i * bx.bdims[1] + j) * bx.bdims[2] + k] = 1
-
-
-@njit(cache=True, inline="always")
 def _near_path(nd, st, u):  # pragma: no cover - compiled
     """The stored path's extraction read ``u`` (on the path or next to it)."""
     return nd.near[u] == st[S_PID] or nd.near[u] == -st[S_PID]
@@ -176,14 +158,19 @@ def edges(occ, ms, ufree, bx, nd, st, s):  # pragma: no cover - compiled
     if nd.mask[s] >= 0:
         return nd.mask[s]
     u0, u1, u2 = unpack3(nd.key[s])
-    _mark(bx, u0, u1, u2)
     st[S_LOOK] += 1
     m = np.int64(0)
+    reach = bx.reach
+    reach[_box(bx, u0, u1, u2)] = 1
     if occ_free(occ, u0, u1, u2):
         ust = ms.union
         nu = ust.shape[0]
         for j in range(nu):
-            ufree[j] = occ_free(occ, u0 + ust[j, 0], u1 + ust[j, 1], u2 + ust[j, 2])
+            v0, v1, v2 = u0 + ust[j, 0], u1 + ust[j, 1], u2 + ust[j, 2]
+            ufree[j] = occ_free(occ, v0, v1, v2)
+            b = _box(bx, v0, v1, v2)
+            if b >= 0:
+                reach[b] = 1
         st[S_LOOK] += nu
         for k in range(ms.moves.shape[0]):
             if move_allowed(ufree, ms.ptr, ms.idx, k):

@@ -14,12 +14,12 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
+from numba import njit, types
+from numba.experimental import structref
 
 from planner.keys import unpack3
 from planner.search._dstar import (
     BLOCKED,
-    BSH,
     DONE,
     GROW,
     S_CHK,
@@ -59,6 +59,40 @@ class DScratch(NamedTuple):
     touched: np.ndarray  # (>= 2 n moves + 1,) int64 repair scratch
     path: np.ndarray  # (>= nodes + 1, 3) int64 cells of the stored path
     step: np.ndarray  # (same,) float64 cost of the move into each path cell (m)
+
+
+@structref.register
+class _StateType(types.StructRef):
+    def preprocess_fields(self, fields):
+        return tuple((n, types.unliteral(t)) for n, t in fields)
+
+
+class ReplanState(structref.StructRefProxy):
+    """A planner's arrays (:func:`replan`'s first nine arguments) as one object.
+
+    A compiled call unboxes each array argument from its Python object; right after a
+    scan those objects are out of cache and the ~45 arrays of a replan cost ~40 us, most of
+    a replan that repairs nothing. One object costs one. Made by :func:`new_state` (cached
+    compilation); remade when an array is replaced."""
+
+
+# "counts" is the state vector ``st`` (a field named "st" would clash with the local the
+# generated constructor gives its struct)
+structref.define_proxy(ReplanState, _StateType,
+                       ["occ", "ms", "bx", "nd", "heap", "sc", "counts", "fs", "start"])
+
+
+@njit(cache=True)
+def new_state(occ, ms, bx, nd, heap, sc, st, fs, start):  # pragma: no cover - compiled
+    """:class:`ReplanState` of these arrays (shared, not copied)."""
+    return ReplanState(occ, ms, bx, nd, heap, sc, st, fs, start)
+
+
+@njit(cache=True)
+def replan_state(state, cells, blocked):  # pragma: no cover - compiled
+    """:func:`replan` with the planner's arrays from ``state`` (:class:`ReplanState`)."""
+    return replan(state.occ, state.ms, state.bx, state.nd, state.heap, state.sc,
+                  state.counts, state.fs, state.start, cells, blocked)
 
 
 @njit(cache=True)
@@ -194,9 +228,8 @@ def collect(occ, ms, affect, bx, nd, st, cells, blocked, out_s, out_old, out_red
     pid = st[S_PID]
     lo0, lo1, lo2 = bx.lo[0], bx.lo[1], bx.lo[2]
     d0, d1, d2 = bx.dims[0], bx.dims[1], bx.dims[2]
-    b1, b2 = bx.bdims[1], bx.bdims[2]
     e0, e1, e2 = bx.ext[0], bx.ext[1], bx.ext[2]
-    blk, slot, grid = bx.blk, bx.slot, occ.grid
+    reach, slot, grid = bx.reach, bx.slot, occ.grid
     # slot-map offset of each stencil node from the changed cell (cells away from the
     # box faces need no bounds checks)
     off = np.empty(nu, np.int64)
@@ -206,11 +239,12 @@ def collect(occ, ms, affect, bx, nd, st, cells, blocked, out_s, out_old, out_red
     for i in range(cells.shape[0]):
         c0, c1, c2 = cells[i, 0], cells[i, 1], cells[i, 2]
         a, b, c = c0 - lo0, c1 - lo1, c2 - lo2
+        base = (a * d1 + b) * d2 + c
+        if (a >= 0 and b >= 0 and c >= 0 and a < d0 and b < d1 and c < d2
+                and reach[base] == 0):
+            continue  # in no cached stencil
         inner = (a >= e0 and b >= e1 and c >= e2 and a < d0 - e0 and b < d1 - e1
                  and c < d2 - e2)
-        if inner and blk[((a >> BSH) * b1 + (b >> BSH)) * b2 + (c >> BSH)] == 0:
-            continue  # no cached stencil reaches this cell
-        base = (a * d1 + b) * d2 + c
         for j in range(-1, nu):
             if inner:
                 if j < 0:

@@ -108,7 +108,7 @@ class DStarLite:
         self._mark = (0, 0)  # lookups, expansions at the last plan
         self._seconds = 0.0  # time of update() calls since the last plan
         self._pending: list[tuple[np.ndarray, np.ndarray | bool]] = []  # since then
-        self._entry: tuple | None = None  # see _replan
+        self._state = None  # dr.ReplanState of the arrays below, remade when one is (_replan)
         self._fl = {True: np.ones(1024, np.bool_), False: np.zeros(1024, np.bool_)}
         self._peak = 0
         self._sized()
@@ -207,9 +207,10 @@ class DStarLite:
             ``cell_checks``, ``expansions`` and ``seconds`` cover the work since the
             previous :meth:`plan` (the updates included: they are repaired here, in one
             compiled call with the search and the path); ``generated`` counts every node
-            ever created.
+            ever created. ``seconds``, as A*'s, is the engine's own time: the compiled
+            calls (and growing arrays between them) and the lookups of an ``update``
+            told nothing, not the Python that prepares the call or builds this result.
         """
-        t0 = time.perf_counter()
         st, pend = self._st, self._pending
         if len(pend) == 1 and isinstance(pend[0][1], bool):
             cells = pend[0][0]
@@ -227,21 +228,21 @@ class DStarLite:
         else:
             st[dk.S_PHASE] = dr.PH_SEARCH
         st[dk.S_CHK] = 1  # the start's own cell: one lookup, as A*'s endpoint check
+        t0 = time.perf_counter()
         while True:
-            done = self._replan((self.world.occupancy, self._ms, self._bx, self._nd,
-                                 self._heap, self._sc, st, self._fs, self.start, cells,
-                                 state))
+            done = self._replan(cells, state)
             if done != dk.GROW:
                 break
             self._room(int(st[dk.S_NEED]))
+        self._seconds += time.perf_counter() - t0
         if done == dk.BLOCKED:
-            return self._result(None, math.inf, t0, "start cell is blocked", "blocked")
+            return self._result(None, math.inf, "start cell is blocked", "blocked")
         j, k = int(st[dk.S_PJ]), int(st[dk.S_PK])
         if k == j:
-            return self._result(None, math.inf, t0,
+            return self._result(None, math.inf,
                                 f"goal unreachable: explored {self.nodes} cells",
                                 "unreachable")
-        return self._result(self._sc.path[j:k].copy(), float(self._fs[1]), t0, "", "found")
+        return self._result(self._sc.path[j:k].copy(), float(self._fs[1]), "", "found")
 
     def _flags(self, k: int, value: bool) -> np.ndarray:
         """``np.full(k, value)`` as a view of an array kept for the purpose."""
@@ -250,31 +251,32 @@ class DStarLite:
             a = self._fl[value] = np.full(max(k, 2 * len(a)), value)
         return a[:k]
 
-    def _replan(self, args: tuple) -> int:
-        """``dr.replan(*args)`` through the compiled entry point of its signature.
-
-        numba's dispatcher types every argument on every call (~15 us for these ~45
-        arrays, most of a replan that reuses its path). The types here are fixed: the
-        planner makes all arrays but the world's occupancy and ``start``, so the entry
-        point is looked up again only when one of those two objects is replaced."""
-        occ, start = args[0], args[8]
-        disp = dr.replan
-        if not hasattr(disp, "overloads"):  # not a numba dispatcher (NUMBA_DISABLE_JIT)
-            return disp(*args)
-        if self._entry is None or occ is not self._entry[1] or start is not self._entry[2]:
-            sig = tuple(disp.typeof_pyval(a) for a in args)
+    def _replan(self, cells: np.ndarray, blocked: np.ndarray) -> int:
+        """``dr.replan`` on the planner's arrays, passed as one :class:`dr.ReplanState`
+        (made again when an array was replaced: the planner's grew, or the world's
+        occupancy struct is another object)."""
+        arrays = (self.world.occupancy, self._ms, self._bx, self._nd, self._heap, self._sc,
+                  self._st, self._fs, self.start)
+        if not hasattr(dr.replan, "overloads"):  # not a numba dispatcher (NUMBA_DISABLE_JIT)
+            return dr.replan(*arrays, cells, blocked)
+        if self._state is None or any(a is not b for a, b in zip(arrays, self._state[0],
+                                                                  strict=True)):
+            # numba's dispatcher types every argument on every call; the types are fixed
+            # here, so its compiled entry point is called directly
+            state = dr.new_state(*arrays)
+            disp = dr.replan_state
+            sig = tuple(disp.typeof_pyval(a) for a in (state, cells, blocked))
             if sig not in disp.overloads:
                 disp.compile(sig)
-            self._entry = (disp.overloads[sig].entry_point, occ, start)
-        return self._entry[0](*args)
+            self._state = (arrays, state, disp.overloads[sig].entry_point)
+        return self._state[2](self._state[1], cells, blocked)
 
-    def _result(self, cells, cost, t0, why, status) -> SearchResult:
+    def _result(self, cells, cost, why, status) -> SearchResult:
         look, exp = int(self._st[dk.S_LOOK]), int(self._st[dk.S_EXP])
         checks, expansions = look - self._mark[0], exp - self._mark[1]
         self._mark = (look, exp)
         self.world.cell_checks += checks
-        secs = self._seconds + time.perf_counter() - t0
-        self._seconds = 0.0
+        secs, self._seconds = self._seconds, 0.0
         found = cells is not None
         return SearchResult(found, cells if found else np.zeros((0, 3), np.int64), cost,
                             checks, expansions, self.nodes, secs, self.peak_bytes, why,
