@@ -71,13 +71,15 @@ class DNodes(NamedTuple):
 class DBox(NamedTuple):
     """Dense cell -> node map over the world's index box, and a map of the cells that lie
     in the stencil (or are the own cell) of a node with a cached edge mask: an unmarked
-    changed cell touches no cached edge, so :func:`collect` skips it with one byte read
-    (a scan's cells mostly lie off the searched region or deep in a blocked blob)."""
+    changed cell touches no cached edge, so :func:`collect` skips it with one bit read
+    (a scan's cells mostly lie off the searched region or deep in a blocked blob; bits,
+    not bytes: right after a scan the map is out of cache, and a cache line then covers
+    512 cells)."""
 
     slot: np.ndarray  # (prod(dims),) int32 node of each cell, -1 none
     lo: np.ndarray  # (3,) int64
     dims: np.ndarray  # (3,) int64
-    reach: np.ndarray  # (prod(dims),) uint8 1: in a cached stencil (marks only grow)
+    reach: np.ndarray  # (prod(dims) / 8,) uint8 bit set: in a cached stencil (only grows)
     ext: np.ndarray  # (3,) int64 largest |union-stencil offset| per axis
     inv: np.ndarray  # (M,) int64 the move back: moves[inv[m]] = -moves[m]
 
@@ -90,7 +92,7 @@ def new_box(lo: np.ndarray, dims: np.ndarray, ms) -> DBox:
     back = {tuple(m): i for i, m in enumerate((-moves).tolist())}
     inv = np.array([back[tuple(m)] for m in moves.tolist()], np.int64)
     return DBox(np.full(int(np.prod(dims)), -1, np.int32), np.asarray(lo, np.int64).copy(),
-                dims, np.zeros(int(np.prod(dims)), np.uint8), ext, inv)
+                dims, np.zeros((int(np.prod(dims)) + 7) // 8, np.uint8), ext, inv)
 
 
 #: one node's record: the fields of :class:`DNodes` and padding to a cache line
@@ -161,7 +163,8 @@ def edges(occ, ms, ufree, bx, nd, st, s):  # pragma: no cover - compiled
     st[S_LOOK] += 1
     m = np.int64(0)
     reach = bx.reach
-    reach[_box(bx, u0, u1, u2)] = 1
+    b = _box(bx, u0, u1, u2)
+    reach[b >> 3] |= np.uint8(1 << (b & 7))
     if occ_free(occ, u0, u1, u2):
         ust = ms.union
         nu = ust.shape[0]
@@ -170,7 +173,7 @@ def edges(occ, ms, ufree, bx, nd, st, s):  # pragma: no cover - compiled
             ufree[j] = occ_free(occ, v0, v1, v2)
             b = _box(bx, v0, v1, v2)
             if b >= 0:
-                reach[b] = 1
+                reach[b >> 3] |= np.uint8(1 << (b & 7))
         st[S_LOOK] += nu
         for k in range(ms.moves.shape[0]):
             if move_allowed(ufree, ms.ptr, ms.idx, k):

@@ -241,7 +241,7 @@ def collect(occ, ms, affect, bx, nd, st, cells, blocked, out_s, out_old, out_red
         a, b, c = c0 - lo0, c1 - lo1, c2 - lo2
         base = (a * d1 + b) * d2 + c
         if (a >= 0 and b >= 0 and c >= 0 and a < d0 and b < d1 and c < d2
-                and reach[base] == 0):
+                and (reach[base >> 3] >> (base & 7)) & 1 == 0):
             continue  # in no cached stencil
         inner = (a >= e0 and b >= e1 and c >= e2 and a < d0 - e0 and b < d1 - e1
                  and c < d2 - e2)
