@@ -108,7 +108,7 @@ class DStarLite:
         self._mark = (0, 0)  # lookups, expansions at the last plan
         self._seconds = 0.0  # time of update() calls since the last plan
         self._pending: list[tuple[np.ndarray, np.ndarray | bool]] = []  # since then
-        self._state = None  # dr.ReplanState of the arrays below, remade when one is (_replan)
+        self._state = None  # (occupancy, its ReplanState, entry point): see _call
         self._fl = {True: np.ones(1024, np.bool_), False: np.zeros(1024, np.bool_)}
         self._peak = 0
         self._sized()
@@ -157,7 +157,8 @@ class DStarLite:
         return self._peak
 
     def _sized(self) -> None:
-        """Recount :attr:`peak_bytes` (after arrays grew)."""
+        """Recount :attr:`peak_bytes` (after arrays grew); the replan state is remade."""
+        self._state = None
         self._peak = (len(self._nd.key) * dk.NODE.itemsize
                       + sum(a.nbytes for part in (self._heap, self._bx, self._sc)
                             for a in part))
@@ -228,12 +229,14 @@ class DStarLite:
         else:
             st[dk.S_PHASE] = dr.PH_SEARCH
         st[dk.S_CHK] = 1  # the start's own cell: one lookup, as A*'s endpoint check
+        call, arg = self._call()
         t0 = time.perf_counter()
         while True:
-            done = self._replan(cells, state)
+            done = call(arg, cells, state)
             if done != dk.GROW:
                 break
             self._room(int(st[dk.S_NEED]))
+            call, arg = self._call()
         self._seconds += time.perf_counter() - t0
         if done == dk.BLOCKED:
             return self._result(None, math.inf, "start cell is blocked", "blocked")
@@ -251,25 +254,29 @@ class DStarLite:
             a = self._fl[value] = np.full(max(k, 2 * len(a)), value)
         return a[:k]
 
-    def _replan(self, cells: np.ndarray, blocked: np.ndarray) -> int:
-        """``dr.replan`` on the planner's arrays, passed as one :class:`dr.ReplanState`
-        (made again when an array was replaced: the planner's grew, or the world's
-        occupancy struct is another object)."""
-        arrays = (self.world.occupancy, self._ms, self._bx, self._nd, self._heap, self._sc,
-                  self._st, self._fs, self.start)
+    def _call(self):
+        """``(f, a)``: ``f(a, cells, blocked)`` runs ``dr.replan`` on the planner's arrays.
+
+        ``a`` is a :class:`dr.ReplanState` of them (one object to unbox instead of ~45
+        arrays), made again when one was replaced (the planner's grew: ``_room`` clears
+        it; or the world's occupancy struct or ``start`` is another object); ``f`` the
+        compiled entry point of its signature (numba's dispatcher would type the
+        arguments on every call; here they are fixed: :meth:`plan` passes C-contiguous
+        (K, 3) int64 cells and (K,) bool states)."""
+        occ = self.world.occupancy
+        if self._state is not None and self._state[0] is occ and self._state[3] is self.start:
+            return self._state[2], self._state[1]
+        arrays = (occ, self._ms, self._bx, self._nd, self._heap, self._sc, self._st,
+                  self._fs, self.start)
         if not hasattr(dr.replan, "overloads"):  # not a numba dispatcher (NUMBA_DISABLE_JIT)
-            return dr.replan(*arrays, cells, blocked)
-        if self._state is None or any(a is not b for a, b in zip(arrays, self._state[0],
-                                                                  strict=True)):
-            # numba's dispatcher types every argument on every call; the types are fixed
-            # here, so its compiled entry point is called directly
-            state = dr.new_state(*arrays)
-            disp = dr.replan_state
-            sig = tuple(disp.typeof_pyval(a) for a in (state, cells, blocked))
-            if sig not in disp.overloads:
-                disp.compile(sig)
-            self._state = (arrays, state, disp.overloads[sig].entry_point)
-        return self._state[2](self._state[1], cells, blocked)
+            return (lambda a, c, b: dr.replan(*a, c, b)), arrays
+        state = dr.new_state(*arrays)
+        disp = dr.replan_state
+        sig = tuple(disp.typeof_pyval(a) for a in (state, _NONE, _NONE_B))
+        if sig not in disp.overloads:
+            disp.compile(sig)
+        self._state = (occ, state, disp.overloads[sig].entry_point, self.start)
+        return self._state[2], state
 
     def _result(self, cells, cost, why, status) -> SearchResult:
         look, exp = int(self._st[dk.S_LOOK]), int(self._st[dk.S_EXP])
