@@ -11,7 +11,7 @@ import pytest
 
 from planner.errors import PlanError
 from planner.lattice import NAMED_LATTICES, Lattice
-from planner.search import move_stencils, search
+from planner.search import incremental, move_stencils, search
 from planner.search.incremental import DStarLite
 from planner.world import World
 
@@ -48,9 +48,13 @@ def _assert_valid(world, cells, neighbors):
     return total
 
 
+@pytest.mark.parametrize("renumbered", [False, True])
 @pytest.mark.parametrize("neighbors", ["face", "full"])
 @pytest.mark.parametrize("name", NAMED_LATTICES)
-def test_dstar_lite_matches_astar_after_every_batch(name, neighbors, seed=0):
+def test_dstar_lite_matches_astar_after_every_batch(name, neighbors, renumbered, monkeypatch,
+                                                    seed=0):
+    if renumbered:  # the planner renumbers its nodes whenever their count doubles
+        monkeypatch.setattr(incremental, "_COMPACT_MIN", 1)
     rng = np.random.default_rng([zlib.crc32(f"{name}/{neighbors}".encode()), seed])
     lat = Lattice.named(name, 1.0)
     world = World(lat, np.zeros((0, 3), np.int64), [[0, 0, 0], [7, 7, 5]])
@@ -91,9 +95,13 @@ def test_dstar_lite_matches_astar_after_every_batch(name, neighbors, seed=0):
     assert checked >= 3  # most batches have a path to compare
 
 
+@pytest.mark.parametrize("renumbered", [False, True])
 @pytest.mark.parametrize("neighbors", ["face", "full"])
 @pytest.mark.parametrize("name", NAMED_LATTICES)
-def test_walking_robot_with_small_changes_near_and_far_keeps_an_optimal_path(name, neighbors):
+def test_walking_robot_with_small_changes_near_and_far_keeps_an_optimal_path(
+        name, neighbors, renumbered, monkeypatch):
+    if renumbered:
+        monkeypatch.setattr(incremental, "_COMPACT_MIN", 1)
     # A robot steps along its plan while a few cells flip per step, on the path, next to
     # it or anywhere: the plan it gets (often the rest of the previous one) is always a
     # valid path from where it stands, as short as A* from scratch.

@@ -36,6 +36,7 @@ import time
 import numpy as np
 
 from planner.errors import PlanError
+from planner.keys import unpack
 from planner.search import SearchResult
 from planner.search import _dstar as dk
 from planner.search import _dstar_run as dr
@@ -111,6 +112,7 @@ class DStarLite:
         self._state = None  # (occupancy, its ReplanState, entry point): see _call
         self._fl = {True: np.ones(1024, np.bool_), False: np.zeros(1024, np.bool_)}
         self._peak = 0
+        self._ordered = 0  # node count at the last renumbering (_compact)
         self._sized()
 
     # -- storage -----------------------------------------------------------------------
@@ -162,6 +164,38 @@ class DStarLite:
         self._peak = (len(self._nd.key) * dk.NODE.itemsize
                       + sum(a.nbytes for part in (self._heap, self._bx, self._sc)
                             for a in part))
+
+    def _compact(self) -> None:
+        """Renumber the nodes in the order of their cells in the box, dropping the rows of
+        nodes that left the node map (:func:`dr._settle`).
+
+        Searches create nodes in expansion order, scattered in memory; a scan's repair
+        then reads the rows of the nodes next to its cells, neighbours in space. In box
+        order they share pages and neighbouring cache lines. Run after a plan that at
+        least doubled the node count (the first one mostly): O(n log n) numpy, counted
+        in that plan's time."""
+        st, nd, bx = self._st, self._nd, self._bx
+        n = int(st[dk.S_N])
+        d = bx.dims
+        a = unpack(nd.key[:n], 3) - bx.lo
+        b = (a[:, 0] * d[1] + a[:, 1]) * d[2] + a[:, 2]
+        ids = np.arange(n)
+        old = ids[bx.slot[b] == ids]  # rows still in the node map
+        old = old[np.argsort(b[old], kind="stable")]
+        m = len(old)
+        new_id = np.full(n, -1, np.int64)
+        new_id[old] = np.arange(m)
+        table = dk.new_nodes(len(nd.key))
+        for dst, src in zip(table, nd, strict=True):
+            dst[:m] = src[old]
+        hn = int(st[dk.S_HN])
+        self._heap.slot[:hn] = new_id[self._heap.slot[:hn]]
+        bx.slot[b[old]] = np.arange(m, dtype=np.int32)
+        st[dk.S_GOAL] = new_id[st[dk.S_GOAL]]
+        st[dk.S_N] = m
+        self._nd = table
+        self._ordered = m
+        self._sized()
 
     # -- the three operations ------------------------------------------------------------
     def move_start(self, cell) -> None:
@@ -237,6 +271,8 @@ class DStarLite:
                 break
             self._room(int(st[dk.S_NEED]))
             call, arg = self._call()
+        if int(st[dk.S_N]) >= max(_COMPACT_MIN, 2 * self._ordered):
+            self._compact()
         self._seconds += time.perf_counter() - t0
         if done == dk.BLOCKED:
             return self._result(None, math.inf, "start cell is blocked", "blocked")
@@ -291,6 +327,7 @@ class DStarLite:
 
 
 _NONE = np.zeros((0, 3), np.int64)
+_COMPACT_MIN = 1 << 14  # nodes: below this the node table fits in cache anyway
 _NONE_B = np.zeros(0, np.bool_)
 
 
