@@ -9,7 +9,7 @@ from ``u`` is free; the touched cells of a segment do not depend on its directio
 offset, made once and redone only when a changed cell lies in that stencil.
 
 Lazy rhs: each node keeps a move ``sup`` its rhs rests on. A node that loses that move
-(or was never looked up) may hold an rhs that is too low, never too high; it stays queued
+(looked up or not) may hold an rhs that is too low, never too high; it stays queued
 with the key of that rhs, a lower bound of its true key, and :func:`compute_path`
 recomputes it when it is popped (or, for the start, before searching). Repairs after a
 scan then touch only the nodes whose stencils changed, not both ends of every lost edge.
@@ -353,8 +353,10 @@ def compute_path(occ, ms, ufree, bx, nd, heap, st, km, start, check_start):
         if k1o < k1n:  # a key from an earlier start: requeue (the tie-break is current)
             update_vertex(ms, nd, heap, st, km, start, u)
             continue
-        if (nd.mask[u] < 0 or nd.lazy[u]) and u != goal:
-            # never looked up, or lazy: its rhs may be too low; requeue it exact
+        if nd.lazy[u] and u != goal:
+            # lazy: its rhs may be too low; requeue it exact (a node never looked up has
+            # the rhs its expanded neighbour gave it, exact unless a scan since blocked
+            # that edge: then collect flagged it lazy)
             recompute_rhs(occ, ms, ufree, bx, nd, st, u)
             update_vertex(ms, nd, heap, st, km, start, u)
             continue

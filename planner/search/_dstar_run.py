@@ -217,7 +217,9 @@ def collect(occ, ms, affect, bx, nd, st, cells, blocked, out_s, out_old, out_red
     ``out_s[:n]`` with their old masks (``out_old``); returns n. A newly blocked cell at
     union offset j clears the moves ``affect[j]`` needs (all moves when it is the node's
     own cell): no lookup. A newly freed cell marks the node for a fresh lookup
-    (``out_redo``). A stencil node whose own cell is blocked has no edges to lose
+    (``out_redo``). A node never looked up whose rhs rests on a move a newly blocked cell
+    serves turns lazy (it is not collected). A stencil node whose own cell is blocked has
+    no edges to lose
     (blocked in this batch: its own cell's visit kills it; earlier: it died then), so
     away from the box faces one byte of the dense occupancy grid (``occ``, the node
     map's box) skips it without touching its row."""
@@ -257,7 +259,15 @@ def collect(occ, ms, affect, bx, nd, st, cells, blocked, out_s, out_old, out_red
                 s = node(bx, nd, st, c0, c1, c2, False)
             else:
                 s = node(bx, nd, st, c0 - ust[j, 0], c1 - ust[j, 1], c2 - ust[j, 2], False)
-            if s < 0 or nd.mask[s] < 0:
+            if s < 0:
+                continue
+            if nd.mask[s] < 0:
+                # Never looked up (g = inf): nothing reads its rhs until it is expanded,
+                # but that rhs may rest on an edge this cell blocks; flagged, it is
+                # recomputed when popped (compute_path), as a lazy node.
+                if (blocked[i] and nd.rhs[s] < np.inf and s != st[S_GOAL]
+                        and (j < 0 or nd.sup[s] < 0 or (affect[j] >> nd.sup[s]) & 1)):
+                    nd.lazy[s] = 1
                 continue
             if nd.stamp[s] != stamp:
                 nd.stamp[s] = stamp
