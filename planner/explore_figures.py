@@ -59,7 +59,7 @@ def summary_png(res, path: str | Path) -> Path:
     for a, (d, s, what) in ((ac, (res.dstar_checks, res.astar_checks, "cell checks")),
                             (at, (res.dstar_seconds, res.astar_seconds, "seconds"))):
         a.semilogy(i, s, ".", c="0.5", label="A* from scratch")
-        a.semilogy(i, d, ".", c="tab:red", label="D* Lite (update + plan)")
+        a.semilogy(i, d, ".", c="tab:red", label="D* Lite (repair + search)")
         a.set_xlabel("replan")
         a.set_title(f"{what} per replan", fontsize=9)
         a.legend(fontsize=7)
