@@ -96,6 +96,10 @@ class ExploreResult:
                                   repr=False)
     ring_ranges: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)), repr=False)
     ring_azimuths: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
+    # Per replan, the wall time of the calls a user makes (s): D* Lite's ``update`` and
+    # ``plan``, A*'s ``search`` (argument and endpoint checks, result, Python included).
+    dstar_wall_seconds: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
+    astar_wall_seconds: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
 
     @property
     def replans(self) -> int:
@@ -108,7 +112,9 @@ class ExploreResult:
         with np.errstate(divide="ignore", invalid="ignore"):
             rt = self.dstar_seconds[k] / self.astar_seconds[k]
             rc = self.dstar_checks[k] / self.astar_checks[k]
+            rw = self.dstar_wall_seconds[k] / self.astar_wall_seconds[k]
         return {"median_time_ratio": float(np.median(rt)) if len(rt) else math.nan,
+                "median_wall_ratio": float(np.median(rw)) if len(rw) else math.nan,
                 "median_checks_ratio": float(np.median(rc)) if len(rc) else math.nan,
                 "total_time_ratio": _div(self.dstar_seconds.sum(), self.astar_seconds.sum()),
                 "total_checks_ratio": _div(self.dstar_checks.sum(), self.astar_checks.sum())}
@@ -234,7 +240,7 @@ def explore(
     _warm_up(lat, neighbors, DStarLite)
     dl = DStarLite(known, s, gcell, neighbors=neighbors)
     rec = {k: [] for k in ("changed", "ds", "dc", "de", "dcost", "as", "ac", "ae", "acost",
-                           "step")}
+                           "step", "dw", "aw")}
     paths = []
     cur = s.copy()
     traj = [cur.copy()]
@@ -259,12 +265,19 @@ def explore(
             # the replans.
             a_first = len(rec["ds"]) % 2 == 1
             if a_first:
+                t0 = time.perf_counter()
                 a = _scratch_astar(search, known, cur, gcell, neighbors)
+                a_wall = time.perf_counter() - t0
+            t0 = time.perf_counter()
             dl.update(changed, blocked=True)
             r = dl.plan()
+            rec["dw"].append(time.perf_counter() - t0)
             d_secs = r.seconds
             if not a_first:
+                t0 = time.perf_counter()
                 a = _scratch_astar(search, known, cur, gcell, neighbors)
+                a_wall = time.perf_counter() - t0
+            rec["aw"].append(a_wall)
             rec["changed"].append(len(changed))
             rec["step"].append(_step)
             paths.append(lat.to_world(r.cells) if len(r.cells) else np.zeros((0, 3)))
@@ -310,6 +323,7 @@ def explore(
         seen=sensor.seen, rays=len(dirs) * len(traj), sense_seconds=sense_secs,
         radius=float(truth.radius), replan_step=arr["step"].astype(np.int64), paths=paths,
         seen_step=sensor.seen_step, ring_azimuths=sensor.ring_azimuths,
+        dstar_wall_seconds=arr["dw"].astype(float), astar_wall_seconds=arr["aw"].astype(float),
         ring_ranges=np.array(sensor.ring_ranges).reshape(len(sensor.ring_ranges),
                                                          len(sensor.ring)))
 
