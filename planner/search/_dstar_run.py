@@ -71,9 +71,9 @@ class ReplanState(structref.StructRefProxy):
     """A planner's arrays (:func:`replan`'s first nine arguments) as one object.
 
     A compiled call unboxes each array argument from its Python object; right after a
-    scan those objects are out of cache and the ~45 arrays of a replan cost ~40 us, most of
-    a replan that repairs nothing. One object costs one. Made by :func:`new_state` (cached
-    compilation); remade when an array is replaced."""
+    scan those objects are out of cache, and unboxing the ~45 arrays of a replan was much of
+    one that repairs nothing. One object is one unboxing. Made by :func:`new_state`
+    (cached compilation); remade when an array is replaced."""
 
 
 # "counts" is the state vector ``st`` (a field named "st" would clash with the local the

@@ -107,7 +107,7 @@ class DStarLite:
         self._nd.rhs[g] = 0.0
         dk.update_vertex(self._ms, self._nd, self._heap, self._st, 0.0, self.start, g)
         self._mark = (0, 0)  # lookups, expansions at the last plan
-        self._seconds = 0.0  # time of update() calls since the last plan
+        self._seconds = 0.0  # engine time of update() lookups since the last plan
         self._pending: list[tuple[np.ndarray, np.ndarray | bool]] = []  # since then
         self._state = None  # (occupancy, its ReplanState, entry point): see _call
         self._fl = {True: np.ones(1024, np.bool_), False: np.zeros(1024, np.bool_)}
@@ -216,7 +216,6 @@ class DStarLite:
         Batches taken before one plan are repaired together, with the start and ``km``
         of that plan (as D* Lite's main loop: move, scan, update, compute).
         """
-        t0 = time.perf_counter()
         c = changed_cells
         if not (type(c) is np.ndarray and c.dtype == np.int64 and c.ndim == 2
                 and c.shape[1] == 3 and c.flags.c_contiguous and c.flags.writeable):
@@ -225,13 +224,14 @@ class DStarLite:
                 c = c.copy()
         if not len(c):
             return
-        if blocked is None:
+        if blocked is None:  # lookups: engine work, timed as the next plan's
+            t0 = time.perf_counter()
             state = ~self.world.checker.cells_free(c)
+            self._seconds += time.perf_counter() - t0
             self._st[dk.S_LOOK] += len(c)
         else:
             state = bool(blocked)  # made an array in plan()
         self._pending.append((c, state))
-        self._seconds += time.perf_counter() - t0
 
     def plan(self) -> SearchResult:
         """Shortest path from the current start to the goal on the world as it is now.
