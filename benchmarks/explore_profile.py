@@ -40,7 +40,7 @@ def profile(name: str, lattice: str, query: int) -> dict:
         out = scratch(search_fn, world, cur, goal, neighbors)
         if not first:
             back = search(world, goal, cur, method="astar", neighbors=neighbors)
-            first.update(forward=out[2], backward=back.expansions)
+            first.update(forward=out[3], backward=back.expansions)
         return out
 
     DStarLite.plan, ex._scratch_astar = counted_plan, with_backward
