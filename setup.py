@@ -36,7 +36,10 @@ class BuildPyWarm(build_py):
         # The in-tree cache (``__pycache__`` beside the sources) is the one that travels with
         # the package: no NUMBA_CACHE_DIR. No .pyc files: pip writes its own.
         env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
-        env.update(PYTHONPATH=root, PYTHONDONTWRITEBYTECODE="1")
+        # pip exposes its isolated build environment (numpy, scipy, numba) through PYTHONPATH:
+        # the package root goes in front of it, never in its place.
+        path = [root, *filter(None, os.environ.get("PYTHONPATH", "").split(os.pathsep))]
+        env.update(PYTHONPATH=os.pathsep.join(path), PYTHONDONTWRITEBYTECODE="1")
         t = time.perf_counter()
         try:
             res = subprocess.run([sys.executable, "-m", "planner._warm"], cwd=root, env=env,

@@ -2,16 +2,19 @@
 
 Usage::
 
-    python benchmarks/cold_start.py --install  # build + install a wheel, first run (shipped cache)
+    python benchmarks/cold_start.py --install           # brand-new venv, pip install SRC
+    python benchmarks/cold_start.py --install editable  # brand-new venv, pip install -e SRC
     python benchmarks/cold_start.py            # no install-time cache: every kernel compiles
     python benchmarks/cold_start.py --runs 3   # warm runs to take the median of
 
 Each run is a new Python process (``python -m planner compare office``).
 
-``--install``: what a fresh install sees. ``pip wheel`` builds the checkout (in pip's
-isolated build environment, where ``setup.py`` compiles the kernels into the package's numba
-cache: :mod:`planner._warm`), ``pip install --no-deps --target`` installs it into an empty
-folder, and the command runs from there with an empty HOME and no ``NUMBA_CACHE_DIR``.
+``--install``: what a fresh install sees. A brand-new virtual environment (no packages but
+pip), ``pip install`` of a clean copy of the checkout with its dependencies from the package
+index (pip's isolated build environment runs ``setup.py``, which compiles the kernels into the
+package's numba cache: :mod:`planner._warm`), then the command from the venv's ``planner``
+script with an empty HOME and no ``NUMBA_CACHE_DIR``; last, ``python -m planner._warm --check``
+reports from numba's dispatcher statistics how many kernels were loaded and how many compiled.
 
 Default: each run has its own ``NUMBA_CACHE_DIR`` (it takes precedence over the package's
 cache); the first run starts from an empty directory: every kernel compiles, as on a machine
@@ -64,48 +67,63 @@ def import_time(cache: str | None, runs: int = 5, **kw) -> float:
     return statistics.median(float(timed(["-c", code], cache, **kw)[1]) for _ in range(runs))
 
 
-def fresh_install(runs: int) -> int:
-    """Build and install a wheel of the checkout, then time the command from it."""
+def fresh_install(runs: int, mode: str) -> int:
+    """Install the checkout into a brand-new virtual environment, as the README says, and time
+    the README's first command from it (``mode``: "wheel" = ``pip install SRC``, "editable" =
+    ``pip install -e SRC``). Dependencies come from the package index, as on a user's machine."""
     with tempfile.TemporaryDirectory(prefix="planner_install_") as tmp:
-        src, dist, site, home = (Path(tmp) / d for d in ("src", "dist", "site", "home"))
+        src, venv, home = (Path(tmp) / d for d in ("src", "venv", "home"))
         home.mkdir()
         # A clean copy: pip builds in the source folder, and an earlier build/ (with its
         # kernel cache) would make the build look cheap.
         shutil.copytree(ROOT, src, ignore=shutil.ignore_patterns(
             ".git", "build", "__pycache__", "*.egg-info", ".ci", "results", ".*cache"))
-        env = {k: v for k, v in os.environ.items() if k not in ("NUMBA_CACHE_DIR", "PYTHONPATH")}
-        pip = [sys.executable, "-m", "pip", "-q"]
+        env = {k: v for k, v in os.environ.items()
+               if k not in ("NUMBA_CACHE_DIR", "PYTHONPATH", "VIRTUAL_ENV")}
+        env.update(HOME=str(home), XDG_CACHE_HOME=str(home / ".cache"))
         t = time.perf_counter()
-        subprocess.run([*pip, "wheel", "--no-deps", "-w", str(dist), str(src)], check=True,
+        subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True, env=env)
+        py = str(venv / "bin" / "python")
+        subprocess.run([py, "-m", "pip", "install", "-q", "--upgrade", "pip"], check=True,
                        env=env)
-        build = time.perf_counter() - t
-        subprocess.run([*pip, "install", "--no-deps", "--target", str(site),
-                        *map(str, dist.glob("*.whl"))], check=True, env=env)
-        shipped = len(list(site.rglob("*.nbi")))
-        kw = dict(site=site, home=str(home))
-        imp = import_time(None, **kw)
-        cold, table = timed(COMMAND, None, **kw)
-        warm = statistics.median(timed(COMMAND, None, **kw)[0] for _ in range(max(1, runs)))
-    print(f"command: python {' '.join(COMMAND)}  (from a freshly built and installed wheel, "
-          "empty HOME, no NUMBA_CACHE_DIR, new process each)")
-    print(f"wheel build (pip wheel, isolated build env, kernels compiled into the package "
-          f"cache): {build:.0f} s; {shipped} kernel cache indexes shipped")
-    print(f"import planner: {imp:.2f} s")
+        target = ["-e", str(src)] if mode == "editable" else [str(src)]
+        subprocess.run([py, "-m", "pip", "install", "-q", *target], check=True, env=env)
+        install = time.perf_counter() - t
+        shipped = len(list((src if mode == "editable" else venv).rglob("*.nbi")))
+        planner_cmd = [str(venv / "bin" / "planner"), *COMMAND[2:]]
+
+        def run(cmd: list[str]) -> tuple[float, subprocess.CompletedProcess]:
+            t0 = time.perf_counter()
+            out = subprocess.run(cmd, capture_output=True, text=True, env=env, cwd=home)
+            if out.returncode != 0:
+                raise SystemExit(f"{' '.join(cmd)} failed ({out.returncode}): "
+                                 f"{out.stderr.strip()[-2000:]}")
+            return time.perf_counter() - t0, out
+
+        cold, first = run(planner_cmd)
+        warm = statistics.median(run(planner_cmd)[0] for _ in range(max(1, runs)))
+        _, stats = run([py, "-m", "planner._warm", "--check", *COMMAND[2:]])
+    print(f"command: planner {' '.join(COMMAND[2:])}  (brand-new venv, pip install "
+          f"{' '.join(target[:-1] + ['SRC'])}, empty HOME, no NUMBA_CACHE_DIR, new process each)")
+    print(f"venv + install with dependencies (kernels compiled into the package cache): "
+          f"{install:.0f} s; {shipped} kernel cache indexes")
     print(f"first run after install: {cold:.1f} s")
     print(f"warm run (median of {max(1, runs)}): {warm:.1f} s")
+    print(stats.stderr.strip().splitlines()[-1])
     print("\nthe first run's table:")
-    print(table.rstrip())
+    print(first.stdout.rstrip())
     return 0
 
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--runs", type=int, default=2, help="warm runs (median reported)")
-    ap.add_argument("--install", action="store_true",
-                    help="build and install a wheel first; time the command from the install")
+    ap.add_argument("--install", nargs="?", const="wheel", choices=("wheel", "editable"),
+                    help="install into a brand-new venv first (pip install SRC, or -e SRC with "
+                         "'editable'); time the command from the install")
     a = ap.parse_args(argv)
     if a.install:
-        return fresh_install(a.runs)
+        return fresh_install(a.runs, a.install)
     with tempfile.TemporaryDirectory(prefix="planner_numba_") as cache:
         imp = import_time(cache)
         cold, table = timed(COMMAND, cache)

@@ -13,7 +13,9 @@ first use as before; nothing here changes a result.
 
 Usage::
 
-    python -m planner._warm        # what the build runs; prints the seconds it took
+    python -m planner._warm                         # what the build runs; prints its seconds
+    python -m planner._warm --check compare office  # run a command, then report numba's
+                                                    # cache hits and misses; exit 1 on a miss
 """
 
 from __future__ import annotations
@@ -63,5 +65,43 @@ def _warm_explore(office: str) -> None:
             cell_volume=0.05, max_steps=200)
 
 
+def cache_stats() -> tuple[int, int, list[str]]:
+    """Cache hits, cache misses and the kernels that missed, over every planner kernel used.
+
+    Read from numba's own dispatcher statistics: a hit is a signature loaded from the on-disk
+    cache, a miss one compiled because the cache did not hold it.
+    """
+    from numba.core.dispatcher import Dispatcher
+
+    hits = misses = 0
+    missed: list[str] = []
+    for name, mod in list(sys.modules.items()):
+        if not name.startswith("planner"):
+            continue
+        for obj in vars(mod).values():
+            if isinstance(obj, Dispatcher) and obj.py_func.__module__ == name:
+                h, m = sum(obj.stats.cache_hits.values()), sum(obj.stats.cache_misses.values())
+                hits, misses = hits + h, misses + m
+                if m:
+                    missed.append(f"{name}.{obj.py_func.__qualname__}")
+    return hits, misses, missed
+
+
+def check(argv: list[str]) -> int:
+    """Run ``planner ARGV`` in this process; 0 if every kernel it used came from the cache."""
+    from planner.cli import main
+
+    t = time.perf_counter()
+    rc = main(argv)
+    secs = time.perf_counter() - t
+    hits, misses, missed = cache_stats()
+    print(f"planner {' '.join(argv)}: exit {rc}, {secs:.1f} s; numba cache: {hits} kernel "
+          f"signatures loaded, {misses} compiled" + (f" ({', '.join(missed)})" if missed else ""),
+          file=sys.stderr)
+    return 1 if rc or misses or not hits else 0
+
+
 if __name__ == "__main__":
+    if sys.argv[1:2] == ["--check"]:
+        sys.exit(check(sys.argv[2:]))
     print(f"numba kernels compiled or loaded in {warm():.1f} s", file=sys.stderr)
