@@ -83,4 +83,9 @@ def test_the_readme_results_are_spliced_from_the_run(tmp_path):
     assert text.startswith("# title") and text.endswith("more\n")
     readme.write_text("no markers")
     with pytest.raises(PlannerError, match="markers"):
-        update_readme(run, readme)
+        update_readme(run, readme)  # an existing page without markers is never overwritten
+    page = tmp_path / "benchmarks" / "results.md"
+    page.parent.mkdir()
+    update_readme(run, page)  # a new page of its own
+    assert "fewer checks (median 0.59)" in page.read_text()
+    assert "![pareto](../results/full/pareto.png)" in page.read_text()

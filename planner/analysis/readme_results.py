@@ -1,18 +1,19 @@
-"""Regenerate the README's results section from a benchmark run, so the two cannot drift.
+"""Write a results page from a benchmark run, so the page and the run cannot drift.
 
 ``planner bench`` writes ``results_section.md`` beside its ``report.md`` (the paired table
 with intervals and p-values, the sentences generated from them, the rotation spread, the
-dropped queries and the trade-off figures).  This module puts it between the markers::
+dropped queries and the trade-off figures). This module writes it to a page of its own
+(``benchmarks/results.md`` in the checkout), or, when the target already holds the markers::
 
     <!-- results:start -->
     ...generated, never edited by hand...
     <!-- results:end -->
 
-Usage::
+puts it between them. Usage::
 
-    python -m planner.analysis.readme_results results/full README.md
+    python -m planner.analysis.readme_results results/full benchmarks/results.md
 
-Figure links are rewritten relative to the README's folder.
+Figure links are rewritten relative to the target's folder.
 """
 
 from __future__ import annotations
@@ -44,7 +45,8 @@ def splice(readme: str, section: str) -> str:
 
 
 def update_readme(run_dir: str | Path, readme: str | Path) -> Path:
-    """Splice ``run_dir/results_section.md`` into ``readme`` (atomically); returns the path.
+    """Splice ``run_dir/results_section.md`` into ``readme`` (atomically; a new page when it
+    does not exist); returns the path.
 
     Raises
     ------
@@ -59,14 +61,20 @@ def update_readme(run_dir: str | Path, readme: str | Path) -> Path:
     rel = Path(os.path.relpath(run_dir.resolve(), readme.resolve().parent))
     section = re.sub(r"!\[([^\]]*)\]\(([^)/]+\.png)\)",
                      lambda m: f"![{m.group(1)}]({(rel / m.group(2)).as_posix()})", section)
-    write_text_atomic(readme, splice(readme.read_text(), section))
+    if readme.is_file():
+        text = readme.read_text()
+    else:
+        text = (f"# Benchmark results\n\nGenerated from the run in `{rel.as_posix()}` by "
+                f"`python -m planner.analysis.readme_results {rel.as_posix()} {readme.name}` "
+                f"(from this folder); never edited by hand.\n\n{START}\n{END}\n")
+    write_text_atomic(readme, splice(text, section))
     return readme
 
 
 def main(argv: list[str] | None = None) -> int:
     args = sys.argv[1:] if argv is None else argv
     if len(args) != 2:
-        print("usage: python -m planner.analysis.readme_results RUN_DIR README.md",
+        print("usage: python -m planner.analysis.readme_results RUN_DIR PAGE.md",
               file=sys.stderr)
         return 2
     try:
