@@ -19,9 +19,9 @@ import numpy as np
 
 import planner.explore as ex
 from planner.maps import load_map_info, map_path
-from planner.search import _dstar as dk
 from planner.search import search
-from planner.search.incremental import DStarLite
+from planner.search.dstar import kernel as dk
+from planner.search.dstar.lite import DStarLite
 
 
 def profile(name: str, lattice: str, query: int) -> dict:

@@ -25,7 +25,8 @@ from pathlib import Path
 
 import numpy as np
 
-from planner import api, ompl, search
+from planner import ompl, search
+from planner import planning as api
 
 ROOT = Path(__file__).resolve().parent.parent
 PLANNERS = ("rrtconnect", "rrtstar", "informedrrtstar", "bitstar", "prmstar")

@@ -215,7 +215,7 @@ def geb079(n_queries: int = 20, seed: int = 0, lattice: str = "cubic"
            ) -> tuple[World, np.ndarray] | None:
     """The real OctoMap scan geb079.bt on the cubic lattice at its native 0.08 m, with
     random free start/goal cells at least 10 m apart (None when the data is absent)."""
-    from planner.api import build_world
+    from planner.planning import build_world
 
     if not GEB079.is_file():
         return None

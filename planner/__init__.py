@@ -28,14 +28,14 @@ __version__ = "0.1.0"
 _LAZY = {
     "OccupiedVoxelList": "planner.voxels",
     "World": "planner.world",
-    "PlanResult": "planner.api",
-    "build_world": "planner.api",
-    "plan": "planner.api",
+    "PlanResult": "planner.planning",
+    "build_world": "planner.planning",
+    "plan": "planner.planning",
 }
 
 
-_SUBMODULES = ("analysis", "api", "bench", "io", "lattice", "maps", "ompl", "paths", "search",
-               "voxels", "world")
+_SUBMODULES = ("analysis", "api", "bench", "explore", "io", "lattice", "maps", "occupancy", "ompl",
+               "path", "planning", "search", "voxels", "world")
 
 
 def __getattr__(name: str):

@@ -37,7 +37,7 @@ def warm() -> float:
     more).
     """
     t0 = time.perf_counter()
-    from planner import api
+    from planner import planning as api
     from planner.analysis.compare import compare
     from planner.lattice import NAMED_LATTICES
     from planner.maps import MAPS_DIR

@@ -373,9 +373,9 @@ def _cmd_stats(a) -> int:
 
 
 def _build(a):
-    from planner import api
-    from planner._world_file import is_world_file
+    from planner import planning as api
     from planner.analysis.compare import map_defaults
+    from planner.world.file import is_world_file
 
     lattice = a.generator if a.generator is not None else a.lattice
     if is_world_file(a.map):  # a saved world: loaded, options only checked against it
@@ -414,7 +414,7 @@ def _check_dim(world, a) -> None:
 
 
 def _cmd_plan(a) -> int:
-    from planner import api
+    from planner import planning as api
     from planner.analysis import compare
 
     _check_neighbors([a.generator if a.generator is not None else a.lattice], a.neighbors,
@@ -427,7 +427,7 @@ def _cmd_plan(a) -> int:
         max_expansions=a.max_expansions,
     )
     if a.out:
-        from planner._pathfile import write_path
+        from planner.path import write_path
 
         write_path(a.out, res, world, a.start, a.goal)
     if a.plot and res.found:
@@ -437,8 +437,8 @@ def _cmd_plan(a) -> int:
 
 
 def _cmd_compare(a) -> int:
-    from planner._world_file import is_world_file, load_world
     from planner.analysis import compare
+    from planner.world.file import is_world_file, load_world
 
     lattices = list(a.lattices) + ([a.generator] if a.generator is not None else [])
     radius = a.radius
@@ -458,7 +458,7 @@ def _cmd_compare(a) -> int:
 
 
 def _cmd_world(a) -> int:
-    from planner._world_file import save_world
+    from planner.world.file import save_world
 
     world, label = _build(a)
     save_world(world, a.out)

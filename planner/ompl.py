@@ -59,7 +59,7 @@ import numpy as np
 
 from planner._guard import run_guarded
 from planner.errors import PlanError
-from planner.paths import path_length
+from planner.path import path_length
 from planner.world import ValidityChecker, World
 
 __all__ = ["PLANNERS", "ANYTIME", "OmplResult", "plan_ompl", "run_seeds", "check_seed",

@@ -74,7 +74,7 @@ def test_a_built_world_is_reused_without_rebuilding(wall, monkeypatch):
         raise AssertionError("the map was built again")
 
     monkeypatch.setattr("planner.voxels.exact_inflation", no_rebuild)
-    monkeypatch.setattr("planner.api.build_world", no_rebuild)
+    monkeypatch.setattr("planner.planning.build_world", no_rebuild)
     again = planner.plan(world, START, GOAL)
     assert again.length == first.length
     other = planner.plan(world, GOAL, START, neighbors="face+1")
@@ -178,7 +178,7 @@ def test_radius_guarantee_in_every_mode_that_claims_it(lattice):
     """Every neighbour set x corner cutting x method: a path with guarantee=True keeps the
     radius from every obstacle point (exact segment-point distance); only corner cutting
     over moves that cross other cells drops the guarantee."""
-    from planner.search.stencils import move_stencils
+    from planner.search.moves import move_stencils
 
     rng = np.random.default_rng(7)
     pts = rng.uniform(0.0, 4.0, (60, 3))

@@ -108,7 +108,7 @@ def test_office_exploration_animates_one_frame_per_replan(tmp_path):
 
 
 def test_animation_frames_are_subsampled_evenly_keeping_first_and_last():
-    from planner.explore_figures import frame_replans
+    from planner.explore.figures import frame_replans
 
     assert list(frame_replans(4, 150)) == [0, 1, 2, 3]
     f = frame_replans(1000, 150)

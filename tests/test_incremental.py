@@ -11,8 +11,9 @@ import pytest
 
 from planner.errors import PlanError
 from planner.lattice import NAMED_LATTICES, Lattice
-from planner.search import incremental, move_stencils, search
-from planner.search.incremental import DStarLite
+from planner.search import move_stencils, search
+from planner.search.dstar import lite as incremental
+from planner.search.dstar.lite import DStarLite
 from planner.world import World
 
 

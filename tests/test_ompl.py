@@ -17,8 +17,9 @@ import pytest
 
 pytest.importorskip("ompl")
 
-from planner import api, search  # noqa: E402
 from planner import ompl as baseline  # noqa: E402
+from planner import planning as api  # noqa: E402
+from planner import search  # noqa: E402
 from planner.errors import PlanError  # noqa: E402
 
 RADIUS = 0.3
@@ -198,7 +199,7 @@ def test_invalid_seed_is_refused_before_any_work(door, seed, monkeypatch):
     monkeypatch.setattr(baseline, "run_guarded", no_work)
     with pytest.raises(PlanError, match="seed must be an integer"):
         baseline.plan_ompl(w, START, GOAL, seed=seed)
-    monkeypatch.setattr("planner.api.build_world", no_work)
+    monkeypatch.setattr("planner.planning.build_world", no_work)
     with pytest.raises(PlanError, match="seed must be an integer"):
         api.plan(_wall_points(), START, GOAL, method="ompl:rrtconnect", seed=seed)
 
@@ -234,7 +235,7 @@ def test_worker_dies_with_its_caller(tmp_path):
     script.write_text(
         "import multiprocessing, sys, threading, time\n"
         "import numpy as np\n"
-        "from planner import api, ompl\n"
+        "from planner import ompl\nfrom planner import planning as api\n"
         "pts = np.array([[5.0, 5.0, 5.0]])\n"
         "w = api.build_world(pts, 'cubic', cell_volume=0.008, radius=0.3,\n"
         "                    bounds=[[0, 0, 0], [10, 10, 10]])\n"

@@ -14,6 +14,7 @@ from hypothesis import strategies as st
 from planner import search as S
 from planner.errors import PlanError
 from planner.lattice import NAMED_LATTICES, Lattice
+from planner.search.run import PROBE_AFTER
 from planner.world import World
 
 DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
@@ -117,7 +118,7 @@ def test_segment_cells_contain_sampled_cells(name):
 def _touched_brute(lat, a, b, s):
     """Every cell in an index box around the segment whose closed Voronoi cell (widened by
     the walk's tolerance) meets it: the walk's clip test, evaluated for each candidate."""
-    from planner._world_kernels import _SEG_TOL
+    from planner.occupancy.grid import _SEG_TOL
 
     g, rel = lat.generator, lat.relevant_vectors
     rhs = 0.5 * (rel * rel).sum(1)
@@ -352,7 +353,7 @@ def test_hash_storage_gives_same_results():
 def test_dense_and_paged_node_maps_agree(name, monkeypatch):
     """The dense cell -> node array (reused and cleared between searches) and the paged map
     give the same searches, repeated searches on one world included."""
-    from planner.search import _driver
+    from planner.search.astar import driver as _driver
 
     world, s, g = _random_world(name, 3, n=6)
     methods = ("astar", "dijkstra", "lazy-theta")
@@ -415,7 +416,7 @@ def test_a_goal_sealed_in_a_small_pocket_is_unreachable_after_a_short_search():
     w, s, g = _sealed_goal_world(wall=2)  # 27 free cells around the goal
     r = S.search(w, s, g)
     # the start's component is 200,000 cells: the search stops long before exhausting it
-    assert r.status == "unreachable" and 0 < r.expansions <= S.PROBE_AFTER
+    assert r.status == "unreachable" and 0 < r.expansions <= PROBE_AFTER
     assert r.reason == "goal unreachable: its free space is 27 cells, closed off from the start"
 
 
@@ -441,8 +442,9 @@ def test_unreachable_and_found_statuses():
 def test_every_lattice_shares_one_compiled_kernel():
     """Every array the kernels get has one numba type on every lattice (MCC's generator is
     not C-contiguous and once forced a second compilation)."""
-    from planner._world_kernels import free_many
-    from planner.search import _astar, _los
+    from planner.occupancy.grid import free_many
+    from planner.search import _los
+    from planner.search.astar import kernel as _astar
 
     for name in NAMED_LATTICES:
         for budget in ({}, {"dense_budget": 0}):

@@ -273,7 +273,7 @@ def test_aligned_boxes_do_not_grow():
 
 
 def unpack_keys(keys, dim):
-    from planner.keys import unpack
+    from planner.occupancy.keys import unpack
 
     return unpack(keys, dim).tolist()
 

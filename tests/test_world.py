@@ -74,7 +74,7 @@ def test_octomap_leaves_are_inflated_once_exactly():
         exact = exact_box_inflation(boxes - sizes[:, None] / 2, boxes + sizes[:, None] / 2,
                                     w.lattice, 0.15)
         assert w.n_blocked == len(exact), name
-        assert np.array_equal(np.unique(planner.keys.pack(w.blocked)), exact.keys), name
+        assert np.array_equal(np.unique(planner.occupancy.keys.pack(w.blocked)), exact.keys), name
 
 
 @pytest.mark.skipif(not GEB.is_file(), reason="geb079.bt not present")
@@ -160,7 +160,7 @@ def test_saved_world_round_trip_and_mismatches(tmp_path):
     obst = _room()
     w = planner.build_world(obst, "bcc", cell_volume=0.04**3, radius=0.03)
     out = tmp_path / "room.npz"
-    planner._world_file.save_world(w, out)
+    planner.world.file.save_world(w, out)
     back = planner.build_world(out)
     assert back.lattice == w.lattice and back.lattice.name == "bcc"
     # out-of-bounds cells are never free, so the file keeps the in-bounds ones only
@@ -232,7 +232,7 @@ def test_saved_2d_world_keeps_planar_moves(tmp_path):
     yaml = _ros_map(tmp_path)
     w = planner.build_world(yaml, "hex2d", cell_volume=0.03**2, radius=0.05)
     out = tmp_path / "room2d.npz"
-    planner._world_file.save_world(w, out)
+    planner.world.file.save_world(w, out)
     back = planner.build_world(out)
     assert back.dim == 2 and back.lattice.neighbors("full").shape == (6, 3)
     assert back.n_blocked == _in_bounds_count(w, w.blocked)
@@ -272,7 +272,7 @@ def test_cli_world_round_trip_and_path_file(tmp_path, capsys):
                  str(path), "--shortcut"]) == 0
     rec = json.loads(path.read_text())
     assert rec["map"] == "room.yaml" and rec["frame"] == "map" and rec["lattice"] == "square"
-    assert rec["map_sha256"] == planner._world_file.sha256(yaml)
+    assert rec["map_sha256"] == planner.world.file.sha256(yaml)
     assert rec["radius"] == 0.05 and rec["cell_volume"] == 0.0009 and rec["dim"] == 2
     assert rec["start"] == [-0.7, 0.0] and rec["goal"] == [0.3, 0.3]
     assert rec["unknown_cells"] == 0 and rec["unknown_policy"] == "blocked"

@@ -8,10 +8,10 @@ import pytest
 
 import planner
 from planner.io import Obstacles
-from planner.keys import pack, unpack
 from planner.lattice import NAMED_LATTICES
+from planner.occupancy.keys import pack, unpack
 from planner.voxels import exact_box_inflation, inflation_stencil
-from planner.voxels.known import unknown_box_keys
+from planner.voxels.unknown import unknown_box_keys
 
 RES = 0.1
 SHIFT = 0.013  # the voxel grid does not start at the origin

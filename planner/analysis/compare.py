@@ -119,7 +119,7 @@ def compare(
     ``unknown`` is the unknown-space policy of :func:`planner.build_world` (None: the map's
     default); each row reports the unknown cells its paths cross.
     """
-    from planner import api
+    from planner import planning as api
 
     side = read_sidecar(map_path)
     if start is not None and goal is not None:
@@ -182,7 +182,7 @@ def _smoothed_length(world, res) -> float:
     """Length (m) after line-of-sight shortcutting (A*/Dijkstra cell paths); any-angle and
     OMPL paths are their own smoothed path."""
     from planner import search
-    from planner.paths import path_length
+    from planner.path import path_length
 
     if res.method not in ("astar", "dijkstra") or len(res.cells) < 3:
         return float(res.length)

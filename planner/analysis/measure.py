@@ -18,8 +18,8 @@ import numpy as np
 from scipy.optimize import minimize
 
 from planner.analysis.tables import format_table
-from planner.keys import pack
 from planner.lattice import NAMED_LATTICES, PAPER_DELTAS, Lattice
+from planner.occupancy.keys import pack
 
 __all__ = [
     "NAMED",

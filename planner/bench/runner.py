@@ -23,7 +23,7 @@ import numpy as np
 from planner.bench.queries import sample_queries, scenario_queries
 from planner.bench.suite import Suite
 from planner.errors import PlannerError
-from planner.paths import path_length
+from planner.path import path_length
 
 _WORLDS: dict = {}
 _CLEARANCE: dict = {}
@@ -79,7 +79,8 @@ def run_task(task: dict) -> list[dict]:
 
     A plain function of plain data so that it pickles to processes and Dask workers.
     """
-    from planner import api, search
+    from planner import planning as api
+    from planner import search
     from planner.analysis.metadata import row_commit
 
     if task["method"] == "explore":  # a robot sensing its way, not one planned path

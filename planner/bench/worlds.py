@@ -33,7 +33,7 @@ class FreeSpace:
     """
 
     def __init__(self, obst):
-        from planner.io._validate import fill_boxes
+        from planner.io.validate import fill_boxes
 
         sizes = obst.free_box_sizes
         step = float(obst.resolution or sizes.min())
@@ -76,7 +76,7 @@ class MapFrame:
 
 def map_frame(map_path: str) -> MapFrame:
     """Load a map and its world box as :func:`planner.build_world` would choose it."""
-    from planner.api import as_obstacles, map_box
+    from planner.planning import as_obstacles, map_box
 
     obst = as_obstacles(map_path)
     bounds = map_box(map_path, obst)
@@ -107,7 +107,7 @@ def rotated_world(map_path: str, lattice: str, cell_volume: float, radius: float
     planner.World
         In the map's own frame, bounds the map's box.
     """
-    from planner.api import build_world
+    from planner.planning import build_world
 
     return build_world(map_path, rotated_lattice(lattice, cell_volume, quaternion),
                        radius=radius)
@@ -127,7 +127,7 @@ def cached_world(cache_dir: str | None, map_path: str, lattice: str, cell_volume
     from pathlib import Path
 
     from planner.fsutil import atomic_path
-    from planner.keys import pack, unpack
+    from planner.occupancy.keys import pack, unpack
     from planner.world import World
 
     if cache_dir is None:

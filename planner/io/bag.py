@@ -15,9 +15,9 @@ from pathlib import Path
 import numpy as np
 
 from planner.errors import MapError
-from planner.io._obstacles import Obstacles
-from planner.io._validate import finite_points, no_return_mask
+from planner.io.obstacles import Obstacles
 from planner.io.scans import quaternion_matrix
+from planner.io.validate import finite_points, no_return_mask
 
 CLOUD_TYPE = "sensor_msgs/msg/PointCloud2"
 TF_TYPE = "tf2_msgs/msg/TFMessage"

@@ -7,9 +7,9 @@ from pathlib import Path
 import numpy as np
 
 from planner.errors import MapError
-from planner.io._obstacles import Obstacles
-from planner.io._validate import cloud, finite_points
 from planner.io.bag import first_line, require
+from planner.io.obstacles import Obstacles
+from planner.io.validate import cloud, finite_points
 
 
 def read_las(p: Path) -> Obstacles:

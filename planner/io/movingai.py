@@ -9,7 +9,7 @@ import numpy as np
 
 from planner.errors import MapError
 from planner.io._files import loadtxt, read_text
-from planner.io._obstacles import Obstacles, Scenarios
+from planner.io.obstacles import Obstacles, Scenarios
 
 # Largest grid side accepted: beyond it coordinates no longer fit int64 products, and no
 # benchmark map comes near it.

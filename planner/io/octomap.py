@@ -15,7 +15,7 @@ from numba import njit
 
 from planner.errors import MapError
 from planner.io._files import header_lines, read_bytes
-from planner.io._obstacles import Obstacles
+from planner.io.obstacles import Obstacles
 
 _MAGIC = "# Octomap OcTree binary file"
 _DEPTH = 16

@@ -13,8 +13,8 @@ from numba import njit
 
 from planner.errors import MapError
 from planner.io._files import header_lines, loadtxt, read_bytes
-from planner.io._obstacles import Obstacles
-from planner.io._validate import cloud
+from planner.io.obstacles import Obstacles
+from planner.io.validate import cloud
 
 _PCD_TYPES = {("F", 4): "f4", ("F", 8): "f8", ("I", 1): "i1", ("I", 2): "i2", ("I", 4): "i4",
               ("I", 8): "i8", ("U", 1): "u1", ("U", 2): "u2", ("U", 4): "u4", ("U", 8): "u8"}

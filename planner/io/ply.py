@@ -14,8 +14,8 @@ import numpy as np
 from planner.errors import MapError
 from planner.fsutil import atomic_path
 from planner.io._files import header_lines, loadtxt, read_bytes
-from planner.io._obstacles import Obstacles
-from planner.io._validate import cloud
+from planner.io.obstacles import Obstacles
+from planner.io.validate import cloud
 
 _TYPES = {"char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1", "short": "i2",
           "int16": "i2", "ushort": "u2", "uint16": "u2", "int": "i4", "int32": "i4",

@@ -19,7 +19,7 @@ import numpy as np
 
 from planner.errors import MapError
 from planner.io._files import decode_text, read_bytes
-from planner.io._obstacles import Obstacles
+from planner.io.obstacles import Obstacles
 
 _MODES = ("trinary", "scale", "raw")
 

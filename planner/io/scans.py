@@ -14,8 +14,8 @@ import numpy as np
 
 from planner.errors import MapError
 from planner.io._files import read_text
-from planner.io._obstacles import Obstacles
-from planner.io._validate import finite_points, no_return_mask
+from planner.io.obstacles import Obstacles
+from planner.io.validate import finite_points, no_return_mask
 
 
 def merge_scans(scans: list[np.ndarray], poses) -> np.ndarray:

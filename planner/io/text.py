@@ -8,8 +8,8 @@ import numpy as np
 
 from planner.errors import MapError
 from planner.io._files import check_file, loadtxt, read_text
-from planner.io._obstacles import Obstacles
-from planner.io._validate import cloud
+from planner.io.obstacles import Obstacles
+from planner.io.validate import cloud
 
 
 def read_xyz(p: Path, compression: str | None = None, budget: int | None = None) -> Obstacles:

@@ -15,7 +15,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from planner._jit import njit_cached
+from planner._numba import njit_cached
 
 
 class Quantizer(NamedTuple):

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from planner.lattice import Lattice
+from planner.lattice.lattice import Lattice
 
 __all__ = ["PlanarPrism", "planar_prism"]
 

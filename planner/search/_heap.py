@@ -20,7 +20,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from planner._jit import njit_cached
+from planner._numba import njit_cached
 
 __all__ = ["Heap", "new_heap", "push", "pop", "decrease_key", "sift_up", "sift_down"]
 

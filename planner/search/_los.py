@@ -1,5 +1,5 @@
 """Line of sight between cell centres (numba): the exact segment walk of the validity
-checker (:mod:`planner._world_kernels`) on reusable scratch, and greedy path shortcutting.
+checker (:mod:`planner.occupancy.grid`) on reusable scratch, and greedy path shortcutting.
 
 Two cells see each other iff every cell whose closed Voronoi cell the centre-to-centre
 segment touches is free (the same test as a motion check of :class:`planner.world.
@@ -16,8 +16,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from planner._jit import njit_cached
-from planner._world_kernels import (
+from planner._numba import njit_cached
+from planner.occupancy.grid import (
     _SEG_TOL,
     _free,
     occ_free,

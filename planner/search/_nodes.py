@@ -7,11 +7,11 @@ keys. Neighbouring cells share a page, so a lookup is usually a cached-page hit 
 nearby load: memory stays proportional to the region the search touches, with near-dense
 locality.
 
-On a dense occupancy grid whose box fits ``planner.search._driver.DENSE_SLOT_BUDGET`` the
+On a dense occupancy grid whose box fits ``planner.search.astar.driver.DENSE_SLOT_BUDGET`` the
 map is instead one int32 per grid cell (``SlotMap.dense``, one load per lookup), reused
 across the searches on that grid and cleared at the touched cells after each.
 
-Both are fixed-size inside the kernels; the driver (:func:`planner.search._driver.run`)
+Both are fixed-size inside the kernels; the driver (:func:`planner.search.astar.driver.run`)
 doubles them when a kernel asks (``RUN_GROW``).
 """
 
@@ -21,9 +21,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from planner._jit import njit_cached
-from planner._world_kernels import mix64
-from planner.keys import pack3, unpack3
+from planner._numba import njit_cached
+from planner.occupancy.grid import mix64
+from planner.occupancy.keys import pack3, unpack3
 
 _EMPTY = -1
 

@@ -16,11 +16,11 @@ NX_NODE_CAP = 1_000_000
 
 def search_networkx(world, s: np.ndarray, gl: np.ndarray, ms, cap: int | None = None):
     """A* (or Dijkstra when ``ms.hkind`` is 0) from cell ``s`` to ``gl`` ((3,) int64) over
-    the graph of allowed moves of :class:`~planner.search.stencils.MoveSet` ``ms``, built by
+    the graph of allowed moves of :class:`~planner.search.moves.MoveSet` ``ms``, built by
     BFS over the start's free component (at most ``cap`` cells, default 1,000,000)."""
     import networkx as nx
 
-    from planner.search import SearchResult
+    from planner.search.run import SearchResult
 
     cap = cap or NX_NODE_CAP
     t0 = time.perf_counter()

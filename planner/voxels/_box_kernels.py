@@ -2,7 +2,7 @@
 
 A box is given by its centre ``C`` (world, metres) and half sizes ``H`` in a frame whose
 axes are the columns of a rotation ``R`` shared by all boxes: ``{C + R x : |x| <= H}``.
-Cell geometry travels as a :class:`planner.voxels._kernels.CellPolytope` expressed in the
+Cell geometry travels as a :class:`planner.voxels.kernels.CellPolytope` expressed in the
 boxes' frame (so a box is axis-aligned there).
 
 * :func:`overlap_keys` / :func:`overlap_mark`: cells whose Voronoi cell overlaps a box with
@@ -21,7 +21,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from planner._jit import njit_cached
+from planner._numba import njit_cached
 from planner.lattice import Lattice
 from planner.voxels._checks import REL_TOL, cell_diameter, offsets_within
 

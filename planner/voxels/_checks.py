@@ -8,8 +8,8 @@ import numpy as np
 
 from planner.budget import memory_budget
 from planner.errors import LatticeError, MapError
-from planner.keys import BITS
 from planner.lattice import Lattice
+from planner.occupancy.keys import BITS
 
 DEFAULT_BUDGET = None  # bytes of scratch + result an inflation may use: planner.budget's
 REL_TOL = 1e-9  # geometric tolerance, relative to the cell diameter

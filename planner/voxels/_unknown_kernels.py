@@ -4,7 +4,7 @@ Two grids travel together: ``known`` (uint8, C order over a voxel index box ``vd
 which voxels of a map's grid some occupied or free box covers, and ``grid`` (uint8, C order
 over a lattice index box starting at ``glo`` with ``strides``) collects cells (bit 1:
 meets unknown space). Cell centres are computed as ``G w`` in the order
-:func:`planner.voxels.known.cells_in_box` uses; where another summation order (numpy's
+:func:`planner.voxels.unknown.cells_in_box` uses; where another summation order (numpy's
 ``w @ G.T``) could round to the other side of a voxel face or a bounds face, the kernels
 hand the cell back to the caller (``border``) instead of deciding it.
 """
@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 
-from planner._jit import njit_cached
+from planner._numba import njit_cached
 
 
 @njit_cached

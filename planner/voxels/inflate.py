@@ -18,10 +18,10 @@ import numpy as np
 
 from planner.budget import require
 from planner.errors import MapError
-from planner.keys import BITS, check_range, index_limit, pack, unpack
 from planner.lattice import Lattice
+from planner.occupancy.keys import BITS, check_range, index_limit, pack, unpack
 from planner.voxels import _box_kernels as bk
-from planner.voxels import _kernels as vk
+from planner.voxels import kernels as vk
 from planner.voxels._checks import (
     DEFAULT_BUDGET,
     REL_TOL,
@@ -36,7 +36,7 @@ from planner.voxels._checks import (
     resolve_budget,
     unique_keys,
 )
-from planner.voxels._list import OccupiedVoxelList
+from planner.voxels.voxel_list import OccupiedVoxelList
 
 __all__ = ["box_keys", "exact_box_inflation", "exact_inflation", "inflation_stencil",
            "stencil_inflation"]

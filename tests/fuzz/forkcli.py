@@ -77,9 +77,9 @@ def serve() -> None:
     import matplotlib.pyplot  # noqa: F401 - warm: the bench and --plot import it
 
     import planner.analysis.compare  # noqa: F401
-    import planner.api  # noqa: F401
     import planner.bench.session  # noqa: F401
     import planner.cli  # noqa: F401
+    import planner.planning  # noqa: F401
 
     print(json.dumps({"ready": True}), flush=True)
     for line in sys.stdin:

@@ -11,7 +11,6 @@ import weakref
 import numpy as np
 
 from planner.lattice import Lattice
-from planner.search import _astar
 from planner.search._heap import Heap, new_heap
 from planner.search._los import new_scratch
 from planner.search._nodes import (
@@ -29,7 +28,8 @@ from planner.search._nodes import (
     rehash,
     trace_path,
 )
-from planner.world import _walk
+from planner.search.astar import kernel as _astar
+from planner.world.world import _walk
 
 
 def _grown(a: np.ndarray, size: int, keep: int) -> np.ndarray:

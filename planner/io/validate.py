@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from planner.errors import MapError
-from planner.io._obstacles import Obstacles
+from planner.io.obstacles import Obstacles
 
 # Coordinates beyond this (m) are corrupt values, not places: they would overflow every
 # lattice index downstream.  Geodetic coordinates (UTM, ECEF) stay far below it.

@@ -1,6 +1,6 @@
 """The search kernel (numba): A* / Dijkstra over lattice cells, with the any-angle parent
-rules of :mod:`planner.search._theta` for Theta* and Lazy Theta*. Resumable: the driver
-(:mod:`planner.search._driver`) grows the arrays when the kernel asks.
+rules of :mod:`planner.search.astar.theta` for Theta* and Lazy Theta*. Resumable: the driver
+(:mod:`planner.search.astar.driver`) grows the arrays when the kernel asks.
 """
 
 from __future__ import annotations
@@ -9,9 +9,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from planner._jit import njit_cached
-from planner._world_kernels import _free, mix64
-from planner.keys import pack3, unpack3
+from planner._numba import njit_cached
+from planner.occupancy.grid import _free, mix64
+from planner.occupancy.keys import pack3, unpack3
 from planner.search import _heap
 from planner.search._los import cubic_walk, is_cubic, sight
 from planner.search._nodes import (
@@ -29,8 +29,8 @@ from planner.search._nodes import (
     local,
     new_page,
 )
-from planner.search._theta import LAZY_THETA, THETA, euclid
-from planner.search.stencils import H_EUCLID, H_GAUGE, MAX_BITS, move_allowed
+from planner.search.astar.theta import LAZY_THETA, THETA, euclid
+from planner.search.moves import H_EUCLID, H_GAUGE, MAX_BITS, move_allowed
 
 _EMPTY = -1
 RUN_EXHAUSTED, RUN_FOUND, RUN_LIMIT, RUN_GROW, RUN_BUDGET = 0, 1, 2, 3, 4

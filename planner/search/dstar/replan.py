@@ -17,8 +17,8 @@ import numpy as np
 from numba import njit, types
 from numba.experimental import structref
 
-from planner.keys import unpack3
-from planner.search._dstar import (
+from planner.occupancy.keys import unpack3
+from planner.search.dstar.kernel import (
     BLOCKED,
     DONE,
     GROW,
@@ -49,7 +49,7 @@ PH_COLLECT, PH_APPLY, PH_SEARCH, PH_PATH = 0, 1, 2, 3
 
 
 class DScratch(NamedTuple):
-    """Arrays a replan reuses (sized by :class:`planner.search.incremental.DStarLite`)."""
+    """Arrays a replan reuses (sized by :class:`planner.search.dstar.lite.DStarLite`)."""
 
     ufree: np.ndarray  # (U,) bool one node's stencil lookups
     affect: np.ndarray  # (U,) int64 moves whose safe-rule cells include union offset j
@@ -312,7 +312,7 @@ def apply_changes(occ, ms, ufree, bx, nd, heap, st, km, start, ss, old, redo, n,
 
     Lazy rhs: a node never looked up (mask -1: generated, never expanded, g = inf) is not
     repaired when an edge it may rest on is lost; its rhs can then be too low, never too
-    high, until :func:`planner.search._dstar.compute_path` recomputes it before expanding
+    high, until :func:`planner.search.dstar.kernel.compute_path` recomputes it before expanding
     it (and the start's before searching). Each queued node's key is a lower bound of its
     true one, so the search stops no earlier than it should.
     """

@@ -3,15 +3,15 @@
 The robot (radius ``r``) starts at a cell of an empty *known* world (unknown space treated as
 free, the classic assumption) and walks its current D* Lite path one lattice move at a time.
 After every move it senses, blocks the newly seen obstacles in the known world and, when
-anything changed, repairs the plan with :class:`planner.search.incremental.DStarLite`. Each
+anything changed, repairs the plan with :class:`planner.search.dstar.lite.DStarLite`. Each
 replan is also solved from scratch with A* on the same map state in the same process, and
 the two costs must agree (counted as ``mismatches``).
 
-Sensor: :mod:`planner.sensor` (exact rays through the lattice against the true map's
+Sensor: :mod:`planner.explore.sensor` (exact rays through the lattice against the true map's
 occupied cells; a hit reveals the obstacles of the cell it stops in).
 
 Known map: the revealed obstacles, inflated for the radius by the same rule as the true
-world (:func:`planner.api.inflated_obstacles`: points exactly, boxes grown by the radius),
+world (:func:`planner.planning.inflated_obstacles`: points exactly, boxes grown by the radius),
 only around the newly revealed ones, so the known blocked cells are a subset of the true
 world's. Hence a move the robot takes is safe on what it knew, and a goal unreachable in
 the known world is unreachable in the true one. Every executed move is also walked in the
@@ -29,8 +29,8 @@ from pathlib import Path
 import numpy as np
 
 from planner.errors import MapError, PlanError
+from planner.explore.sensor import Sensor, cast_rays, ray_directions
 from planner.lattice import Lattice
-from planner.sensor import Sensor, cast_rays, ray_directions
 from planner.world import World
 
 __all__ = ["ExploreResult", "explore", "ray_directions", "cast_rays"]
@@ -135,15 +135,15 @@ class ExploreResult:
         """Summary figure (PNG): top view with the true and the seen obstacles and the
         trajectory; per-replan cell checks and times of D* Lite and A*. Written atomically.
         """
-        from planner.explore_figures import summary_png
+        from planner.explore.figures import summary_png
 
         return summary_png(self, path)
 
     def animate(self, path: str | Path, max_frames: int = 150, fps: float = 6.0) -> Path:
         """Animated GIF of the run, one frame per replan (evenly subsampled to at most
         ``max_frames``): observed area, seen obstacles, trajectory, current plan, goal
-        (:func:`planner.explore_figures.animate_gif`). Written atomically."""
-        from planner.explore_figures import animate_gif
+        (:func:`planner.explore.figures.animate_gif`). Written atomically."""
+        from planner.explore.figures import animate_gif
 
         return animate_gif(self, path, max_frames=max_frames, fps=fps)
 
@@ -197,11 +197,11 @@ def explore(
     ExploreResult
     """
     from planner import io
-    from planner.api import _sidecar, as_obstacles, build_world
+    from planner.planning import _sidecar, as_obstacles, build_world
     from planner.search import search
-    from planner.search.incremental import DStarLite
-    from planner.voxels.obstacles import inflated_obstacles
-    from planner.world import _walk
+    from planner.search.dstar.lite import DStarLite
+    from planner.voxels.from_map import inflated_obstacles
+    from planner.world.world import _walk
 
     if isinstance(source, str | Path):  # a bundled map by name ("office"), as build_world
         from planner.maps import resolve

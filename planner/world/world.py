@@ -12,7 +12,7 @@ Occupancy storage (chosen per world, see :attr:`World.storage`):
   cell centre. Memory proportional to the number of blocked cells.
 
 Both live in a typed :class:`Occupancy` struct of plain numpy arrays read by the numba
-kernels (:mod:`planner._world_kernels`). :attr:`World.checker` (a :class:`ValidityChecker`)
+kernels (:mod:`planner.occupancy.grid`). :attr:`World.checker` (a :class:`ValidityChecker`)
 owns it with the segment-walk data: lattice search, shortcutting and the OMPL baseline all
 check states and motions through it. It is built lazily and dropped when pickling (OMPL
 ships the checker itself to its worker process).
@@ -24,15 +24,15 @@ from functools import lru_cache
 
 import numpy as np
 
-from planner import _world_kernels as wk
-from planner._world_kernels import Occupancy, Walk
 from planner.errors import MapError, PlanError
-from planner.io._obstacles import UNKNOWN_POLICIES
-from planner.keys import check_range, pack
+from planner.io.obstacles import UNKNOWN_POLICIES
 from planner.lattice import Lattice
 from planner.lattice._quantize import Quantizer
+from planner.occupancy import grid as wk
+from planner.occupancy.grid import Occupancy, Walk
+from planner.occupancy.keys import check_range, pack
 from planner.voxels._checks import unique_keys
-from planner.world_unknown import UnknownSpace
+from planner.world.unknown import UnknownSpace
 
 __all__ = ["World", "DENSE_BUDGET", "Occupancy", "ValidityChecker", "Walk", "as_point"]
 

@@ -25,14 +25,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from planner import _world_kernels as wk
-from planner._jit import njit_cached
+from planner._numba import njit_cached
 from planner.errors import MapError
-from planner.keys import check_range, pack
 from planner.lattice import Lattice
+from planner.occupancy import grid as wk
+from planner.occupancy.keys import check_range, pack
 from planner.voxels import _box_kernels as bk
-from planner.voxels import _kernels as vk
 from planner.voxels import _unknown_kernels as uk
+from planner.voxels import kernels as vk
 from planner.voxels._checks import (
     DEFAULT_BUDGET,
     grid_strides,
@@ -306,7 +306,7 @@ def unknown_box_space(boxes: np.ndarray, box_sizes: np.ndarray, free_boxes: np.n
     unsure = np.empty(len(out), dtype=bool)
     m = uk.cells_near(grid, glo, dims, g, box[0], box[1], single, eps, out, unsure)
     out, unsure = out[:m], unsure[:m]
-    if unsure.any():  # decided as planner.api does, on lat.to_world
+    if unsure.any():  # decided as planner.planning does, on lat.to_world
         c = lat.to_world(out[unsure])
         keep = np.ones(m, dtype=bool)
         keep[unsure] = np.all((c >= box[0]) & (c <= box[1]), axis=1)
@@ -346,7 +346,7 @@ def ray_free_keys(points: np.ndarray, origins: np.ndarray, point_origin: np.ndar
     ndarray, shape (F,), int64
         Sorted unique keys.
     """
-    from planner.world import _c, _walk
+    from planner.world.world import _c, _walk
 
     if lattice.dim != 3:
         raise MapError(f"ray casting needs a 3D lattice, got {lattice.dim}D")

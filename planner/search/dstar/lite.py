@@ -1,12 +1,12 @@
 """Incremental replanning: D* Lite over the lattice graph, for a robot that moves and senses.
 
 The graph, safe rule, edge costs (m) and heuristic are those of
-``planner.search.search(..., method="astar")`` (:mod:`planner.search.stencils`); the search
+``planner.search.search(..., method="astar")`` (:mod:`planner.search.moves`); the search
 runs from the goal towards the start, so the start may move (:meth:`DStarLite.move_start`)
 and changed cells (:meth:`DStarLite.update`, after the world was mutated, e.g. with
 :meth:`planner.world.World.set_cells`) repair only the vertices whose edges they touch.
-Kernels and data layout: :mod:`planner.search._dstar`; the changes' repair, the path and
-the one compiled call a replan makes: :mod:`planner.search._dstar_run`. :meth:`update`
+Kernels and data layout: :mod:`planner.search.dstar.kernel`; the changes' repair, the path and
+the one compiled call a replan makes: :mod:`planner.search.dstar.replan`. :meth:`update`
 only takes the changed cells; :meth:`plan` repairs, searches and extracts the path, and
 reuses the previous path from the new start on while nothing it was read from changed.
 
@@ -36,13 +36,13 @@ import time
 import numpy as np
 
 from planner.errors import PlanError
-from planner.keys import unpack
-from planner.search import SearchResult
-from planner.search import _dstar as dk
-from planner.search import _dstar_run as dr
+from planner.occupancy.keys import unpack
 from planner.search._heap import Heap, new_heap
-from planner.search.stencils import H_GAUGE, carries_guarantee, move_set
-from planner.world import World, _cells
+from planner.search.dstar import kernel as dk
+from planner.search.dstar import replan as dr
+from planner.search.moves import H_GAUGE, carries_guarantee, move_set
+from planner.search.run import SearchResult
+from planner.world.world import World, _cells
 
 __all__ = ["DStarLite"]
 

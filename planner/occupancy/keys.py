@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from planner._jit import njit_cached
+from planner._numba import njit_cached
 from planner.errors import MapError
 
 BITS = {2: 31, 3: 21}

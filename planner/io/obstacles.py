@@ -170,7 +170,7 @@ class Obstacles:
         ndarray, shape (P, d), float64
             Metres; ``boxes`` itself when every box has the same size.
         """
-        from planner.io._validate import fill_boxes
+        from planner.io.validate import fill_boxes
 
         return fill_boxes(self.boxes, self.box_sizes, self.resolution)
 
@@ -185,7 +185,7 @@ class Obstacles:
         n_outliers : int
             Points left out (see :func:`planner.io.robust_extent`).
         """
-        from planner.io._validate import robust_extent
+        from planner.io.validate import robust_extent
 
         half = self.box_sizes[:, None] / 2
         parts = [self.points, self.boxes - half, self.boxes + half]

@@ -16,7 +16,7 @@ def _cells_near(keys: np.ndarray, lat: Lattice, bounds: np.ndarray) -> np.ndarra
     """Indices (N, 3) of the cells of packed ``keys`` whose centre lies within a covering
     radius of the bounds box (m, (2, 3)), unpacked in chunks: a large radius dilates
     unknown space far past the box, and only cells in it can ever be searched."""
-    from planner.keys import unpack
+    from planner.occupancy.keys import unpack
 
     lo, hi = bounds[0] - lat.covering_radius, bounds[1] + lat.covering_radius
     parts = [np.zeros((0, 3), dtype=np.int64)]
@@ -40,8 +40,8 @@ def unknown_space(obst, lat: Lattice, bounds: np.ndarray, radius: float, planar:
     """The (U, 3) cells meeting unknown space (:func:`_unknown_keys`) and, when unknown
     space is blocked, the (N, 3) cells it blocks near the bounds (:func:`_cells_near`;
     grid maps: less the ``occupied`` ones, (M, 3), blocked already)."""
-    from planner.keys import unpack
-    from planner.voxels.known import unknown_box_space, unknown_inflation
+    from planner.occupancy.keys import unpack
+    from planner.voxels.unknown import unknown_box_space, unknown_inflation
 
     if obst.origins is None and len(obst.free_boxes):  # a grid map: on dense grids
         lo, hi, res = _box_region(obst, lat, bounds, radius, planar)
@@ -70,8 +70,8 @@ def _box_region(obst, lat: Lattice, bounds: np.ndarray, radius: float, planar: b
 def _unknown_keys(obst, lat: Lattice, bounds: np.ndarray, radius: float, planar: bool
                   ) -> np.ndarray:
     """Keys of the cells meeting unknown space over :func:`unknown_region`."""
-    from planner.voxels import exact_inflation
-    from planner.voxels.known import ray_free_keys, unknown_box_keys, unknown_cell_keys
+    from planner.voxels.inflate import exact_inflation
+    from planner.voxels.unknown import ray_free_keys, unknown_box_keys, unknown_cell_keys
 
     lo, hi = unknown_region(lat, bounds, radius)
     parts = []
@@ -101,8 +101,9 @@ def inflated_obstacles(obst, lattice: Lattice, radius: float):
     -------
     OccupiedVoxelList
     """
-    from planner.voxels import OccupiedVoxelList, exact_box_inflation, exact_inflation
     from planner.voxels._checks import unique_keys
+    from planner.voxels.inflate import exact_box_inflation, exact_inflation
+    from planner.voxels.voxel_list import OccupiedVoxelList
 
     keys = []
     if len(obst.points):

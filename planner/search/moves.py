@@ -30,10 +30,10 @@ from typing import NamedTuple
 
 import numpy as np
 
-from planner._jit import njit_cached
-from planner._world_kernels import Occupancy, segment_walk
+from planner._numba import njit_cached
 from planner.lattice import Lattice
-from planner.world import _walk
+from planner.occupancy.grid import Occupancy, segment_walk
+from planner.world.world import _walk
 
 __all__ = ["MoveSet", "move_allowed", "move_set", "move_stencils", "move_heuristic",
            "carries_guarantee"]

@@ -19,7 +19,7 @@ import numpy as np
 from planner.errors import PlanError
 from planner.fsutil import atomic_path
 
-__all__ = ["headings", "path_record", "write_path"]
+__all__ = ["headings", "path_length", "path_record", "write_path"]
 
 _DIGITS = 6
 
@@ -51,7 +51,7 @@ def path_record(res, world, start, goal) -> dict:
     digest = getattr(world, "source_sha256", "") or ""
     src_file = getattr(world, "source_file", "")
     if not digest and src_file and Path(src_file).is_file():
-        from planner._world_file import sha256
+        from planner.world.file import sha256
 
         digest = sha256(src_file)
     pts = path[:, :2] if world.dim == 2 else path
@@ -93,3 +93,17 @@ def write_path(path: str, res, world, start, goal) -> None:
             w = csv.writer(f)
             w.writerow(rec["waypoint_columns"])
             w.writerows(rec["waypoints"])
+
+
+def path_length(path: np.ndarray, empty: float = math.nan) -> float:
+    """Length (m) of a polyline ``path`` of shape (K, d); ``empty`` when K < 2.
+
+    >>> path_length(np.array([[0.0, 0, 0], [3, 4, 0], [3, 4, 1]]))
+    6.0
+    >>> path_length(np.zeros((1, 3)), empty=0.0)
+    0.0
+    """
+    p = np.asarray(path, dtype=float)
+    if len(p) < 2:
+        return float(empty)
+    return float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum())

@@ -1,8 +1,8 @@
 """The occupied voxel list: storage, membership, construction from points and boxes, files.
 
-An :class:`OccupiedVoxelList` is a sorted array of unique packed keys (:mod:`planner.keys`),
-8 bytes per occupied cell, queried with ``np.searchsorted``. Keys sort lexicographically by
-index, so the list is also a sorted index list.
+An :class:`OccupiedVoxelList` is a sorted array of unique packed keys
+(:mod:`planner.occupancy.keys`), 8 bytes per occupied cell, queried with
+``np.searchsorted``. Keys sort lexicographically by index, so the list is also a sorted index list.
 
 Robot-radius inflation (:meth:`OccupiedVoxelList.inflate`) and the exact (tight) sets for
 points and boxes live in :mod:`planner.voxels.inflate`.
@@ -33,8 +33,8 @@ import numpy as np
 
 from planner.errors import MapError
 from planner.fsutil import file_mode
-from planner.keys import BITS, index_limit, pack, unpack
 from planner.lattice import Lattice
+from planner.occupancy.keys import BITS, index_limit, pack, unpack
 from planner.voxels._checks import (
     DEFAULT_BUDGET,
     as_indices,
@@ -54,8 +54,8 @@ VERSION = 1
 class OccupiedVoxelList:
     """A set of occupied lattice cells.
 
-    Storage: a sorted array of unique int64 packed keys (:mod:`planner.keys`), **8 bytes per
-    occupied cell** at rest (:attr:`nbytes`); membership is a binary search
+    Storage: a sorted array of unique int64 packed keys (:mod:`planner.occupancy.keys`),
+    **8 bytes per occupied cell** at rest (:attr:`nbytes`); membership is a binary search
     (``np.searchsorted``), O(log M) per query, vectorised.
 
     Parameters

@@ -1,6 +1,6 @@
 """Compiled (numba) kernels of :mod:`planner.voxels`, dimension-generic (2D and 3D).
 
-Cells are addressed either by packed keys (:mod:`planner.keys`) or, inside a dense scratch
+Cells are addressed either by packed keys (:mod:`planner.occupancy.keys`) or, inside a dense scratch
 grid over an index box, by flat C-order positions ``sum((w - lo) * strides)``. A lattice
 offset ``delta`` is then a constant flat offset, so dilation is a 1D loop.
 
@@ -15,7 +15,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from planner._jit import njit_cached
+from planner._numba import njit_cached
 
 
 class CellPolytope(NamedTuple):

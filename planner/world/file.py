@@ -6,8 +6,8 @@ File format (numpy ``.npz``, uncompressed for a fast load; written atomically):
 * ``generator`` (3, 3) float64 (m) and ``lattice`` (its name, ``""`` for a custom one);
 * ``blocked`` (M, 3) int16 or int32 (the smallest that holds them): the distinct in-bounds
   blocked cells (inflated for ``radius``; under the ``"blocked"`` policy unknown space too),
-  and ``unknown`` (U,) int64: sorted packed keys (:func:`planner.keys.pack`) of the in-bounds
-  cells meeting unknown space. Free cells are the in-bounds cells in neither list (not
+  and ``unknown`` (U,) int64: sorted packed keys (:func:`planner.occupancy.keys.pack`) of the
+  in-bounds cells meeting unknown space. Free cells are the in-bounds cells in neither list (not
   stored: they are the bulk of the box). Cells out of bounds are never free, so a path
   touches none of them and leaving them out changes no plan and no count;
 * ``bounds`` (2, 3) float64 (m), ``radius`` (m), ``unknown_policy``;
@@ -64,7 +64,7 @@ def is_world_file(path) -> bool:
 
 def save_world(world, path: str | os.PathLike) -> None:
     """Write ``world`` (a :class:`planner.World`) to ``path`` (``.npz``) atomically."""
-    from planner.keys import pack
+    from planner.occupancy.keys import pack
     from planner.voxels._checks import unique_keys
 
     src = world.source or ""
@@ -72,7 +72,7 @@ def save_world(world, path: str | os.PathLike) -> None:
     path_of_source = getattr(world, "source_file", "") or src
     if not digest and path_of_source and Path(path_of_source).is_file():
         digest = sha256(path_of_source)
-    from planner.keys import unpack
+    from planner.occupancy.keys import unpack
 
     blocked = unpack(unique_keys(pack(world.blocked)), 3)
     blocked = blocked[world.in_bounds(blocked)]
@@ -107,7 +107,7 @@ def load_world(path: str | os.PathLike):
         Not a saved world, another format version, or a damaged file.
     """
     from planner.lattice import Lattice
-    from planner.world import World
+    from planner.world.world import World
 
     p = Path(path)
     try:

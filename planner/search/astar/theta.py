@@ -6,7 +6,7 @@ neighbour when it is generated and links the neighbour to that parent when it ca
 Lazy Theta* (``anyangle`` 2) assumes the sight line and verifies it once, when the node is
 expanded, falling back to its best closed lattice neighbour (SetVertex).
 Both use the Euclidean heuristic and the exact walk of :mod:`planner.search._los`. The
-parent rules are written out in the kernel (:func:`planner.search._astar.search_run`):
+parent rules are written out in the kernel (:func:`planner.search.astar.kernel.search_run`):
 helpers taking the structs were not inlined there and cost more than an A* expansion.
 """
 
@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from planner._jit import njit_cached
+from planner._numba import njit_cached
 
 THETA, LAZY_THETA = 1, 2
 

@@ -24,9 +24,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from planner._jit import njit_cached
-from planner.keys import pack3
+from planner._numba import njit_cached
 from planner.lattice import _quantize as qk
+from planner.occupancy.keys import pack3
 
 
 class Occupancy(NamedTuple):

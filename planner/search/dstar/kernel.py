@@ -1,7 +1,7 @@
 """D* Lite kernels (numba): the optimised version of Koenig & Likhachev (2002, fig. 4), with
 ``km``, searching from the goal towards a moving start.
 
-Graph: the lattice search's (:mod:`planner.search.stencils`). The undirected edge between
+Graph: the lattice search's (:mod:`planner.search.moves`). The undirected edge between
 ``u`` and ``u + moves[m]`` exists iff ``u`` is free and every safe-rule cell of move ``m``
 from ``u`` is free; the touched cells of a segment do not depend on its direction, so
 ``c(u, v) = c(v, u)``. Each node caches its edges as a bit mask over the moves (``mask``,
@@ -20,9 +20,9 @@ first key ``k1`` (on a grid of 1e-9 move lengths), ties broken by ``tb`` descend
 other way, by the smaller k2; that expands every node of the equal-cost region between goal
 and start, which on a lattice is most of it).
 Nodes live in a table in creation order, found through a dense slot map over the world's
-index box. The kernels never grow arrays: :class:`planner.search.incremental.DStarLite`
+index box. The kernels never grow arrays: :class:`planner.search.dstar.lite.DStarLite`
 makes room before each call (``GROW`` asks for more). Repair after changed cells, path
-extraction and the one call per replan: :mod:`planner.search._dstar_run`.
+extraction and the one call per replan: :mod:`planner.search.dstar.replan`.
 """
 
 from __future__ import annotations
@@ -32,13 +32,13 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from planner._world_kernels import occ_free
-from planner.keys import pack3, unpack3
+from planner.occupancy.grid import occ_free
+from planner.occupancy.keys import pack3, unpack3
 from planner.search._heap import push, sift_down, sift_up
-from planner.search.stencils import move_allowed
+from planner.search.moves import move_allowed
 
 # int64 state vector: node count, heap size, expansions, lookups, update stamp, goal slot;
-# the stored path (:mod:`planner.search._dstar_run`): its id, whether it is still valid, its
+# the stored path (:mod:`planner.search.dstar.replan`): its id, whether it is still valid, its
 # length and the start's index in it; the replan's phase, collected nodes, room it needs
 # (nodes, repair scratch) and whether the start's own cell is still to be checked.
 S_N, S_HN, S_EXP, S_LOOK, S_STAMP, S_GOAL = 0, 1, 2, 3, 4, 5

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from planner.keys import pack, unpack
+from planner.occupancy.keys import pack, unpack
 
 __all__ = ["UnknownSpace"]
 
@@ -42,7 +42,7 @@ class UnknownSpace:
         radius of unknown space), *unknown* (free to plan through only under the ``"free"``
         policy; this test) or *free* (observed free, or a plain cloud's non-occupied space).
         """
-        from planner.world import _cells
+        from planner.world.world import _cells
 
         w = _cells(indices)
         if not len(self._unknown_keys) or not len(w):

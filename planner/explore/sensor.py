@@ -15,10 +15,10 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from planner._world_kernels import Occupancy, occ_free, walk_on, walk_scratch
 from planner.errors import PlanError
-from planner.keys import pack
 from planner.lattice import Lattice
+from planner.occupancy.grid import Occupancy, occ_free, walk_on, walk_scratch
+from planner.occupancy.keys import pack
 
 __all__ = ["Sensor", "cast_rays", "ray_directions"]
 
@@ -120,7 +120,7 @@ class Sensor:
 
     def __init__(self, points: np.ndarray, box_sizes: np.ndarray | None, lattice: Lattice,
                  walk, dirs: np.ndarray, reach: float):
-        from planner._world_kernels import build_key_set
+        from planner.occupancy.grid import build_key_set
 
         self.points, self.boxes = points, box_sizes is not None
         if self.boxes:

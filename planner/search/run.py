@@ -1,0 +1,419 @@
+"""Graph search over lattice cells: A*, Dijkstra, Theta*, Lazy Theta*, path shortcutting.
+
+Nodes are lattice cells, edges the offsets ``lattice.neighbors(neighbors)``, edge cost the
+Euclidean distance between cell centres (m). The movement rule, the radius guarantee and
+the heuristic are described in :mod:`planner.search.moves`.
+
+Layout: :mod:`~planner.search.moves` (move sets, safe-rule cells, heuristic),
+:mod:`~planner.search._heap` (binary heap kernels), :mod:`~planner.search._nodes` (node
+table, cell -> slot map), :mod:`~planner.search.astar.kernel` (the kernel),
+:mod:`~planner.search.astar.theta` (any-angle parent rules), :mod:`~planner.search._los` (line
+of sight, shortcutting), :mod:`~planner.search.reference` (networkx backend).
+
+Timing: :attr:`SearchResult.seconds` is the kernel time only; the first search in a process
+first compiles or loads the kernels (:func:`warm_up`, reported as
+:attr:`SearchResult.compile_seconds`).
+
+Budget: every search is bounded. ``max_expansions`` (default: the memory budget divided by
+the bytes a node costs, :data:`planner.search._nodes.BYTES_PER_NODE`) stops it with status
+``"budget"``; the memory budget defaults to an eighth of the physical memory
+(:func:`default_memory_budget`).
+
+Examples
+--------
+>>> import numpy as np
+>>> from planner.lattice import Lattice
+>>> from planner.world import World
+>>> w = World(Lattice.named("cubic", 1.0), [[2, 2, 2]], [[0, 0, 0], [4, 4, 4]])
+>>> r = search(w, [0, 0, 0], [4, 4, 4])
+>>> r.status, round(r.cost, 4), r.guarantee
+('found', 8.2925, True)
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from planner import budget as _budget
+from planner.errors import PlanError
+from planner.search._los import new_scratch, shortcut_kernel
+from planner.search._nodes import BYTES_PER_NODE, ST_EXP, ST_LOOK, ST_N
+from planner.search.astar import driver as _driver
+from planner.search.astar import kernel as _astar
+from planner.search.astar.kernel import SearchParams
+from planner.search.moves import (
+    H_EUCLID,
+    H_GAUGE,
+    H_ZERO,
+    carries_guarantee,
+    move_heuristic,
+    move_set,
+    move_stencils,
+)
+from planner.world.world import World, _cells
+
+__all__ = ["SearchResult", "search", "search_many", "shortcut", "warm_up", "move_stencils",
+           "move_heuristic", "METHODS", "carries_guarantee", "default_memory_budget",
+           "default_max_expansions"]
+
+METHODS = ("astar", "dijkstra", "theta", "lazy-theta")
+_ANYANGLE = {"astar": 0, "dijkstra": 0, "theta": 1, "lazy-theta": 2}
+_HKIND = {"astar": H_GAUGE, "dijkstra": H_ZERO, "theta": H_EUCLID, "lazy-theta": H_EUCLID}
+MEMORY_SHARE = _budget.MEMORY_SHARE  # of physical memory, the default memory budget
+
+
+def default_memory_budget() -> int:
+    """Bytes a search may use by default: the one memory budget of :mod:`planner.budget`
+    (``PLANNER_MEMORY_BUDGET`` / ``--memory-budget``, else an eighth of the physical
+    memory)."""
+    return _budget.memory_budget()
+
+
+def default_max_expansions(memory_budget: int | None = None) -> int:
+    """Expansions allowed within ``memory_budget`` bytes (default
+    :func:`default_memory_budget`): the node budget ``budget // BYTES_PER_NODE``."""
+    b = default_memory_budget() if memory_budget is None else int(memory_budget)
+    return max(1, b // BYTES_PER_NODE)
+
+
+@dataclass
+class SearchResult:
+    """Outcome of one search.
+
+    Attributes
+    ----------
+    found : bool
+    cells : ndarray, shape (K, 3), int64
+        Path cells from start to goal (any-angle methods: only the turning cells).
+        Empty when not found.
+    cost : float
+        Path length between cell centres (m); ``inf`` when not found.
+    cell_checks : int
+        Occupancy lookups made by this search (each actual lookup counted once).
+    expansions : int
+        Nodes removed from the open list (the goal included).
+    generated : int
+        Distinct nodes created (start included).
+    seconds : float
+        Wall time of the search (numba backend: the kernel calls; networkx: build + search).
+    peak_bytes : int
+        Peak size of the search's own arrays (node table, heap, slot map, scratch).
+    reason : str
+        Why no path was found ("" when found).
+    status : str
+        ``"found"``, ``"unreachable"`` (the start's free component is exhausted) or
+        ``"budget"`` (stopped by ``max_expansions`` / ``max_nodes``).
+    guarantee : bool
+        Whether the path carries the radius guarantee
+        (:func:`planner.search.moves.carries_guarantee`).
+    compile_seconds : float
+        Time spent compiling or loading the search kernels before this search (its first
+        in the process; 0 after), never part of ``seconds`` (:func:`warm_up`).
+    """
+
+    found: bool
+    cells: np.ndarray
+    cost: float
+    cell_checks: int
+    expansions: int
+    generated: int
+    seconds: float
+    peak_bytes: int
+    reason: str = ""
+    extra: dict = field(default_factory=dict)
+    status: str = "found"
+    guarantee: bool = True
+    compile_seconds: float = 0.0
+
+
+_WARM: list[float] = []
+
+
+def warm_up() -> float:
+    """Compile (or load from numba's on-disk cache) every search kernel once per process, on
+    a tiny world, so that no search times the JIT. :func:`search` calls it first; callers
+    that report times may call it up front.
+
+    Returns
+    -------
+    float
+        Seconds it took (0.0 once done in this process).
+    """
+    if _WARM:
+        return 0.0
+    _WARM.append(0.0)  # before the searches below, which call warm_up again
+    t0 = time.perf_counter()
+    from planner.lattice import Lattice
+    from planner.search._nodes import new_slots, rehash
+
+    w = World(Lattice.named("cubic", 1.0), np.array([[1, 1, 1]]), [[0, 0, 0], [3, 3, 3]])
+    for method in ("astar", "lazy-theta"):
+        search(w, [0, 0, 0], [3, 3, 2], method=method)
+    rehash(new_slots(1), 0)  # the driver's slot-map growth
+    _WARM[0] = time.perf_counter() - t0
+    return _WARM[0]
+
+
+def _limit(value, name: str) -> int:
+    if value is None:
+        return 0
+    if (isinstance(value, bool) or not isinstance(value, int | np.integer) or value <= 0
+            or value >= 2**63):
+        raise PlanError(f"{name} must be a positive integer below 2**63, got {value!r}")
+    return int(value)
+
+
+def search(
+    world: World,
+    start_cell: np.ndarray,
+    goal_cell: np.ndarray,
+    *,
+    method: str = "astar",
+    neighbors: str = "full",
+    corner_cutting: bool = False,
+    backend: str = "numba",
+    max_nodes: int | None = None,
+    max_expansions: int | None = None,
+    memory_budget: int | None = None,
+) -> SearchResult:
+    """Shortest path between two cells.
+
+    Parameters
+    ----------
+    world : World
+    start_cell, goal_cell : array_like of int, shape (3,)
+        Lattice indices; both must be free (else PlanError naming which, where, and the
+        nearest free cell: :meth:`World.endpoint_cell`).
+    method : {"astar", "dijkstra", "theta", "lazy-theta"}
+    neighbors : str
+        ``lattice.neighbors`` kind: ``face``, ``full``, ``face+k``, ``full+k``.
+    corner_cutting : bool
+        False: the safe rule (:mod:`planner.search.moves`); True: only the target cell
+        is checked (no radius guarantee unless the move set makes both rules equal).
+    backend : {"numba", "networkx"}
+        ``networkx`` (A*/Dijkstra only) builds the explicit free-cell graph of the start's
+        component (at most ``max_nodes`` or 1,000,000 cells) and runs
+        ``networkx.astar_path``: a slow readable reference.
+    max_nodes : int, optional
+        Give up (status "budget") once this many nodes exist.
+    max_expansions : int, optional
+        Give up (status "budget") after this many expansions. Default:
+        :func:`default_max_expansions` of ``memory_budget``.
+    memory_budget : int, optional
+        Bytes the search may use (default :func:`default_memory_budget`); also caps the
+        nodes created.
+
+    Returns
+    -------
+    SearchResult
+        Lookups are also added to ``world.cell_checks``.
+    """
+    if method not in METHODS:
+        raise PlanError(f"unknown method {method!r}; expected one of {', '.join(METHODS)}")
+    if backend not in ("numba", "networkx"):
+        raise PlanError(f"unknown backend {backend!r}; expected numba or networkx")
+    compile_s = warm_up()
+    max_nodes = _limit(max_nodes, "max_nodes")
+    budget_nodes = default_max_expansions(_limit(memory_budget, "memory_budget") or None)
+    max_exp = _limit(max_expansions, "max_expansions") or budget_nodes
+    s = world.endpoint_cell(start_cell, "start")
+    gl = world.endpoint_cell(goal_cell, "goal")
+    lat = world.lattice
+    guarantee = carries_guarantee(lat, neighbors, corner_cutting)
+    ms = move_set(lat, neighbors, corner_cutting, _HKIND[method])
+    anyangle = _ANYANGLE[method]
+    if backend == "networkx":
+        if anyangle:
+            raise PlanError("the networkx backend supports astar and dijkstra only")
+        from planner.search.reference import search_networkx
+
+        res = search_networkx(world, s, gl, ms, max_nodes or None)
+        res.guarantee = guarantee
+        return res
+    node_cap = min(max_nodes, budget_nodes) if max_nodes else budget_nodes
+    res, look = _run(world, s, gl, ms, SearchParams(anyangle, node_cap, max_exp), max_nodes)
+    world.cell_checks += look
+    res.guarantee, res.compile_seconds = guarantee, compile_s
+    return res
+
+
+def _run(world: World, s: np.ndarray, gl: np.ndarray, ms, params: SearchParams,
+         max_nodes: int) -> tuple[SearchResult, int]:
+    """One kernel search between two free cells: the result and the lookups to add to
+    ``world.cell_checks`` (left to the caller, so that threads never write to the world)."""
+    chk = world.checker
+    pocket: list[tuple[int, int]] = []
+
+    def goal_open() -> bool:  # asked once, by a search still going after PROBE_AFTER
+        p = _goal_pocket(world, ms, s, gl)
+        if p is not None:
+            pocket.append(p)
+        return p is None
+
+    t0 = time.perf_counter()
+    status, cells, cost, st, peak = _driver.run(chk.occupancy, chk.walk, ms, s, gl, params,
+                                               _span(world) if params.anyangle else 0.0,
+                                               pause_at=PROBE_AFTER, keep_going=goal_open)
+    secs = time.perf_counter() - t0
+    exp, gen, look = int(st[ST_EXP]), int(st[ST_N]), int(st[ST_LOOK])
+    checks = look + 2  # and the two endpoint checks
+    none = np.zeros((0, 3), np.int64)
+    if status == _astar.RUN_FOUND:
+        return SearchResult(True, cells, cost, checks, exp, gen, secs, peak), look
+    if status == _driver.RUN_STOPPED:  # the goal is sealed in a small pocket
+        n, probe_look = pocket[0]
+        return SearchResult(False, none, math.inf, checks + probe_look, exp, gen, secs, peak,
+                            f"goal unreachable: its free space is {n} cells, closed off "
+                            "from the start", status="unreachable"), look + probe_look
+    if status == _astar.RUN_EXHAUSTED:
+        why, kind = f"goal unreachable: explored {gen} cells", "unreachable"
+    elif status == _astar.RUN_LIMIT and max_nodes and gen >= max_nodes:
+        why, kind = f"node limit {max_nodes} reached after {exp} expansions", "budget"
+    else:
+        why, kind = f"search budget exhausted after {exp} expansions ({peak} bytes)", "budget"
+    return SearchResult(False, none, math.inf, checks, exp, gen, secs, peak, why,
+                        status=kind), look
+
+
+def search_many(
+    world: World,
+    start_cells: np.ndarray,
+    goal_cells: np.ndarray,
+    *,
+    method: str = "astar",
+    neighbors: str = "full",
+    corner_cutting: bool = False,
+    workers: int | None = None,
+    max_nodes: int | None = None,
+    max_expansions: int | None = None,
+    memory_budget: int | None = None,
+) -> list[SearchResult]:
+    """Shortest paths for many start / goal pairs on one world, ``workers`` at a time.
+
+    Each pair gets the result :func:`search` would give it (same path, cost and counts).
+    The search kernel releases the GIL, so the threads search in parallel on the one
+    shared world: no copies, no processes.
+
+    Parameters
+    ----------
+    world : World
+    start_cells, goal_cells : array_like of int, shape (Q, 3)
+        Lattice indices, all free (checked before any search: PlanError naming the query).
+    method, neighbors, corner_cutting, max_nodes, max_expansions
+        As :func:`search` (numba backend).
+    workers : int, optional
+        Threads (default: the CPUs this process may use, at most Q).
+    memory_budget : int, optional
+        Bytes for all searches together (default :func:`default_memory_budget`): each of
+        the ``workers`` concurrent searches gets its share.
+
+    Returns
+    -------
+    list of SearchResult, length Q, in query order
+        Their lookups are also added to ``world.cell_checks``.
+    """
+    import os
+    from concurrent.futures import ThreadPoolExecutor
+
+    if method not in METHODS:
+        raise PlanError(f"unknown method {method!r}; expected one of {', '.join(METHODS)}")
+    a, b = _cells(start_cells), _cells(goal_cells)
+    if a.shape != b.shape:
+        raise PlanError(f"start_cells and goal_cells must have the same shape (Q, 3), got "
+                        f"{a.shape} and {b.shape}")
+    if workers is None:
+        cpus = os.sched_getaffinity(0) if hasattr(os, "sched_getaffinity") else None
+        workers = len(cpus) if cpus else (os.cpu_count() or 1)
+    workers = max(1, min(_limit(workers, "workers"), len(a)))
+    compile_s = warm_up()
+    max_nodes = _limit(max_nodes, "max_nodes")
+    budget = _limit(memory_budget, "memory_budget") or default_memory_budget()
+    budget_nodes = default_max_expansions(max(1, budget // workers))
+    max_exp = _limit(max_expansions, "max_expansions") or budget_nodes
+    for i in range(len(a)):
+        world.endpoint_cell(a[i], f"query {i}: start")
+        world.endpoint_cell(b[i], f"query {i}: goal")
+    guarantee = carries_guarantee(world.lattice, neighbors, corner_cutting)
+    ms = move_set(world.lattice, neighbors, corner_cutting, _HKIND[method])
+    node_cap = min(max_nodes, budget_nodes) if max_nodes else budget_nodes
+    params = SearchParams(_ANYANGLE[method], node_cap, max_exp)
+
+    def one(i: int) -> tuple[SearchResult, int]:
+        return _run(world, a[i], b[i], ms, params, max_nodes)
+
+    if workers == 1:
+        done = [one(i) for i in range(len(a))]
+    else:
+        with ThreadPoolExecutor(workers) as pool:
+            done = list(pool.map(one, range(len(a))))
+    out = []
+    for i, (res, look) in enumerate(done):
+        world.cell_checks += look
+        res.guarantee = guarantee
+        res.compile_seconds = compile_s if i == 0 else 0.0
+        out.append(res)
+    return out
+
+
+GOAL_PROBE = 256  # expansions of the search from the goal (the goal probe)
+#: expansions after which a search still going runs the goal probe: most searches end
+#: sooner and skip it; a longer one pays at most GOAL_PROBE / PROBE_AFTER extra
+PROBE_AFTER = 2048
+
+
+def _goal_pocket(world: World, ms, start, goal) -> tuple[int, int] | None:
+    """``(cells, lookups)`` when a search from the goal (lattice moves, at most
+    :data:`GOAL_PROBE` expansions) runs out of cells before reaching the start: the goal
+    is sealed off, so an unbounded search from the start could only end at the budget.
+    None otherwise; its lookups are then not counted (not part of the measured search;
+    its time, well under a millisecond, is). Nothing is written to the world.
+    The moves are symmetric (the same cells are checked either way), so this is exact."""
+    chk = world.checker
+    status, _, _, st, _ = _driver.run(chk.occupancy, chk.walk, ms, goal, start,
+                                      SearchParams(0, 0, GOAL_PROBE), 0.0, dense=False)
+    if status != _astar.RUN_EXHAUSTED:
+        return None
+    return int(st[ST_N]), int(st[ST_LOOK])
+
+
+def _span(world: World) -> float:
+    """Longest line of sight inside the world (m): sizes the any-angle walk scratch. Capped
+    so the scratch (~72 bytes per cell a sight line may touch) stays within 1/16 of the
+    memory budget: a huge box must not allocate by its size; longer sight lines walk on
+    fresh arrays."""
+    walk = world.checker.walk
+    step = math.sqrt(2.0 * float(walk.rhs.min()))
+    steps = _budget.memory_budget() / 16 / 72 / (len(walk.full) + 1)
+    return min(float(np.linalg.norm(world.bounds[1] - world.bounds[0])), steps * step)
+
+
+def shortcut(world: World, cells: np.ndarray) -> np.ndarray:
+    """Greedy line-of-sight shortcutting of a cell path.
+
+    From each kept cell, jump to the farthest later cell that is still in sight (every cell
+    the centre-to-centre segment touches is free, the safe rule), scanning forward until
+    the first cell out of sight. The result keeps the first and last cell, is a
+    subsequence of the input, and each consecutive pair is in sight (or was consecutive in
+    the input). Lookups are added to ``world.cell_checks``.
+
+    Parameters
+    ----------
+    cells : array_like of int, shape (K, 3)
+
+    Returns
+    -------
+    ndarray, shape (K', 3), int64
+    """
+    c = _cells(cells)
+    if len(c) <= 2:
+        return c.copy()
+    chk = world.checker
+    # Longest possible sight line: from the first cell to the farthest one (x2 headroom).
+    span = 2.0 * float(np.linalg.norm((c - c[0]) @ chk.walk.g.T, axis=1).max())
+    keep, n = shortcut_kernel(chk.occupancy, chk.walk, c, new_scratch(span, chk.walk))
+    world.cell_checks += int(n)
+    return c[keep]
