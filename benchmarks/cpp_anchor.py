@@ -2,7 +2,8 @@
 
 Cubic lattice, 26 neighbours with MovingAI's no-corner-cutting rule (a move is allowed
 only when every voxel of its bounding box is free), step costs 1, sqrt(2), sqrt(3), the
-exact octile heuristic and the project's tie-break (lower f first, then larger g). It is
+exact octile heuristic and the project's tie-break (lower f first, f rounded to 1e-9 so
+that equal-cost paths tie exactly, then larger g). It is
 written to be as fast as a minimal A* can be, so that a ratio against it is a fair one:
 a dense byte grid padded by one voxel (no bounds tests), the 26-neighbourhood read once
 per expansion into a bit mask and each move's required cells tested as one mask, heap
@@ -125,6 +126,10 @@ int main(int argc, char** argv) {
         ++nm;
     }
     const double s2m1 = std::sqrt(2.0) - 1.0, s3m2 = std::sqrt(3.0) - std::sqrt(2.0);
+    // f on a 1e-9 grid, as ours: equal-cost paths then tie exactly (float noise would
+    // otherwise decide) and the larger-g tie-break dives along them.
+    const double fq = 1e-9, fq_inv = 1.0 / fq;
+    auto fkey = [&](double f) { return std::floor(f * fq_inv + 0.5) * fq; };
     Cell* cell = (Cell*)std::calloc(X * Y * Z, sizeof(Cell));
     Heap open; open.a.reserve(1 << 16); open.cell = cell;
     for (int64_t k = 0; k < nq; ++k) {
@@ -144,7 +149,7 @@ int main(int argc, char** argv) {
         open.clear();
         if (fr[s] && fr[t]) {
             cell[s].g = 0; cell[s].stamp = seen;
-            open.push({h(sx, sy, sz), 0.0, s, sx, sy, sz, 0});
+            open.push({fkey(h(sx, sy, sz)), 0.0, s, sx, sy, sz, 0});
             while (!open.empty()) {
                 const Entry n = open.pop();
                 cell[n.v].stamp = done; ++exp;
@@ -161,11 +166,11 @@ int main(int argc, char** argv) {
                     if (cw.stamp != seen) {
                         cw.stamp = seen; cw.g = ng;
                         const int32_t x = n.x + mdx[m], y = n.y + mdy[m], z = n.z + mdz[m];
-                        open.push({ng + h(x, y, z), ng, w, x, y, z, 0});
+                        open.push({fkey(ng + h(x, y, z)), ng, w, x, y, z, 0});
                     } else if (ng < cw.g) {
                         cw.g = ng;
                         const int32_t x = n.x + mdx[m], y = n.y + mdy[m], z = n.z + mdz[m];
-                        open.decrease({ng + h(x, y, z), ng, w, x, y, z, 0});
+                        open.decrease({fkey(ng + h(x, y, z)), ng, w, x, y, z, 0});
                     }
                 }
             }
