@@ -31,6 +31,7 @@ import numpy as np
 from planner.errors import MapError, PlanError
 from planner.explore.sensor import Sensor, cast_rays, ray_directions
 from planner.lattice import Lattice
+from planner.occupancy.walk import walk_of
 from planner.world import World
 
 __all__ = ["ExploreResult", "explore", "ray_directions", "cast_rays"]
@@ -201,7 +202,6 @@ def explore(
     from planner.search import search
     from planner.search.dstar.lite import DStarLite
     from planner.voxels.from_map import inflated_obstacles
-    from planner.world.world import _walk
 
     if isinstance(source, str | Path):  # a bundled map by name ("office"), as build_world
         from planner.maps import resolve
@@ -235,7 +235,7 @@ def explore(
     goal_p, gcell = truth.endpoint(goal, "goal")
     known = World(lat, np.zeros((0, 3), np.int64), truth.bounds, radius=truth.radius,
                   source=f"explored {obst.source}")
-    sensor = Sensor(pts, obst.box_sizes if boxes else None, lat, _walk(lat), dirs,
+    sensor = Sensor(pts, obst.box_sizes if boxes else None, lat, walk_of(lat), dirs,
                      sensor_range)
     _warm_up(lat, neighbors, DStarLite)
     dl = DStarLite(known, s, gcell, neighbors=neighbors)

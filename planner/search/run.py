@@ -40,6 +40,7 @@ import numpy as np
 
 from planner import budget as _budget
 from planner.errors import PlanError
+from planner.occupancy.walk import as_cells
 from planner.search._los import new_scratch, shortcut_kernel
 from planner.search._nodes import BYTES_PER_NODE, ST_EXP, ST_LOOK, ST_N
 from planner.search.astar import driver as _driver
@@ -54,7 +55,7 @@ from planner.search.moves import (
     move_set,
     move_stencils,
 )
-from planner.world.world import World, _cells
+from planner.world.world import World
 
 __all__ = ["SearchResult", "search", "search_many", "shortcut", "warm_up", "move_stencils",
            "move_heuristic", "METHODS", "carries_guarantee", "default_memory_budget",
@@ -321,7 +322,7 @@ def search_many(
 
     if method not in METHODS:
         raise PlanError(f"unknown method {method!r}; expected one of {', '.join(METHODS)}")
-    a, b = _cells(start_cells), _cells(goal_cells)
+    a, b = as_cells(start_cells), as_cells(goal_cells)
     if a.shape != b.shape:
         raise PlanError(f"start_cells and goal_cells must have the same shape (Q, 3), got "
                         f"{a.shape} and {b.shape}")
@@ -408,7 +409,7 @@ def shortcut(world: World, cells: np.ndarray) -> np.ndarray:
     -------
     ndarray, shape (K', 3), int64
     """
-    c = _cells(cells)
+    c = as_cells(cells)
     if len(c) <= 2:
         return c.copy()
     chk = world.checker

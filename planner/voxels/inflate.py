@@ -19,7 +19,7 @@ import numpy as np
 from planner.budget import require
 from planner.errors import MapError
 from planner.lattice import Lattice
-from planner.occupancy.keys import BITS, check_range, index_limit, pack, unpack
+from planner.occupancy.keys import BITS, check_range, index_limit, pack, unique_keys, unpack
 from planner.voxels import _box_kernels as bk
 from planner.voxels import kernels as vk
 from planner.voxels._checks import (
@@ -34,7 +34,6 @@ from planner.voxels._checks import (
     offsets_within,
     over_budget,
     resolve_budget,
-    unique_keys,
 )
 from planner.voxels.voxel_list import OccupiedVoxelList
 

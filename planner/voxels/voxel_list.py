@@ -34,14 +34,13 @@ import numpy as np
 from planner.errors import MapError
 from planner.fsutil import file_mode
 from planner.lattice import Lattice
-from planner.occupancy.keys import BITS, index_limit, pack, unpack
+from planner.occupancy.keys import BITS, index_limit, pack, unique_keys, unpack
 from planner.voxels._checks import (
     DEFAULT_BUDGET,
     as_indices,
     as_points,
     check_lattice,
     check_radius,
-    unique_keys,
 )
 
 __all__ = ["OccupiedVoxelList", "FORMAT", "VERSION"]

@@ -10,8 +10,8 @@ from typing import NamedTuple
 import numpy as np
 
 from planner._numba import njit_cached
-from planner.occupancy.grid import _free, mix64
-from planner.occupancy.keys import pack3, unpack3
+from planner.occupancy.grid import cell_free
+from planner.occupancy.keys import mix64, pack3, unpack3
 from planner.search import _heap
 from planner.search._los import cubic_walk, is_cubic, sight
 from planner.search._nodes import (
@@ -207,7 +207,7 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st):
                                 and c < d2 and grid[(a * d1 + b) * d2 + c] != 0)
         else:
             for j in range(nu):
-                ufree[j] = _free(mode, grid, lo, dims, otable, otmask, gg, blo, bhi,
+                ufree[j] = cell_free(mode, grid, lo, dims, otable, otmask, gg, blo, bhi,
                                  u0 + ust[j, 0], u1 + ust[j, 1], u2 + ust[j, 2])
         blocked = np.int64(0)
         if bits:
