@@ -122,6 +122,7 @@ def _door_plug() -> np.ndarray:
     return np.column_stack([np.full(y.size, 5.0), y.ravel(), z.ravel()])
 
 
+@pytest.mark.slow
 def test_cli_plan_writes_path_json_and_plot(wall_file, tmp_path, capsys):
     out, png = tmp_path / "path.csv", tmp_path / "path.png"
     argv = ["plan", str(wall_file), "--lattice", "bcc", "--cell-volume", "0.002",

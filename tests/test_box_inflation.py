@@ -161,6 +161,7 @@ def test_aligned_ties_do_not_depend_on_how_boxes_are_cut(name):
         assert whole == exact_box_inflation(kids - 0.5, kids + 0.5, lat, r)
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not GEB079.exists(), reason="shared OctoMap data not present")
 def test_geb079_pruned_leaves_block_what_their_children_block():
     from planner.io import load_obstacles
