@@ -76,7 +76,7 @@ class MapFrame:
 
 def map_frame(map_path: str) -> MapFrame:
     """Load a map and its world box as :func:`planner.build_world` would choose it."""
-    from planner.planning import as_obstacles, map_box
+    from planner.world.build import as_obstacles, map_box
 
     obst = as_obstacles(map_path)
     bounds = map_box(map_path, obst)
@@ -107,7 +107,7 @@ def rotated_world(map_path: str, lattice: str, cell_volume: float, radius: float
     planner.World
         In the map's own frame, bounds the map's box.
     """
-    from planner.planning import build_world
+    from planner.world.build import build_world
 
     return build_world(map_path, rotated_lattice(lattice, cell_volume, quaternion),
                        radius=radius)
