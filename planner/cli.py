@@ -193,8 +193,8 @@ def _add_world_args(p: argparse.ArgumentParser, *, lattice: bool = True) -> None
     if lattice:
         g = p.add_mutually_exclusive_group()
         g.add_argument("--lattice", default=None, choices=NAMED_LATTICES + NAMED_LATTICES_2D,
-                       help="named lattice (default fcc; 2D maps: square or hex2d, default "
-                            "hex2d; a saved world keeps its own unless another is named)")
+                       help="named lattice (2D maps: square or hex2d; a saved world keeps its "
+                            "own unless another is named); not given: fcc, on a 2D map hex2d")
         g.add_argument("--generator", type=_generator, default=None,
                        help="custom lattice: generator rows 'a,b,c;d,e,f;g,h,i' (columns are "
                             "the basis vectors, metres) or a .npy file")
@@ -289,7 +289,7 @@ def build_parser() -> argparse.ArgumentParser:
                                        "replanning with D* Lite (checked against A*)")
     _add_world_args(p, lattice=False)
     p.add_argument("--lattice", default=None, type=_explore_lattices,
-                   help="named lattice, comma-separated names, or 'all' (default fcc)")
+                   help="named lattice, comma-separated names, or 'all'; not given: fcc")
     p.add_argument("--start", type=_vec3, required=True, help="x,y,z (m); negatives allowed")
     p.add_argument("--goal", type=_vec3, required=True, help="x,y,z (m); negatives allowed")
     p.add_argument("--neighbors", default="full", help="full, face, face+k or full+k")

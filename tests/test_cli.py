@@ -45,7 +45,7 @@ def test_help_shows_every_default():
         text = " ".join(r.stdout.split())
         assert "(default:" in text, cmd
     text = " ".join(planner("plan", "--help").stdout.split())
-    for default in ("(default: fcc)", "(default: astar)", "(default: full)", "(default: 1.0)"):
+    for default in ("not given: fcc", "(default: astar)", "(default: full)", "(default: 1.0)"):
         assert default in text
 
 

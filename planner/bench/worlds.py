@@ -149,7 +149,7 @@ def cached_world(cache_dir: str | None, map_path: str, lattice: str, cell_volume
     w = rotated_world(map_path, lattice, cell_volume, radius, quaternion)
     f.parent.mkdir(parents=True, exist_ok=True)
 
-    def steps(cells):  # sorted keys as steps compress ~100x
+    def steps(cells):  # sorted keys as steps: small numbers that compress well
         return np.diff(np.unique(pack(cells)), prepend=np.int64(0))
 
     with atomic_path(f) as tmp, open(tmp, "wb") as fh:

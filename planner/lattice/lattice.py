@@ -40,8 +40,8 @@ __all__ = ["Lattice", "NAMED_LATTICES", "PAPER_DELTAS", "Quantizer", "VoronoiCel
 
 
 def _qk():
-    """The quantizer kernels, imported on first use: importing numba costs ~0.2 s, which
-    ``import planner`` should not pay."""
+    """The quantizer kernels, imported on first use: importing numba is slow, and
+    ``import planner`` should not pay for it."""
     return importlib.import_module("planner.lattice._quantize")
 
 
@@ -54,7 +54,7 @@ def __getattr__(name: str):
 _CHUNK = 1 << 20  # points per chunk of the input checks (no full-size temporaries)
 # Largest |index| a quantized point may have: float64 holds integers exactly up to 2**53.
 _INDEX_LIMIT = 2.0**52
-_SHELL_LIMIT = 5_000_000  # lattice vectors neighbors("face+k") may enumerate (~120 MB)
+_SHELL_LIMIT = 5_000_000  # lattice vectors neighbors("face+k") may enumerate (24 bytes each)
 
 
 class Lattice:

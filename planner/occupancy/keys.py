@@ -76,10 +76,9 @@ def unpack3(key):  # pragma: no cover - compiled
 
 
 def unique_keys(keys: np.ndarray) -> np.ndarray:
-    """Sorted unique int64 keys. Sort + mask: numpy 2.x ``np.unique`` hashes first and is
-    ~15x slower on 10^6 keys. The stable sort finds sorted runs (keys here are mostly
-    concatenated sorted lists): ~40x faster than the default on them, as fast on random
-    keys."""
+    """Sorted unique int64 keys. Sort + mask: numpy 2.x ``np.unique`` hashes first, which is
+    slower on large key arrays. The stable sort finds sorted runs (keys here are mostly
+    concatenated sorted lists), so it is fast on them and no slower on random keys."""
     k = np.sort(np.asarray(keys, dtype=np.int64), kind="stable")
     if len(k) < 2:
         return k

@@ -86,7 +86,7 @@ def walk_on(occ, walk, a, b, s, check, vis, vgen, gen, queue):
     ``gen`` must differ from every stamp already in ``vgen``). Returns ``(n, all_free,
     lookups, ok)`` with the touched cells' offsets from ``s`` in ``queue[:n]``; ``ok`` is
     False when the scratch was too small (retry with more). No array is reassigned in the
-    loop: numba then keeps reference counting out of it (measured ~10x)."""
+    loop: numba then keeps reference counting out of it."""
     mode, grid, lo, dims, table, tmask, gg, blo, bhi = occ
     rel, rhs, full, wv = walk.rel, walk.rhs, walk.full, walk.wv
     nrel = rel.shape[0]

@@ -34,7 +34,6 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -55,6 +54,7 @@ from planner.search.moves import (
     move_set,
     move_stencils,
 )
+from planner.search.result import SearchResult
 from planner.world.world import World
 
 __all__ = ["SearchResult", "search", "search_many", "shortcut", "warm_up", "move_stencils",
@@ -79,56 +79,6 @@ def default_max_expansions(memory_budget: int | None = None) -> int:
     :func:`default_memory_budget`): the node budget ``budget // BYTES_PER_NODE``."""
     b = default_memory_budget() if memory_budget is None else int(memory_budget)
     return max(1, b // BYTES_PER_NODE)
-
-
-@dataclass
-class SearchResult:
-    """Outcome of one search.
-
-    Attributes
-    ----------
-    found : bool
-    cells : ndarray, shape (K, 3), int64
-        Path cells from start to goal (any-angle methods: only the turning cells).
-        Empty when not found.
-    cost : float
-        Path length between cell centres (m); ``inf`` when not found.
-    cell_checks : int
-        Occupancy lookups made by this search (each actual lookup counted once).
-    expansions : int
-        Nodes removed from the open list (the goal included).
-    generated : int
-        Distinct nodes created (start included).
-    seconds : float
-        Wall time of the search (numba backend: the kernel calls; networkx: build + search).
-    peak_bytes : int
-        Peak size of the search's own arrays (node table, heap, slot map, scratch).
-    reason : str
-        Why no path was found ("" when found).
-    status : str
-        ``"found"``, ``"unreachable"`` (the start's free component is exhausted) or
-        ``"budget"`` (stopped by ``max_expansions`` / ``max_nodes``).
-    guarantee : bool
-        Whether the path carries the radius guarantee
-        (:func:`planner.search.moves.carries_guarantee`).
-    compile_seconds : float
-        Time spent compiling or loading the search kernels before this search (its first
-        in the process; 0 after), never part of ``seconds`` (:func:`warm_up`).
-    """
-
-    found: bool
-    cells: np.ndarray
-    cost: float
-    cell_checks: int
-    expansions: int
-    generated: int
-    seconds: float
-    peak_bytes: int
-    reason: str = ""
-    extra: dict = field(default_factory=dict)
-    status: str = "found"
-    guarantee: bool = True
-    compile_seconds: float = 0.0
 
 
 _WARM: list[float] = []

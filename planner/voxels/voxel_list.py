@@ -358,7 +358,7 @@ class OccupiedVoxelList:
 
 def _member(keys: np.ndarray, q: np.ndarray, presorted: bool = False) -> np.ndarray:
     """(N,) bool: ``q`` in the sorted ``keys``. Large query sets are sorted first: numpy's
-    binary search then reuses the previous position, ~5x faster than random order."""
+    binary search then reuses the previous position (cache-friendly, unlike random order)."""
     if len(q) > 4096 and not presorted:
         order = np.argsort(q)
         found = np.empty(len(q), dtype=bool)

@@ -341,7 +341,7 @@ def compute_path(occ, ms, ufree, bx, nd, heap, st, km, start, check_start):
         # an underconsistent w or a w resting on one would have a key below the start's.
         # So the search stops before it, as A* stops at the goal among equal f. (A tie
         # with a larger min(g, rhs) than the start's is a key from an earlier start, not
-        # refreshed: refreshing raises it. Refreshing them cost ~70 pops per MCC replan.)
+        # refreshed: refreshing raises it, and refreshing them costs extra pops per replan.)
         e1 = _TOL * (1.0 + abs(ks1)) if ks1 < np.inf else 0.0
         if not (srhs > sg or k1o < ks1 - e1 or (k1o <= ks1 + e1 and tbo == np.inf)):
             break

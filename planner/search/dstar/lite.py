@@ -42,7 +42,7 @@ from planner.search._heap import Heap, new_heap
 from planner.search.dstar import kernel as dk
 from planner.search.dstar import replan as dr
 from planner.search.moves import H_GAUGE, carries_guarantee, move_set
-from planner.search.run import SearchResult
+from planner.search.result import SearchResult
 from planner.world.world import World
 
 __all__ = ["DStarLite"]

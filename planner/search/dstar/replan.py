@@ -1,6 +1,6 @@
 """D* Lite per replan (numba): the changed cells' repair, the path, and :func:`replan`, the
-one compiled call a replan makes (a call from Python with the planner's structs costs
-~10 us of argument checks; a replan that reuses its path does little else).
+one compiled call a replan makes (each call from Python with the planner's structs pays
+numba's argument checks, and a replan that reuses its path does little else).
 
 Stored path: the last extraction's cells stay in the path buffer. Extraction reads only the
 edge masks of the path's nodes and the g of their neighbours, so until one of those
