@@ -84,6 +84,18 @@ def map_frame(map_path: str) -> MapFrame:
     return MapFrame(obst, bounds, free)
 
 
+_FRAMES: dict = {}
+
+
+def cached_frame(map_path: str) -> MapFrame:
+    """:func:`map_frame`, kept per process for the map last asked for (a worker's tasks
+    come grouped by map)."""
+    if map_path not in _FRAMES:
+        _FRAMES.clear()
+        _FRAMES[map_path] = map_frame(map_path)
+    return _FRAMES[map_path]
+
+
 def rotated_lattice(lattice: str, cell_volume: float, quaternion):
     """The named lattice turned by R^T, R the rotation of unit ``quaternion`` (w, x, y, z):
     generator ``R^T G`` (3, 3), same name and cell volume (m^3)."""

@@ -42,6 +42,8 @@ from planner.voxels._checks import (
     check_lattice,
     check_radius,
 )
+from planner.voxels.boxes import box_cell_keys
+from planner.voxels.stencil import stencil_inflation
 
 __all__ = ["OccupiedVoxelList", "FORMAT", "VERSION"]
 
@@ -132,10 +134,8 @@ class OccupiedVoxelList:
         boxes = as_points(obst.boxes, 3, f"{obst.source}: box centres")
         parts = [unique_keys(pack(lat.quantize(pts)))] if len(pts) else []
         if len(boxes):
-            from planner.voxels.inflate import exact_box_inflation
-
             half = np.asarray(obst.box_sizes, dtype=float)[:, None] / 2  # per leaf size
-            parts.append(exact_box_inflation(boxes - half, boxes + half, lat, 0.0).keys)
+            parts.append(box_cell_keys(boxes - half, boxes + half, lat))
         if not parts:
             return cls._from_keys(lat, np.zeros(0, dtype=np.int64))
         return cls._from_keys(lat, unique_keys(np.concatenate(parts)))
@@ -252,12 +252,10 @@ class OccupiedVoxelList:
         MapError
             Bad radius, or the inflation would exceed ``memory_budget``.
         """
-        from planner.voxels import inflate  # inflate builds lists of this class
-
         r = check_radius(radius)
         if r == 0 or not len(self._keys):
             return OccupiedVoxelList._from_keys(self._lattice, self._keys.copy())
-        keys = inflate.stencil_inflation(self._keys, self._lattice, r, memory_budget)
+        keys = stencil_inflation(self._keys, self._lattice, r, memory_budget)
         return OccupiedVoxelList._from_keys(self._lattice, keys)
 
     # -- files --------------------------------------------------------------------------------
