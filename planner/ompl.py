@@ -6,7 +6,7 @@ same occupancy as the lattice planners. Both checks go through the world's one
 
 * **State validity** (``checker.is_valid``): the lattice cell containing the state is in
   bounds and free. One compiled kernel quantizes the point (the exact generic closest-point
-  kernel of :mod:`planner.lattice._quantize`) and does one occupancy lookup. One check.
+  kernel of :mod:`planner.lattice.quantize`) and does one occupancy lookup. One check.
 * **Motion validity** (``checker.check_motion``): the 2.0.1 bindings let Python subclass
   ``ob.MotionValidator`` (``checkMotion(s1, s2)``), so motions are validated with the EXACT
   lattice segment walk (the lattice planners' line-of-sight test):

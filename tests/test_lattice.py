@@ -333,7 +333,7 @@ def test_quantizer_tables_reproduce_quantize():
     lat = Lattice.named("mcc", 0.2)
     q = lat.quantizer()
     assert q.cand.shape[0] == 8 and q.counts.shape == (8,)
-    from planner.lattice._quantize import run_generic
+    from planner.lattice.quantize import run_generic
 
     x = np.random.default_rng(2).uniform(-5, 5, (5000, 3))
     out = np.empty(x.shape, dtype=np.int64)

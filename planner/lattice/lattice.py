@@ -10,7 +10,7 @@ neighbours), touching cells (full neighbours), the cell as a polytope
 (:class:`VoronoiCell`), covering and packing radii and the normalised second moment.
 Nothing is tabulated per lattice except the paper's unit-determinant generators
 (:mod:`planner.lattice.paper`) and the choice of a specialised closest-point kernel
-(:mod:`planner.lattice._quantize`). The geometry lives in :mod:`planner.lattice._geometry`.
+(:mod:`planner.lattice.quantize`). The geometry lives in :mod:`planner.lattice._geometry`.
 """
 
 from __future__ import annotations
@@ -33,7 +33,7 @@ from planner.lattice._geometry import (
 from planner.lattice.paper import NAMED_LATTICES, PAPER_DELTAS, named_generator
 
 if TYPE_CHECKING:
-    from planner.lattice._quantize import Quantizer
+    from planner.lattice.quantize import Quantizer
 
 __all__ = ["Lattice", "NAMED_LATTICES", "PAPER_DELTAS", "Quantizer", "VoronoiCell",
            "named_generator"]
@@ -42,7 +42,7 @@ __all__ = ["Lattice", "NAMED_LATTICES", "PAPER_DELTAS", "Quantizer", "VoronoiCel
 def _qk():
     """The quantizer kernels, imported on first use: importing numba is slow, and
     ``import planner`` should not pay for it."""
-    return importlib.import_module("planner.lattice._quantize")
+    return importlib.import_module("planner.lattice.quantize")
 
 
 def __getattr__(name: str):

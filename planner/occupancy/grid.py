@@ -24,7 +24,7 @@ from typing import NamedTuple
 import numpy as np
 
 from planner._numba import njit_cached
-from planner.lattice import _quantize as qk
+from planner.lattice import quantize as qk
 from planner.occupancy.keys import in_key_set, pack3
 
 __all__ = ["Occupancy", "cell_free", "clear_cells", "fill_in_bounds", "free_many", "occ_free",

@@ -17,7 +17,7 @@ import numpy as np
 from planner._numba import njit_cached
 from planner.errors import PlanError
 from planner.lattice import Lattice
-from planner.lattice import _quantize as qk
+from planner.lattice import quantize as qk
 from planner.occupancy.grid import cell_free
 from planner.occupancy.keys import mix64, pack3
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from planner.lattice import Lattice
-from planner.lattice._quantize import Quantizer
+from planner.lattice.quantize import Quantizer
 from planner.occupancy import grid as wk
 from planner.occupancy.grid import Occupancy
 from planner.occupancy.walk import Walk, motion_free
