@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from planner.budget import memory_budget
@@ -50,16 +48,6 @@ def as_indices(indices, dim: int) -> np.ndarray:
     if not np.issubdtype(w.dtype, np.integer):
         raise MapError(f"indices must be integers, got dtype {w.dtype}")
     return np.ascontiguousarray(w, dtype=np.int64)
-
-
-def check_radius(radius) -> float:
-    try:
-        r = float(radius)
-    except (TypeError, ValueError):
-        raise MapError(f"radius must be a number of metres, got {radius!r}") from None
-    if not math.isfinite(r) or r < 0:
-        raise MapError(f"radius must be a non-negative finite number of metres, got {radius!r}")
-    return r
 
 
 def gb(nbytes: float) -> str:

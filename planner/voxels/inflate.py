@@ -16,6 +16,7 @@ import math
 
 import numpy as np
 
+from planner.checks import check_radius
 from planner.errors import MapError
 from planner.lattice import Lattice
 from planner.occupancy.keys import BITS, check_range, index_limit, pack, unique_keys
@@ -27,7 +28,6 @@ from planner.voxels._checks import (
     as_points,
     cell_diameter,
     check_lattice,
-    check_radius,
     grid_strides,
     offsets_within,
     over_budget,

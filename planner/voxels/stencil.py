@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from planner.checks import check_radius
 from planner.lattice import Lattice
 from planner.occupancy.keys import BITS, check_range, index_limit, unique_keys, unpack
 from planner.voxels import kernels as vk
@@ -14,7 +15,6 @@ from planner.voxels._checks import (
     DEFAULT_BUDGET,
     REL_TOL,
     cell_diameter,
-    check_radius,
     grid_strides,
     key_offsets,
     offsets_within,

@@ -31,6 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
+from planner.checks import check_radius
 from planner.errors import MapError
 from planner.fsutil import file_mode
 from planner.lattice import Lattice
@@ -40,7 +41,6 @@ from planner.voxels._checks import (
     as_indices,
     as_points,
     check_lattice,
-    check_radius,
 )
 from planner.voxels.boxes import box_cell_keys
 from planner.voxels.stencil import stencil_inflation

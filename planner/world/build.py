@@ -8,7 +8,6 @@ the map, resolves, inflates and classifies unknown space; :func:`map_box` and
 
 from __future__ import annotations
 
-import math
 import time
 import warnings
 from dataclasses import dataclass
@@ -17,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from planner.budget import require
+from planner.checks import check_radius
 from planner.errors import MapError, PlanError, PlannerError
 from planner.io.obstacles import UNKNOWN_POLICIES, Obstacles
 from planner.io.sidecar import load_sidecar
@@ -27,7 +27,7 @@ from planner.voxels.from_map import inflated_obstacles, unknown_region, unknown_
 from planner.world.file import check_options, is_world_file, load_world
 from planner.world.world import World
 
-__all__ = ["MapDefaults", "as_obstacles", "build_world", "check_radius", "default_cell_volume",
+__all__ = ["MapDefaults", "as_obstacles", "build_world", "default_cell_volume",
            "inflated_obstacles", "map_box", "resolve_defaults", "sidecar"]
 
 # Default planning resolution for raw clouds: about this many cells in the bounding box.
@@ -301,14 +301,6 @@ def resolve_defaults(obst, side: dict, *, lattice=None, cell_volume=None, radius
         raise MapError(f"{obst.source}: the map says nothing about free space (a plain "
                        f"cloud), so --unknown blocked would block everything; use free")
     return MapDefaults(_lattice(lattice, cell_volume, side, obst, b), radius, policy, b)
-
-
-def check_radius(radius) -> float:
-    """``radius`` as a float of metres; PlanError unless a finite number >= 0."""
-    if (isinstance(radius, bool) or not isinstance(radius, int | float | np.floating)
-            or not math.isfinite(radius) or radius < 0):
-        raise PlanError(f"radius must be a non-negative number of metres, got {radius!r}")
-    return float(radius)
 
 
 def _lattice(lattice, cell_volume, side, obst, bounds) -> Lattice:

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from planner.checks import check_radius
 from planner.errors import MapError, PlanError
 from planner.io.obstacles import UNKNOWN_POLICIES
 from planner.lattice import Lattice
@@ -122,12 +123,7 @@ class World(UnknownSpace):
         if bb.shape != (2, 3) or not np.isfinite(bb).all() or np.any(bb[1] < bb[0]):
             raise MapError(f"bounds must be [[xmin, ymin, zmin], [xmax, ymax, zmax]], got "
                            f"{bb.tolist() if bb.ndim else bb}")
-        try:
-            r = float(radius)
-        except (TypeError, ValueError):
-            raise MapError(f"radius must be a number of metres, got {radius!r}") from None
-        if not (np.isfinite(r) and r >= 0):
-            raise MapError(f"radius must be a non-negative number of metres, got {radius!r}")
+        r = check_radius(radius)
         self._lattice = lattice
         self._blocked = np.ascontiguousarray(b, dtype=np.int64)
         if len(b):  # now, not inside a kernel
