@@ -39,6 +39,7 @@ from planner.voxels._checks import (
     grid_strides,
     resolve_budget,
 )
+from planner.voxels.stencil import _stencil_runs, inflation_stencil
 
 # Margins within which another summation order of G w could decide a voxel face (voxels)
 # or a bounds face (m, relative to the bounds' size) the other way: numpy decides those.
@@ -223,8 +224,6 @@ def unknown_box_space(boxes: np.ndarray, box_sizes: np.ndarray, free_boxes: np.n
         or None without ``radius``; both distinct, in ascending key order. None when the
         grids do not fit ``budget``.
     """
-    from planner.voxels.inflate import _stencil_runs, inflation_stencil
-
     lat = lattice
     g = np.ascontiguousarray(lat.generator, dtype=float)
     res = float(resolution)
