@@ -1,4 +1,5 @@
-"""Reading obstacle maps and point clouds; writing point clouds.
+"""The reader chosen by file extension or format name (:func:`load_obstacles`,
+:func:`load_points`, :func:`load_posed_scans`) and the point writer (:func:`save_points`).
 
 Readers (chosen by file extension, or by an explicit ``format`` name):
 

@@ -1,4 +1,4 @@
-"""Lattice geometry: generators, exact quantization, Voronoi cells and adjacency.
+"""The :class:`Lattice`: a generator, exact quantization, Voronoi cells and adjacency.
 
 A lattice is the set of points ``G @ w`` for integer index vectors ``w`` (shape ``(d,)``),
 where the generator ``G`` (``d x d``, columns are basis vectors, metres) is non-singular.

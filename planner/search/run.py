@@ -1,14 +1,9 @@
-"""Graph search over lattice cells: A*, Dijkstra, Theta*, Lazy Theta*, path shortcutting.
+"""Running a search: :func:`search` and :func:`search_many` (A*, Dijkstra, Theta*, Lazy
+Theta*) and :func:`shortcut`, over the kernel of :mod:`planner.search.astar`.
 
 Nodes are lattice cells, edges the offsets ``lattice.neighbors(neighbors)``, edge cost the
 Euclidean distance between cell centres (m). The movement rule, the radius guarantee and
 the heuristic are described in :mod:`planner.search.moves`.
-
-Layout: :mod:`~planner.search.moves` (move sets, safe-rule cells, heuristic),
-:mod:`~planner.search._heap` (binary heap kernels), :mod:`~planner.search._nodes` (node
-table, cell -> slot map), :mod:`~planner.search.astar.kernel` (the kernel),
-:mod:`~planner.search.astar.theta` (any-angle parent rules), :mod:`~planner.search._los` (line
-of sight, shortcutting), :mod:`~planner.search.reference` (networkx backend).
 
 Timing: :attr:`SearchResult.seconds` is the kernel time only; the first search in a process
 first compiles or loads the kernels (:func:`warm_up`, reported as
