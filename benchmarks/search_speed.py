@@ -215,11 +215,11 @@ def geb079(n_queries: int = 20, seed: int = 0, lattice: str = "cubic"
            ) -> tuple[World, np.ndarray] | None:
     """The real OctoMap scan geb079.bt on the cubic lattice at its native 0.08 m, with
     random free start/goal cells at least 10 m apart (None when the data is absent)."""
-    from planner.planning import build_world
+    from planner.world.build import build_world
 
     if not GEB079.is_file():
         return None
-    world = build_world(GEB079, lattice, cell_volume=0.08**3)
+    world = build_world(GEB079, lattice, cell_volume=0.08**3, radius=0.0)
     rng = np.random.default_rng(seed)
     lo = np.ceil(world.bounds[0] / 0.08).astype(np.int64)
     hi = np.floor(world.bounds[1] / 0.08).astype(np.int64)

@@ -29,7 +29,7 @@ _LAZY = {
     "OccupiedVoxelList": "planner.voxels",
     "World": "planner.world",
     "PlanResult": "planner.planning",
-    "build_world": "planner.planning",
+    "build_world": "planner.world.build",
     "plan": "planner.planning",
 }
 

@@ -192,9 +192,9 @@ def _add_world_args(p: argparse.ArgumentParser, *, lattice: bool = True) -> None
                         "narrow_passage)")
     if lattice:
         g = p.add_mutually_exclusive_group()
-        g.add_argument("--lattice", default="fcc", choices=NAMED_LATTICES + NAMED_LATTICES_2D,
+        g.add_argument("--lattice", default=None, choices=NAMED_LATTICES + NAMED_LATTICES_2D,
                        help="named lattice (2D maps: square or hex2d; a saved world keeps its "
-                            "own unless another is named)")
+                            "own unless another is named); not given: fcc, on a 2D map hex2d")
         g.add_argument("--generator", type=_generator, default=None,
                        help="custom lattice: generator rows 'a,b,c;d,e,f;g,h,i' (columns are "
                             "the basis vectors, metres) or a .npy file")
@@ -288,8 +288,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("explore", help="explore an unknown map with a simulated range sensor, "
                                        "replanning with D* Lite (checked against A*)")
     _add_world_args(p, lattice=False)
-    p.add_argument("--lattice", default="fcc", type=_explore_lattices,
-                   help="named lattice, comma-separated names, or 'all'")
+    p.add_argument("--lattice", default=None, type=_explore_lattices,
+                   help="named lattice, comma-separated names, or 'all'; not given: fcc")
     p.add_argument("--start", type=_vec3, required=True, help="x,y,z (m); negatives allowed")
     p.add_argument("--goal", type=_vec3, required=True, help="x,y,z (m); negatives allowed")
     p.add_argument("--neighbors", default="full", help="full, face, face+k or full+k")
@@ -373,23 +373,14 @@ def _cmd_stats(a) -> int:
 
 
 def _build(a):
-    from planner import planning as api
-    from planner.analysis.compare import map_defaults
-    from planner.world.file import is_world_file
+    from planner.world.build import build_world
 
+    # options not given stay None: build_world resolves them from the map, as in the API
     lattice = a.generator if a.generator is not None else a.lattice
-    if is_world_file(a.map):  # a saved world: loaded, options only checked against it
-        if lattice == "fcc":  # the parser's default: the saved lattice
-            lattice = None
-        world = api.build_world(a.map, lattice, cell_volume=a.cell_volume, radius=a.radius,
-                                bounds=a.bounds, unknown=a.unknown)
-        return world, world.lattice.name or "custom"
-    radius, cell_volume = map_defaults(a.map, a.radius, a.cell_volume)
-    if a.generator is not None:
-        cell_volume = a.cell_volume  # a custom generator keeps its own scale unless given
-    world = api.build_world(a.map, lattice, cell_volume=cell_volume, radius=radius,
-                            bounds=a.bounds, format=a.format, unknown=a.unknown)
-    return world, (a.generator.name if a.generator is not None else world.lattice.name)
+    world = build_world(a.map, lattice, cell_volume=a.cell_volume, radius=a.radius,
+                        bounds=a.bounds, format=a.format, unknown=a.unknown)
+    return world, (a.generator.name if a.generator is not None else world.lattice.name
+                   or "custom")
 
 
 def _check_neighbors(lattices, neighbors: str, method: str) -> None:
@@ -400,7 +391,8 @@ def _check_neighbors(lattices, neighbors: str, method: str) -> None:
     if method.startswith("ompl") or neighbors in ("face", "full"):
         return
     for lat in lattices:
-        (lat if isinstance(lat, Lattice) else Lattice.named(lat)).neighbors(neighbors)
+        if lat is not None:  # None (the map's default lattice) is checked by the search
+            (lat if isinstance(lat, Lattice) else Lattice.named(lat)).neighbors(neighbors)
 
 
 def _check_dim(world, a) -> None:
@@ -432,7 +424,7 @@ def _cmd_plan(a) -> int:
         write_path(a.out, res, world, a.start, a.goal)
     if a.plot and res.found:
         compare.plot_paths(a.plot, world, {label: res})
-    print(json.dumps(res.to_dict()) if a.json else compare.describe(res))
+    print(json.dumps(res.to_dict()) if a.json else api.describe(res))
     return 0 if res.found else 1
 
 
@@ -469,20 +461,19 @@ def _cmd_world(a) -> int:
 
 
 def _cmd_explore(a) -> int:
-    from planner.analysis.compare import map_defaults
     from planner.analysis.tables import format_table
     from planner.explore import explore
 
-    radius, cell_volume = map_defaults(a.map, a.radius, a.cell_volume)
     rows, bad = [], 0
-    for name in a.lattice:
-        res = explore(a.map, a.start, a.goal, lattice=name, radius=radius,
-                      cell_volume=cell_volume, bounds=a.bounds, sensor_range=a.sensor_range,
+    lattices = a.lattice or [None]  # None: explore's default, resolved from the map
+    for name in lattices:
+        res = explore(a.map, a.start, a.goal, lattice=name, radius=a.radius,
+                      cell_volume=a.cell_volume, bounds=a.bounds, sensor_range=a.sensor_range,
                       fov=a.fov, resolution=a.resolution, neighbors=a.neighbors,
                       max_steps=a.max_steps)
         rows.append(res.summary())
         bad += res.mismatches + res.contacts
-        several = len(a.lattice) > 1
+        several = len(lattices) > 1
         if a.plot:
             res.plot(_per_lattice(a.plot, name, several))
         if a.gif:

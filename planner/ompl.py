@@ -6,7 +6,7 @@ same occupancy as the lattice planners. Both checks go through the world's one
 
 * **State validity** (``checker.is_valid``): the lattice cell containing the state is in
   bounds and free. One compiled kernel quantizes the point (the exact generic closest-point
-  kernel of :mod:`planner.lattice._quantize`) and does one occupancy lookup. One check.
+  kernel of :mod:`planner.lattice.quantize`) and does one occupancy lookup. One check.
 * **Motion validity** (``checker.check_motion``): the 2.0.1 bindings let Python subclass
   ``ob.MotionValidator`` (``checkMotion(s1, s2)``), so motions are validated with the EXACT
   lattice segment walk (the lattice planners' line-of-sight test):
@@ -43,7 +43,8 @@ goal" with a goal state; InformedRRT* found no solution on the office query with
 where RRT* needs 0.3-0.5 s, with identical check counts for seeds 0 and 1 (its informed
 sampler seems not to follow ``RNG.setSeed``); ``RealVectorBounds.low[i] = x`` writes to a
 copy and is silently lost (use ``setLow(i, x)``); a forked worker must get the lattice
-validity checker from the parent (rebuilding it means ~0.7 s of lattice geometry LPs).
+validity checker from the parent (rebuilding it means solving the lattice geometry's LPs
+again).
 """
 
 from __future__ import annotations
@@ -255,7 +256,7 @@ def plan_ompl(
     hard = float(timeout) if timeout is not None else float(time_limit) + _EXTRA_TIMEOUT
     t0 = time.perf_counter()
     # Ship the checker (occupancy, walk and quantizer tables): the worker would otherwise
-    # rederive the lattice geometry (LPs, ~0.7 s) that the parent has cached.
+    # rederive the lattice geometry (LPs) that the parent has cached.
     out = run_guarded(_solve, (world.bounds, world.checker, s, g, name, float(time_limit),
                                seed, max_cell_checks, bool(simplify), bool(verbose)),
                       hard, _PRELOAD, _WARM_ENV)

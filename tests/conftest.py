@@ -3,6 +3,10 @@
 Real data is read from ``../shared/data`` relative to the repository root and never copied
 into the repository; tests that need it use the ``real_data`` fixture (or the
 ``@pytest.mark.real_data`` marker) and are skipped cleanly when it is absent.
+
+Two tiers: ``pytest`` runs the fast tier; tests marked ``@pytest.mark.slow`` (end-to-end
+suites, signals, fuzz corpora through the CLI, read-only installs) run as well with
+``pytest --slow`` (both tiers), or alone with ``pytest --slow -m slow``.
 """
 
 from pathlib import Path
@@ -13,11 +17,22 @@ ROOT = Path(__file__).resolve().parents[1]
 DATA = (ROOT / ".." / "shared" / "data").resolve()
 
 
+def pytest_addoption(parser):
+    parser.addoption("--slow", action="store_true",
+                     help="run the slow tier too (tests marked slow)")
+
+
 def pytest_configure(config):
     config.addinivalue_line("markers", "real_data: needs ../shared/data (skipped when absent)")
+    config.addinivalue_line("markers", "slow: slow tier, run with --slow")
 
 
 def pytest_collection_modifyitems(config, items):
+    if not config.getoption("--slow"):
+        slow = [item for item in items if "slow" in item.keywords]
+        if slow:
+            config.hook.pytest_deselected(items=slow)
+            items[:] = [item for item in items if "slow" not in item.keywords]
     if DATA.is_dir():
         return
     skip = pytest.mark.skip(reason="real data ../shared/data not present")

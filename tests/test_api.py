@@ -110,9 +110,11 @@ def test_bad_api_arguments_are_plan_errors(wall):
     for radius in ("0.2", -1.0, float("nan")):
         with pytest.raises(PlanError, match="radius must be"):
             planner.build_world(wall, "fcc", cell_volume=0.001, radius=radius, bounds=BOUNDS)
-    # None means "the saved world's radius, else 0" (a map is not inflated by default)
-    assert planner.build_world(wall, "fcc", cell_volume=0.001, radius=None,
-                               bounds=BOUNDS).radius == 0.0
+    # None means "the map's radius": points carry none, so a radius must be given
+    with pytest.raises(PlanError, match="suggests no robot radius"):
+        planner.build_world(wall, "fcc", cell_volume=0.001, radius=None, bounds=BOUNDS)
+    with pytest.raises(PlanError, match="suggests no robot radius"):
+        planner.plan(wall, START, GOAL, cell_volume=0.001, bounds=BOUNDS)
     with pytest.raises(PlanError, match="method must be a string"):
         planner.plan(wall, START, GOAL, method=None)
 
@@ -122,6 +124,7 @@ def _door_plug() -> np.ndarray:
     return np.column_stack([np.full(y.size, 5.0), y.ravel(), z.ravel()])
 
 
+@pytest.mark.slow
 def test_cli_plan_writes_path_json_and_plot(wall_file, tmp_path, capsys):
     out, png = tmp_path / "path.csv", tmp_path / "path.png"
     argv = ["plan", str(wall_file), "--lattice", "bcc", "--cell-volume", "0.002",

@@ -78,6 +78,7 @@ def test_a_killed_run_resumes_without_redoing_finished_rows(tiny_tasks, tmp_path
             assert r["length_smoothed"] <= r["length"] + 1e-9
 
 
+@pytest.mark.slow
 def test_results_are_identical_in_processes_and_on_a_dask_cluster(tiny_tasks, tmp_path):
     distributed = pytest.importorskip("distributed")
     tasks, _ = tiny_tasks
@@ -91,6 +92,7 @@ def test_results_are_identical_in_processes_and_on_a_dask_cluster(tiny_tasks, tm
     assert _stable(serial) == _stable(pool) == _stable(dask_rows)
 
 
+@pytest.mark.slow
 def test_summary_report_and_figures(tiny_tasks, tiny_suite, tmp_path):
     tasks, record = tiny_tasks
     rows = runner.run(tasks, tmp_path / "r.jsonl", progress=False)
@@ -110,6 +112,7 @@ def test_summary_report_and_figures(tiny_tasks, tiny_suite, tmp_path):
         assert f"]({f.name})" in text
 
 
+@pytest.mark.slow
 def test_clearance_is_exact_against_brute_force():
     rng = np.random.default_rng(0)
     pts = rng.uniform(0, 10, (400, 3))
@@ -141,6 +144,7 @@ def test_unknown_suite_names_list_the_bundled_ones():
         load_suite("nonexistent")
 
 
+@pytest.mark.slow
 def test_bundled_suites_load():
     for name in ("quick", "paper", "full"):
         s = load_suite(name)
@@ -212,6 +216,7 @@ def test_rotating_by_the_identity_gives_the_unrotated_world():
         assert {tuple(c) for c in plain.blocked} == {tuple(c) for c in turned.blocked}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["cubic", "bcc", "fcc", "mcc", "hex"])
 def test_turning_the_lattice_blocks_the_cells_turning_the_map_blocks(name):
     # The rotated world's premise: cell w of lattice G is within r of the turned points R p
@@ -242,6 +247,7 @@ def test_a_rotated_world_keeps_the_map_box_and_its_corridor():
     assert not w.points_free(np.array([w.bounds[1] + 0.1]))[0]  # outside the map box
 
 
+@pytest.mark.slow
 def test_rotated_suites_share_one_rotation_sample_and_record_it(tmp_path):
 
     p = tmp_path / "rot.toml"
@@ -366,6 +372,7 @@ def test_a_cached_world_is_the_world_it_was_built_as(tmp_path):
     assert np.allclose(built.bounds, loaded.bounds)
 
 
+@pytest.mark.slow
 def test_worlds_built_in_parallel_give_the_same_queries(tmp_path):
     p = tmp_path / "rot.toml"
     p.write_text(ROTATED.format(map=map_path("office").as_posix()))

@@ -31,6 +31,7 @@ radii = [0.2]
 """
 
 
+@pytest.mark.slow
 def test_explore_rows_on_every_lattice_and_rotation(tmp_path):
     p = tmp_path / "tiny.toml"
     p.write_text(SUITE.format(map=map_path("office").as_posix()))

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from scipy.spatial import ConvexHull
 
-from planner import Lattice, MapError
+from planner import Lattice, MapError, PlanError
 from planner.lattice import NAMED_LATTICES
 from planner.voxels import box_keys, exact_box_inflation
 
@@ -161,6 +161,7 @@ def test_aligned_ties_do_not_depend_on_how_boxes_are_cut(name):
         assert whole == exact_box_inflation(kids - 0.5, kids + 0.5, lat, r)
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not GEB079.exists(), reason="shared OctoMap data not present")
 def test_geb079_pruned_leaves_block_what_their_children_block():
     from planner.io import load_obstacles
@@ -186,7 +187,7 @@ def test_bad_boxes_raise_map_error():
         exact_box_inflation(z, z + 1, lat, 0.5, rotation=2 * np.eye(3))
     with pytest.raises(MapError, match="translation"):
         exact_box_inflation(z, z + 1, lat, 0.5, translation=[1, 2])
-    with pytest.raises(MapError, match="radius"):
+    with pytest.raises(PlanError, match="radius"):
         exact_box_inflation(z, z + 1, lat, -1)
     with pytest.raises(MapError, match="budget"):
         exact_box_inflation(z, z + 1, lat, 30.0, memory_budget=10**5)

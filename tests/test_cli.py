@@ -45,7 +45,7 @@ def test_help_shows_every_default():
         text = " ".join(r.stdout.split())
         assert "(default:" in text, cmd
     text = " ".join(planner("plan", "--help").stdout.split())
-    for default in ("(default: fcc)", "(default: astar)", "(default: full)", "(default: 1.0)"):
+    for default in ("not given: fcc", "(default: astar)", "(default: full)", "(default: 1.0)"):
         assert default in text
 
 
@@ -65,6 +65,7 @@ def test_bundled_map_by_name_from_another_folder(tmp_path):
     assert saved["found"] and len(saved["path"]) > 1
 
 
+@pytest.mark.slow
 def test_custom_generator_as_text_and_npy(tmp_path):
     g = np.diag([0.2, 0.2, 0.25])
     np.save(tmp_path / "g.npy", g)
@@ -147,6 +148,7 @@ def test_bad_arguments_are_one_line_errors(args, needle):
     one_line_error(planner(*args), needle)
 
 
+@pytest.mark.slow
 def test_numpy_warnings_do_not_precede_the_error_line(tmp_path):
     # a degenerate cloud (all points on one plane) makes numpy warn on the way to an error
     pts = np.zeros((50, 3))
@@ -210,6 +212,7 @@ def _wait_for_rows(proc, results, n=1, timeout=240):
     (signal.SIGTERM, 143, 2, SUITE),
     (signal.SIGINT, 130, 2, OMPL_ONLY),  # workers with OMPL worker processes of their own
 ])
+@pytest.mark.slow
 def test_bench_stops_cleanly_on_a_signal(tmp_path, sig, code, jobs, suite):
     proc = _start_bench(tmp_path, jobs, suite)
     results = tmp_path / "out" / "results.jsonl"
@@ -237,6 +240,7 @@ def test_bench_stops_cleanly_on_a_signal(tmp_path, sig, code, jobs, suite):
     assert rows and all("found" in r for r in rows)  # only whole rows
 
 
+@pytest.mark.slow
 def test_second_run_on_one_folder_is_refused_and_resume_reuses_queries(tmp_path):
     proc = _start_bench(tmp_path, 1)
     try:

@@ -10,6 +10,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from planner.lattice import Lattice
 from planner.search import search
@@ -41,6 +42,7 @@ def test_public_names_still_resolve_after_a_light_import():
     assert res.stdout.strip().split(maxsplit=2) == ["Quantizer", "World", str(fcc)]
 
 
+@pytest.mark.slow
 def test_install_warm_up_covers_the_readme_first_command():
     """After ``planner._warm.warm()`` (what the build runs), ``planner compare office``
     compiles no kernel signature that the warm-up did not."""

@@ -201,6 +201,7 @@ def _problem(case, command: str, proc, target: Path) -> str | None:
     return None
 
 
+@pytest.mark.slow
 def test_every_corpus_case_through_the_cli(cases, tmp_path):
     chosen = _selected(cases)
     jobs = []
@@ -234,6 +235,7 @@ def _api(case):
     return planner.build_world(str(_map_for(case)), "fcc", radius=0.1, format=case.format)
 
 
+@pytest.mark.slow
 def test_every_corpus_case_through_the_api(cases):
     counts = Counter()
     for case in cases:
@@ -272,6 +274,7 @@ def test_huge_octomap_worlds_are_refused_by_the_memory_budget(extra):
              "geb079.bt", "over the memory budget", "--memory-budget")
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not GEB079.exists(), reason="shared OctoMap data not present")
 def test_a_robot_wider_than_the_corridors_gets_one_line_within_the_memory_limit():
     # r = 3 m with 0.08 m cells: a 200,000-offset stencil over unknown space dilated past
@@ -329,6 +332,7 @@ def test_a_sealed_goal_on_a_large_map_is_unreachable_at_once(tmp_path):
     assert "no path (goal unreachable" in proc.stdout and "Traceback" not in proc.stderr
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not DA1.exists(), reason="shared Warframe data not present")
 def test_an_unreachable_goal_ends_at_the_search_budget(tmp_path):
     # a pocket too big for the goal probe: the search explores until the node budget the
@@ -365,6 +369,7 @@ def _rows(results: Path) -> dict:
     return {runner.row_key(r): r for r in runner.read_rows(results)} if results.is_file() else {}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("point", ["first row", "half the rows", "report"])
 def test_kill_9_loses_no_finished_row(tmp_path, point):
     suite = tmp_path / "killed.toml"

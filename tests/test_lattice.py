@@ -71,6 +71,7 @@ def test_generators_match_the_paper_to_printed_precision():
         assert np.allclose(Lattice.named(name).generator, g, atol=1e-4)
 
 
+@pytest.mark.slow
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(
     name=st.sampled_from(NAMES),
@@ -88,6 +89,7 @@ def test_quantize_is_exact_for_every_lattice_and_scale(name, log_volume, far, se
     assert_nearest(lat, x, lat.quantize_generic(x))
 
 
+@pytest.mark.slow
 @settings(max_examples=40, deadline=None)
 @given(dim=st.sampled_from([2, 3]), seed=st.integers(0, 2**31))
 def test_quantize_is_exact_for_user_generators(dim, seed):
@@ -331,7 +333,7 @@ def test_quantizer_tables_reproduce_quantize():
     lat = Lattice.named("mcc", 0.2)
     q = lat.quantizer()
     assert q.cand.shape[0] == 8 and q.counts.shape == (8,)
-    from planner.lattice._quantize import run_generic
+    from planner.lattice.quantize import run_generic
 
     x = np.random.default_rng(2).uniform(-5, 5, (5000, 3))
     out = np.empty(x.shape, dtype=np.int64)
@@ -340,6 +342,7 @@ def test_quantizer_tables_reproduce_quantize():
 
 
 # -- read-only install --------------------------------------------------------------------------
+@pytest.mark.slow
 def test_import_and_quantize_from_a_read_only_install(tmp_path):
     """No writable package folder, HOME unset, no numba cache dir: kernels compile in memory.
 

@@ -180,6 +180,7 @@ def test_rotation_summary_medians_and_relative_change():
     assert out["fcc"]["rotations"] == 3
 
 
+@pytest.mark.slow
 def test_paper_benchmark_quick_run(tmp_path, capsys):
     out = tmp_path / "paper"
     assert paper.reproduce(out, quick=True, rotations=2, data=DATA) == 0

@@ -100,6 +100,7 @@ WRITERS = {"bag": ("office_bag", write_bag), "las": ("office.las", write_las),
            "pcd": ("office_organized.pcd", write_organized_pcd)}
 
 
+@pytest.mark.slow
 def test_every_robot_format_plans_the_same_path(tmp_path, office):
     ref = plan_json(_write_ply(tmp_path, office))
     assert ref["found"]

@@ -118,7 +118,7 @@ def test_segment_cells_contain_sampled_cells(name):
 def _touched_brute(lat, a, b, s):
     """Every cell in an index box around the segment whose closed Voronoi cell (widened by
     the walk's tolerance) meets it: the walk's clip test, evaluated for each candidate."""
-    from planner.occupancy.grid import _SEG_TOL
+    from planner.occupancy.walk import SEG_TOL as _SEG_TOL
 
     g, rel = lat.generator, lat.relevant_vectors
     rhs = 0.5 * (rel * rel).sum(1)

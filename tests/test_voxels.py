@@ -12,7 +12,7 @@ import pytest
 from scipy.optimize import linprog, minimize
 
 from planner import voxels as V
-from planner.errors import MapError
+from planner.errors import MapError, PlanError
 from planner.io import Obstacles
 from planner.lattice import NAMED_LATTICES, Lattice
 from planner.voxels import OccupiedVoxelList, exact_inflation
@@ -115,7 +115,7 @@ def test_bad_indices_and_lattice():
         OccupiedVoxelList(lat, [[2**22, 0, 0]])
     occ = OccupiedVoxelList(lat, [[0, 0, 0]])
     for bad in (-1.0, float("nan"), float("inf"), "x"):
-        with pytest.raises(MapError, match="radius"):
+        with pytest.raises(PlanError, match="radius"):
             occ.inflate(bad)
 
 

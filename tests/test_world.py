@@ -128,12 +128,12 @@ def test_unknown_free_crosses_unknown_cells_and_counts_them():
 
 def test_plain_clouds_say_everything_not_occupied_is_free():
     w = planner.build_world(np.array([[1.0, 1.0, 1.0], [2.0, 2.0, 2.0]]), "fcc",
-                            cell_volume=0.01)
+                            cell_volume=0.01, radius=0.0)
     assert w.unknown_policy == "free" and w.n_unknown == 0
     assert "no free-space information" in w.unknown_note
     with pytest.raises(MapError, match="says nothing about free space"):
         planner.build_world(np.array([[1.0, 1.0, 1.0]]), unknown="blocked", cell_volume=0.01,
-                            bounds=[[0, 0, 0], [2, 2, 2]])
+                            radius=0.0, bounds=[[0, 0, 0], [2, 2, 2]])
 
 
 def test_posed_scan_rays_mark_free_space():
@@ -143,7 +143,7 @@ def test_posed_scan_rays_mark_free_space():
     obst = Obstacles(points=pts, boxes=np.zeros((0, 3)), box_size=0.0, bounds=None,
                      resolution=None, source="scan", origins=np.zeros((1, 3)),
                      point_origin=np.zeros(len(pts), dtype=np.int64))
-    w = planner.build_world(obst, "cubic", cell_volume=0.1**3,
+    w = planner.build_world(obst, "cubic", cell_volume=0.1**3, radius=0.0,
                             bounds=[[-0.5, -1, -1], [3, 1, 1]])
     assert w.unknown_policy == "blocked"
     q = w.lattice.quantize(np.array([[1.0, 0, 0], [2.6, 0, 0], [-0.3, 0, 0]]))

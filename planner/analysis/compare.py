@@ -1,9 +1,7 @@
-"""The cross-lattice comparison (``planner compare``), path files and path figures."""
+"""The cross-lattice comparison (``planner compare``) and its path figure."""
 
 from __future__ import annotations
 
-import csv
-import json
 import math
 import sys
 import time
@@ -15,80 +13,12 @@ from planner.analysis.style import LATTICE_COLORS
 from planner.analysis.tables import format_table
 from planner.errors import MapError, PlanError
 from planner.fsutil import atomic_path
-from planner.maps import read_sidecar
+from planner.maps import resolve
+from planner.planning import plan
+from planner.search import warm_up
+from planner.world.build import build_world, sidecar
 
-__all__ = ["compare", "describe", "format_rows", "map_defaults", "plot_paths", "write_path"]
-
-
-def describe(res) -> str:
-    """One human-readable paragraph about a PlanResult."""
-    ompl = res.method.startswith("ompl:")
-    head = f"{res.lattice} (cell volume {res.cell_volume:.6g} m^3), {res.method}" + (
-        " (continuous, validated on this lattice's world)" if ompl else f", {res.neighbors}")
-    if not res.found:
-        return f"{head}: no path ({res.reason}); {res.cell_checks} cell checks"
-    work = "" if ompl else f", {res.expansions} expansions"
-    note = f"; {res.reason}" if res.reason else ""
-    return (
-        f"{head}: length {res.length:.3f} m, {len(res.path)} waypoints, "
-        f"{res.cell_checks} cell checks{work}, "
-        f"{res.seconds * 1e3:.1f} ms search (+{res.build_seconds:.2f} s map build){note}"
-    )
-
-
-def write_path(path: str, res) -> None:
-    """Write the path as CSV (x,y,z per waypoint) or JSON (the whole result), atomically."""
-    suffix = Path(path).suffix.lower()
-    if suffix not in (".csv", ".json"):
-        raise PlanError(f"{path}: unknown output format {suffix!r}; use .csv or .json")
-    with atomic_path(path) as tmp:
-        if suffix == ".json":
-            tmp.write_text(json.dumps(res.to_dict(), indent=1))
-        else:
-            with open(tmp, "w", newline="") as f:
-                w = csv.writer(f)
-                w.writerow(["x", "y", "z"])
-                w.writerows(np.round(res.path, 6).tolist())
-
-
-def map_defaults(map_path: str, radius: float | None = None,
-                 cell_volume: float | None = None) -> tuple[float, float | None]:
-    """Robot radius and cell volume for a map: the given values, else the map's sidecar.
-
-    ``plan`` and ``compare`` share these defaults.  A map without a suggested radius needs
-    an explicit one (a silent radius 0 would plan paths that graze obstacles).
-
-    Returns
-    -------
-    radius : float
-        Metres.
-    cell_volume : float or None
-        m^3; ``None`` lets :func:`planner.build_world` pick the map's native resolution.
-
-    Raises
-    ------
-    PlanError
-        No radius given and none suggested by the map.
-
-    Examples
-    --------
-    >>> from planner.maps import resolve
-    >>> map_defaults(str(resolve("office")))
-    (0.25, 0.002)
-    >>> map_defaults(str(resolve("office")), radius=0.1, cell_volume=0.01)
-    (0.1, 0.01)
-    """
-    side = read_sidecar(map_path)
-    if radius is None:
-        if not Path(map_path).exists():
-            raise MapError(f"{map_path}: no such file or bundled map")
-        if side.get("robot_radius") is None:
-            raise PlanError(f"{map_path}: the map suggests no robot radius; pass --radius "
-                            "(metres, 0 for a point robot)")
-        radius = float(side["robot_radius"])
-    if cell_volume is None and side.get("cell_volume") is not None:
-        cell_volume = float(side["cell_volume"])
-    return float(radius), cell_volume
+__all__ = ["compare", "format_rows", "plot_paths"]
 
 
 def compare(
@@ -114,14 +44,17 @@ def compare(
     generator, scaled to the common cell volume when one is given or suggested by the map).
 
     Queries are ``start``/``goal`` when given, else the map's default queries (bundled
-    maps' JSON sidecar). Radius and cell volume default to the sidecar's suggestions.
+    maps' JSON sidecar). Radius and the rest default as in :func:`planner.build_world`; the
+    cell volume, common to every lattice, to the sidecar's suggestion.
     ``max_expansions`` bounds each search (None: the memory budget's default).
     ``unknown`` is the unknown-space policy of :func:`planner.build_world` (None: the map's
     default); each row reports the unknown cells its paths cross.
     """
-    from planner import planning as api
-
-    side = read_sidecar(map_path)
+    if not resolve(map_path).exists():
+        raise MapError(f"{map_path}: no such file or bundled map")
+    side = sidecar(resolve(map_path))
+    if cell_volume is None:  # one cell volume for every lattice, custom generators too
+        cell_volume = side.get("cell_volume")
     if start is not None and goal is not None:
         queries = [(np.asarray(start), np.asarray(goal))]
     elif start is not None or goal is not None:
@@ -130,16 +63,13 @@ def compare(
         queries = [(np.asarray(q["start"]), np.asarray(q["goal"])) for q in side.get("queries", [])]
         if not queries:
             raise PlanError(f"{map_path}: no default queries; pass --start and --goal")
-    radius, cell_volume = map_defaults(map_path, radius, cell_volume)
     rows, results = [], {}
     for lat in lattices:
         name = lat if isinstance(lat, str) else (lat.name or "custom")
         t0 = time.perf_counter()
-        world = api.build_world(map_path, lat, cell_volume=cell_volume, radius=radius,
+        world = build_world(map_path, lat, cell_volume=cell_volume, radius=radius,
                                 bounds=bounds, format=format, unknown=unknown)
         build = time.perf_counter() - t0
-        from planner.search import warm_up
-
         compile_s = warm_up()  # JIT / cache load of the search kernels: not search time
         per = []
         try:
@@ -147,7 +77,7 @@ def compare(
                 if progress:
                     print(f"\r{name}: query {i + 1}/{len(queries)}", end="", file=sys.stderr,
                           flush=True)
-                per.append(api.plan(world, s, g, method=method, neighbors=neighbors,
+                per.append(plan(world, s, g, method=method, neighbors=neighbors,
                                     max_expansions=max_expansions))
         finally:  # clear the progress line, also before an error message
             if progress:

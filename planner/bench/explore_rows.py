@@ -63,10 +63,9 @@ def check_explore_table(table: dict) -> str | None:
 
 def _setting(task: dict):
     """The map the robot explores, its bounds (m) and the task's (turned) lattice."""
-    from planner.bench.runner import _frame
-    from planner.bench.worlds import rotated_lattice
+    from planner.bench.worlds import cached_frame, rotated_lattice
 
-    frame = _frame(task["map"])
+    frame = cached_frame(task["map"])
     lat = rotated_lattice(task["lattice"], task["cell_volume"],
                           task.get("quaternion", (1.0, 0.0, 0.0, 0.0)))
     return frame.obstacles, frame.bounds, lat

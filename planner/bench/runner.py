@@ -27,17 +27,13 @@ from planner.path import path_length
 
 _WORLDS: dict = {}
 _CLEARANCE: dict = {}
-_FRAMES: dict = {}
 LATTICE_METHODS = ("astar", "dijkstra", "theta", "lazy-theta")
 
 
 def _frame(map_path: str):
-    from planner.bench.worlds import map_frame
+    from planner.bench.worlds import cached_frame
 
-    if map_path not in _FRAMES:
-        _FRAMES.clear()
-        _FRAMES[map_path] = map_frame(map_path)
-    return _FRAMES[map_path]
+    return cached_frame(map_path)
 
 
 def _world(task: dict):

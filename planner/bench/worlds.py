@@ -76,12 +76,24 @@ class MapFrame:
 
 def map_frame(map_path: str) -> MapFrame:
     """Load a map and its world box as :func:`planner.build_world` would choose it."""
-    from planner.planning import as_obstacles, map_box
+    from planner.world.build import as_obstacles, map_box
 
     obst = as_obstacles(map_path)
     bounds = map_box(map_path, obst)
     free = FreeSpace(obst) if len(obst.free_boxes) else None
     return MapFrame(obst, bounds, free)
+
+
+_FRAMES: dict = {}
+
+
+def cached_frame(map_path: str) -> MapFrame:
+    """:func:`map_frame`, kept per process for the map last asked for (a worker's tasks
+    come grouped by map)."""
+    if map_path not in _FRAMES:
+        _FRAMES.clear()
+        _FRAMES[map_path] = map_frame(map_path)
+    return _FRAMES[map_path]
 
 
 def rotated_lattice(lattice: str, cell_volume: float, quaternion):
@@ -107,7 +119,7 @@ def rotated_world(map_path: str, lattice: str, cell_volume: float, radius: float
     planner.World
         In the map's own frame, bounds the map's box.
     """
-    from planner.planning import build_world
+    from planner.world.build import build_world
 
     return build_world(map_path, rotated_lattice(lattice, cell_volume, quaternion),
                        radius=radius)
@@ -149,7 +161,7 @@ def cached_world(cache_dir: str | None, map_path: str, lattice: str, cell_volume
     w = rotated_world(map_path, lattice, cell_volume, radius, quaternion)
     f.parent.mkdir(parents=True, exist_ok=True)
 
-    def steps(cells):  # sorted keys as steps compress ~100x
+    def steps(cells):  # sorted keys as steps: small numbers that compress well
         return np.diff(np.unique(pack(cells)), prepend=np.int64(0))
 
     with atomic_path(f) as tmp, open(tmp, "wb") as fh:

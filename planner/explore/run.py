@@ -11,9 +11,9 @@ Sensor: :mod:`planner.explore.sensor` (exact rays through the lattice against th
 occupied cells; a hit reveals the obstacles of the cell it stops in).
 
 Known map: the revealed obstacles, inflated for the radius by the same rule as the true
-world (:func:`planner.planning.inflated_obstacles`: points exactly, boxes grown by the radius),
-only around the newly revealed ones, so the known blocked cells are a subset of the true
-world's. Hence a move the robot takes is safe on what it knew, and a goal unreachable in
+world (:func:`planner.voxels.from_map.inflated_obstacles`: points exactly, boxes grown by the
+radius), only around the newly revealed ones, so the known blocked cells are a subset of the
+true world's. Hence a move the robot takes is safe on what it knew, and a goal unreachable in
 the known world is unreachable in the true one. Every executed move is also walked in the
 true inflated world: a blocked cell there is a ``contact`` (an obstacle within ``r`` that
 the sensor had not seen).
@@ -31,6 +31,7 @@ import numpy as np
 from planner.errors import MapError, PlanError
 from planner.explore.sensor import Sensor, cast_rays, ray_directions
 from planner.lattice import Lattice
+from planner.occupancy.walk import walk_of
 from planner.world import World
 
 __all__ = ["ExploreResult", "explore", "ray_directions", "cast_rays"]
@@ -157,7 +158,7 @@ def explore(
     start,
     goal,
     *,
-    lattice: str | Lattice = "fcc",
+    lattice: str | Lattice | None = None,
     radius: float | None = None,
     cell_volume: float | None = None,
     bounds=None,
@@ -180,7 +181,7 @@ def explore(
     lattice, cell_volume, bounds
         As :func:`planner.build_world` (defaults: the map's).
     radius : float, optional
-        Robot radius (m); default the bundled map's ``robot_radius``, else 0.
+        Robot radius (m); default the map's ``robot_radius`` (a map without one needs it).
     sensor_range : float
         Ray length (m).
     fov : (float, float)
@@ -197,19 +198,16 @@ def explore(
     ExploreResult
     """
     from planner import io
-    from planner.planning import _sidecar, as_obstacles, build_world
     from planner.search import search
     from planner.search.dstar.lite import DStarLite
     from planner.voxels.from_map import inflated_obstacles
-    from planner.world.world import _walk
+    from planner.world.build import as_obstacles, build_world, resolve_defaults, sidecar
 
     if isinstance(source, str | Path):  # a bundled map by name ("office"), as build_world
         from planner.maps import resolve
 
         source = resolve(source)
-    side = _sidecar(source)
-    if radius is None:
-        radius = float(side.get("robot_radius", 0.0))
+    side = sidecar(source)
     if not (isinstance(sensor_range, int | float) and math.isfinite(sensor_range)
             and sensor_range > 0):
         raise PlanError(f"sensor_range must be a positive number of metres, got "
@@ -218,13 +216,12 @@ def explore(
         raise PlanError(f"max_steps must be a non-negative integer, got {max_steps!r}")
     dirs = ray_directions(fov, resolution)
     obst = as_obstacles(source)
-    if cell_volume is None and not isinstance(lattice, Lattice):
-        cell_volume = side.get("cell_volume")
     # The true world is what a sensor can hit: the obstacles. A map's unobserved space (an
     # OctoMap's unknown leaves) is not an obstacle here, so it counts as free.
-    truth = build_world(obst, lattice, cell_volume=cell_volume, radius=radius,
-                        bounds=side.get("bounds") if bounds is None else bounds,
-                        unknown="free")
+    got = resolve_defaults(obst, side, lattice=lattice, cell_volume=cell_volume,
+                           radius=radius, unknown="free", bounds=bounds)
+    radius = got.radius
+    truth = build_world(obst, got.lattice, radius=radius, bounds=got.bounds, unknown="free")
     lat = truth.lattice
     boxes = len(obst.boxes) > 0 and (not len(obst.points) or np.array_equal(obst.points,
                                                                            obst.boxes))
@@ -235,7 +232,7 @@ def explore(
     goal_p, gcell = truth.endpoint(goal, "goal")
     known = World(lat, np.zeros((0, 3), np.int64), truth.bounds, radius=truth.radius,
                   source=f"explored {obst.source}")
-    sensor = Sensor(pts, obst.box_sizes if boxes else None, lat, _walk(lat), dirs,
+    sensor = Sensor(pts, obst.box_sizes if boxes else None, lat, walk_of(lat), dirs,
                      sensor_range)
     _warm_up(lat, neighbors, DStarLite)
     dl = DStarLite(known, s, gcell, neighbors=neighbors)

@@ -13,12 +13,13 @@ cell, or every box that can overlap it (a lidar return from that surface patch).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
+from planner._numba import njit_cached
 from planner.errors import PlanError
 from planner.lattice import Lattice
-from planner.occupancy.grid import Occupancy, occ_free, walk_on, walk_scratch
-from planner.occupancy.keys import pack
+from planner.occupancy.grid import Occupancy, occ_free
+from planner.occupancy.keys import build_key_set, pack
+from planner.occupancy.walk import walk_on, walk_scratch
 
 __all__ = ["Sensor", "cast_rays", "ray_directions"]
 
@@ -44,10 +45,10 @@ def ray_directions(fov=(360.0, 30.0), resolution: float = 3.0) -> np.ndarray:
                                           np.sin(e)], axis=1))
 
 
-@njit(cache=True)
+@njit_cached
 def _entry(u0, u1, u2, av, dq, wv, nrel):  # pragma: no cover - compiled
     """Smallest t in [0, 1] at which a + t (b - a) is in the closed Voronoi cell at offset
-    u from the walk's start cell (the clipping of ``_world_kernels._touches``)."""
+    u from the walk's start cell (the clipping of ``planner.occupancy.walk._touches``)."""
     lo = 0.0
     for r in range(nrel):
         q = dq[r]
@@ -58,7 +59,7 @@ def _entry(u0, u1, u2, av, dq, wv, nrel):  # pragma: no cover - compiled
     return lo
 
 
-@njit(cache=True)
+@njit_cached
 def cast_rays(occupied, walk, origin, s, dirs, reach, hits):  # pragma: no cover - compiled
     """Cast rays from ``origin`` (m, in cell ``s``) along ``dirs`` (R, 3) for ``reach`` m
     against the occupied cells (an :class:`Occupancy` whose *blocked* cells are the
@@ -120,8 +121,6 @@ class Sensor:
 
     def __init__(self, points: np.ndarray, box_sizes: np.ndarray | None, lattice: Lattice,
                  walk, dirs: np.ndarray, reach: float):
-        from planner.occupancy.grid import build_key_set
-
         self.points, self.boxes = points, box_sizes is not None
         if self.boxes:
             from scipy.spatial import cKDTree

@@ -9,10 +9,16 @@ sidecars (:mod:`~planner.io.sidecar`) and the reader chosen by extension or form
 """
 
 from planner.io._files import DECOMPRESSED_BUDGET
-from planner.io.load import load_obstacles, load_points, obstacles_from_points, save_points
+from planner.io.load import (
+    load_obstacles,
+    load_points,
+    load_posed_scans,
+    obstacles_from_points,
+    save_points,
+)
 from planner.io.movingai import load_scenarios
 from planner.io.obstacles import Obstacles, Scenarios
-from planner.io.scans import load_posed_scans, merge_scans
+from planner.io.scans import merge_scans
 from planner.io.sidecar import load_sidecar
 from planner.io.validate import robust_extent
 

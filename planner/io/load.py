@@ -1,4 +1,5 @@
-"""Reading obstacle maps and point clouds; writing point clouds.
+"""The reader chosen by file extension or format name (:func:`load_obstacles`,
+:func:`load_points`, :func:`load_posed_scans`) and the point writer (:func:`save_points`).
 
 Readers (chosen by file extension, or by an explicit ``format`` name):
 
@@ -42,7 +43,7 @@ from planner.errors import MapError
 from planner.io._files import DECOMPRESSED_BUDGET, check_file
 from planner.io.movingai import load_scenarios
 from planner.io.obstacles import Obstacles, Scenarios
-from planner.io.scans import load_posed_scans, merge_scans
+from planner.io.scans import read_pose_list
 from planner.io.sidecar import load_sidecar
 from planner.io.validate import robust_extent
 
@@ -55,7 +56,6 @@ __all__ = [
     "load_posed_scans",
     "load_scenarios",
     "load_sidecar",
-    "merge_scans",
     "obstacles_from_points",
     "robust_extent",
     "save_points",
@@ -159,8 +159,7 @@ def _read(p: Path, fmt: str, compression: str | None, budget: int | None,
         from planner.io.movingai import read_3dmap
         return read_3dmap(p)
     if fmt == "poses":
-        from planner.io.scans import read_pose_list
-        return read_pose_list(p)
+        return read_pose_list(p, load_obstacles)
     if fmt == "rosmap":
         from planner.io.rosmap import read_rosmap
         return read_rosmap(p)
@@ -224,6 +223,28 @@ def load_points(path: PathLike, format: str | None = None, **kwargs) -> np.ndarr
         return obst.box_centre_points()
     except MapError as exc:
         raise MapError(f"{obst.source}: {exc}") from None
+
+
+def load_posed_scans(path: str | Path) -> np.ndarray:
+    """Read a pose list and merge its scans into one world-frame cloud.
+
+    Each non-comment line is ``scan_path`` followed by either 16 numbers (the 4x4
+    sensor-to-world matrix, row-major) or 7 numbers ``x y z qx qy qz qw`` (translation in
+    metres and a rotation quaternion, normalised here).  Separators are whitespace and / or
+    commas; ``#`` starts a comment.  Relative scan paths are relative to the pose file's folder.
+
+    Returns
+    -------
+    ndarray, shape (N, 3), float64
+        World-frame points, metres (no-returns dropped), scans in file order.
+
+    Raises
+    ------
+    MapError
+        Missing or malformed pose file (message gives the line number), a bad pose, or any
+        error reading a scan.
+    """
+    return read_pose_list(Path(path), load_obstacles).points
 
 
 def save_points(path: PathLike, points: np.ndarray, *, dtype=np.float64) -> None:

@@ -170,8 +170,6 @@ class Obstacles:
         ndarray, shape (P, d), float64
             Metres; ``boxes`` itself when every box has the same size.
         """
-        from planner.io.validate import fill_boxes
-
         return fill_boxes(self.boxes, self.box_sizes, self.resolution)
 
     def robust_bounds(self) -> tuple[np.ndarray, int]:
@@ -185,8 +183,6 @@ class Obstacles:
         n_outliers : int
             Points left out (see :func:`planner.io.robust_extent`).
         """
-        from planner.io.validate import robust_extent
-
         half = self.box_sizes[:, None] / 2
         parts = [self.points, self.boxes - half, self.boxes + half]
         allp = np.concatenate([p for p in parts if len(p)] or [np.zeros((0, self.dim))])
@@ -246,3 +242,81 @@ class Scenarios:
 
     def __len__(self) -> int:
         return len(self.costs)
+
+
+# -- geometry over validated points ---------------------------------------------------------
+# A filled box set larger than this is refused (a corrupt coarse OctoMap leaf would otherwise
+# expand to billions of points); no real map comes near it.
+MAX_FILLED_POINTS = 100_000_000
+
+
+def fill_boxes(centres: np.ndarray, sizes: np.ndarray, step: float | None = None) -> np.ndarray:
+    """Fill each box with a grid of cubes of edge ``step``; return their centres.
+
+    Parameters
+    ----------
+    centres : ndarray, shape (M, d)
+        Box centres, metres.
+    sizes : ndarray, shape (M,)
+        Box edges, metres; each a whole multiple of ``step`` (as in an OctoMap).
+    step : float, optional
+        Edge of the filling cubes, metres; default the smallest box edge.
+
+    Returns
+    -------
+    ndarray, shape (P, d), float64
+    """
+    if not len(centres):
+        return centres.copy()
+    step = float(sizes.min()) if step is None else float(step)
+    if step <= 0 or np.all(sizes == step):
+        return centres.copy()
+    per = np.rint(sizes / step).astype(np.int64)
+    d = centres.shape[1]
+    total = int((per.astype(np.float64) ** d).sum())
+    if total > MAX_FILLED_POINTS:
+        raise MapError(f"boxes fill {total} cubes of {step:g} m (limit {MAX_FILLED_POINTS})")
+    out = []
+    for n in np.unique(per):
+        sel = centres[per == n]
+        ticks = (np.arange(n) - (n - 1) / 2) * step
+        grid = np.stack(np.meshgrid(*([ticks] * d), indexing="ij"), axis=-1).reshape(-1, d)
+        out.append((sel[:, None, :] + grid[None]).reshape(-1, d))
+    return np.concatenate(out)
+
+
+def robust_extent(points: np.ndarray, tail: float = 1e-3) -> tuple[np.ndarray, int]:
+    """Bounding box of ``points`` that one far outlier cannot blow up.
+
+    The core box spans the ``tail`` and ``1 - tail`` quantiles per axis.  A point is an outlier
+    when it lies more than one core width (at least 1 m) beyond the core on some axis; the
+    result is the exact bounding box of the other points.
+
+    Parameters
+    ----------
+    points : ndarray, shape (N, d)
+        Finite coordinates, metres, N >= 1.
+    tail : float
+        Quantile left out on each side when sizing the core.
+
+    Returns
+    -------
+    bounds : ndarray, shape (2, d)
+        ``[min, max]`` of the non-outliers, metres.
+    n_outliers : int
+        Points outside it.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> pts = np.vstack([np.random.default_rng(0).uniform(0, 10, (1000, 3)), [[1e6, 0, 0]]])
+    >>> box, n = robust_extent(pts)
+    >>> n, bool(box[1, 0] < 11)
+    (1, True)
+    """
+    pts = np.asarray(points, dtype=np.float64)
+    lo, hi = np.quantile(pts, [tail, 1 - tail], axis=0)
+    margin = np.maximum(hi - lo, 1.0)
+    inside = ((pts >= lo - margin) & (pts <= hi + margin)).all(axis=1)
+    core = pts[inside]
+    return np.stack([core.min(axis=0), core.max(axis=0)]), int(len(pts) - len(core))

@@ -11,8 +11,8 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-from numba import njit
 
+from planner._numba import njit_cached
 from planner.errors import MapError
 from planner.io._files import header_lines, read_bytes
 from planner.io.obstacles import Obstacles
@@ -79,7 +79,7 @@ def read_octomap(p: Path) -> Obstacles:
                      source=p.name, unknown_default="blocked")
 
 
-@njit(cache=True)
+@njit_cached
 def _walk(stream):  # pragma: no cover - compiled
     """Depth-first walk of an OctoMap binary stream with an explicit stack.
 

@@ -9,8 +9,8 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-from numba import njit
 
+from planner._numba import njit_cached
 from planner.errors import MapError
 from planner.io._files import header_lines, loadtxt, read_bytes
 from planner.io.obstacles import Obstacles
@@ -130,7 +130,7 @@ def _pcd_decompress(body: bytes, npts: int, point_step: int, name: str) -> bytes
     return out.tobytes()
 
 
-@njit(cache=True)
+@njit_cached
 def _lzf_decompress(src, out_len):  # pragma: no cover - compiled
     """LZF (liblzf) decompression of uint8 ``src`` into ``out_len`` bytes.
 

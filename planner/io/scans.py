@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -67,31 +68,10 @@ def merge_posed(scans: list[np.ndarray], poses, name: str) -> Obstacles:
                      point_origin=np.concatenate(owner), dropped_nonfinite=dropped)
 
 
-def load_posed_scans(path: str | Path) -> np.ndarray:
-    """Read a pose list and merge its scans into one world-frame cloud.
-
-    Each non-comment line is ``scan_path`` followed by either 16 numbers (the 4x4
-    sensor-to-world matrix, row-major) or 7 numbers ``x y z qx qy qz qw`` (translation in
-    metres and a rotation quaternion, normalised here).  Separators are whitespace and / or
-    commas; ``#`` starts a comment.  Relative scan paths are relative to the pose file's folder.
-
-    Returns
-    -------
-    ndarray, shape (N, 3), float64
-        World-frame points, metres (no-returns dropped), scans in file order.
-
-    Raises
-    ------
-    MapError
-        Missing or malformed pose file (message gives the line number), a bad pose, or any
-        error reading a scan.
-    """
-    return read_pose_list(Path(path)).points
-
-
-def read_pose_list(p: Path) -> Obstacles:
-    """:func:`load_posed_scans` as :class:`Obstacles` with the scans' sensor origins."""
-    from planner.io import load_obstacles
+def read_pose_list(p: Path, load_obstacles: Callable[..., Obstacles]) -> Obstacles:
+    """:func:`planner.io.load_posed_scans` as :class:`Obstacles` with the scans' sensor
+    origins; each scan is read by ``load_obstacles`` (the dispatcher of
+    :mod:`planner.io.load`, passed in: a pose list's scans are maps of any format)."""
 
     text = read_text(p)
     scans, poses, dropped = [], [], 0

@@ -1,7 +1,7 @@
 """Lattice geometry: generators, exact quantization, Voronoi cells and adjacency.
 
 :class:`Lattice` (:mod:`~planner.lattice.lattice`), its geometry
-(:mod:`~planner.lattice._geometry`), the closest-point kernels (:mod:`~planner.lattice._quantize`,
+(:mod:`~planner.lattice._geometry`), the closest-point kernels (:mod:`~planner.lattice.quantize`,
 loaded on first use), the paper's generators (:mod:`~planner.lattice.paper`) and 2D lattices as
 prisms (:mod:`~planner.lattice.planar`).
 """
@@ -20,5 +20,5 @@ def __getattr__(name: str):
     # Quantizer lives beside the numba kernels: loaded when asked for, so that
     # `import planner` does not import numba
     if name == "Quantizer":
-        return importlib.import_module("planner.lattice._quantize").Quantizer
+        return importlib.import_module("planner.lattice.quantize").Quantizer
     raise AttributeError(f"module 'planner.lattice' has no attribute {name!r}")

@@ -388,7 +388,7 @@ def rounding_offsets(
     ndarray, shape (k, d), int64
         Offsets in ``basis`` coefficients, the zero offset first.
     """
-    from scipy.optimize import linprog  # ~0.4 s to import: only when a lattice is derived
+    from scipy.optimize import linprog  # heavy import: only when a lattice is derived
 
     d = basis.shape[0]
     binv = np.linalg.inv(basis)

@@ -1,4 +1,4 @@
-"""Lattice geometry: generators, exact quantization, Voronoi cells and adjacency.
+"""The :class:`Lattice`: a generator, exact quantization, Voronoi cells and adjacency.
 
 A lattice is the set of points ``G @ w`` for integer index vectors ``w`` (shape ``(d,)``),
 where the generator ``G`` (``d x d``, columns are basis vectors, metres) is non-singular.
@@ -10,7 +10,7 @@ neighbours), touching cells (full neighbours), the cell as a polytope
 (:class:`VoronoiCell`), covering and packing radii and the normalised second moment.
 Nothing is tabulated per lattice except the paper's unit-determinant generators
 (:mod:`planner.lattice.paper`) and the choice of a specialised closest-point kernel
-(:mod:`planner.lattice._quantize`). The geometry lives in :mod:`planner.lattice._geometry`.
+(:mod:`planner.lattice.quantize`). The geometry lives in :mod:`planner.lattice._geometry`.
 """
 
 from __future__ import annotations
@@ -33,16 +33,16 @@ from planner.lattice._geometry import (
 from planner.lattice.paper import NAMED_LATTICES, PAPER_DELTAS, named_generator
 
 if TYPE_CHECKING:
-    from planner.lattice._quantize import Quantizer
+    from planner.lattice.quantize import Quantizer
 
 __all__ = ["Lattice", "NAMED_LATTICES", "PAPER_DELTAS", "Quantizer", "VoronoiCell",
            "named_generator"]
 
 
 def _qk():
-    """The quantizer kernels, imported on first use: importing numba costs ~0.2 s, which
-    ``import planner`` should not pay."""
-    return importlib.import_module("planner.lattice._quantize")
+    """The quantizer kernels, imported on first use: importing numba is slow, and
+    ``import planner`` should not pay for it."""
+    return importlib.import_module("planner.lattice.quantize")
 
 
 def __getattr__(name: str):
@@ -54,7 +54,7 @@ def __getattr__(name: str):
 _CHUNK = 1 << 20  # points per chunk of the input checks (no full-size temporaries)
 # Largest |index| a quantized point may have: float64 holds integers exactly up to 2**53.
 _INDEX_LIMIT = 2.0**52
-_SHELL_LIMIT = 5_000_000  # lattice vectors neighbors("face+k") may enumerate (~120 MB)
+_SHELL_LIMIT = 5_000_000  # lattice vectors neighbors("face+k") may enumerate (24 bytes each)
 
 
 class Lattice:

@@ -57,7 +57,7 @@ def floorplan_image() -> np.ndarray:
 def generate_floorplan(out_dir: str | os.PathLike[str]) -> tuple[Path, Path, Path]:
     """Write ``floorplan.pgm``, ``floorplan.yaml`` and ``floorplan.json`` into ``out_dir``."""
     from planner.fsutil import atomic_path, write_text_atomic
-    from planner.maps import _write_json
+    from planner.maps.bundled import _write_json
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

@@ -1,8 +1,7 @@
-"""Compiled (numba) kernels of the validity checker: occupancy lookup and exact segment walk.
+"""Which lattice cells are free: the :class:`Occupancy` struct and its lookups (numba).
 
-Everything here works on plain numpy arrays inside two typed structs (``NamedTuple``s,
-which numba compiles as tuples with named fields) so that it compiles once and caches on
-disk (``cache=True``):
+Everything here works on plain numpy arrays inside typed structs (``NamedTuple``s, which
+numba compiles as tuples with named fields) so that it compiles once and caches on disk:
 
 * :class:`Occupancy` - which cells are free. ``mode`` 0 (dense): ``grid`` is a flat uint8
   array over the index box ``lo + [0, dims)`` holding 1 for every cell that is in bounds and
@@ -11,7 +10,7 @@ disk (``cache=True``):
   load <= 0.5, empty slots -1) of packed keys of blocked cells; a cell is free iff its centre
   ``gmat @ w`` lies in ``[blo, bhi]`` (bounds already widened by the tolerance) and its key
   is not in the table.
-* :class:`Walk` - the lattice data of the exact segment walk (generator, relevant vectors).
+* :class:`planner.occupancy.walk.Walk` - the lattice data of the exact segment walk.
 
 Every array in them is C-contiguous, writable and of a fixed dtype for every lattice and
 storage mode: one numba type, so one compilation (MCC's generator is not C-contiguous and
@@ -25,8 +24,11 @@ from typing import NamedTuple
 import numpy as np
 
 from planner._numba import njit_cached
-from planner.lattice import _quantize as qk
-from planner.occupancy.keys import pack3
+from planner.lattice import quantize as qk
+from planner.occupancy.keys import in_key_set, pack3
+
+__all__ = ["Occupancy", "cell_free", "clear_cells", "fill_in_bounds", "free_many", "occ_free",
+           "point_free"]
 
 
 class Occupancy(NamedTuple):
@@ -43,65 +45,13 @@ class Occupancy(NamedTuple):
     bhi: np.ndarray  # (3,) float64 bounds maximum, widened by the tolerance (m)
 
 
-class Walk(NamedTuple):
-    """Lattice data of the exact segment walk. Arrays C-contiguous and writable."""
-
-    g: np.ndarray  # (3, 3) float64 generator (m)
-    rel: np.ndarray  # (R, 3) float64 Voronoi-relevant vectors (m)
-    rhs: np.ndarray  # (R,) float64 |v|^2 / 2
-    full: np.ndarray  # (F, 3) int64 full-adjacency offsets
-    wv: np.ndarray  # (R, 3) float64 rel @ g: c_u . v = wv . u for the cell at offset u
-
-
-_EMPTY = -1
-_SEG_TOL = 1e-9  # relative slack on each Voronoi half-space: boundary contact counts
-_FWD_SLACK = 1e-6  # cosine below which a full offset counts as backward (walk_on)
-
-
-# -- hashing -------------------------------------------------------------------------------
-@njit_cached(inline="always")
-def mix64(key):  # pragma: no cover - compiled
-    """splitmix64 finaliser: packed keys of neighbouring cells differ in few low bits."""
-    x = np.uint64(key)
-    x = (x ^ (x >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
-    x = (x ^ (x >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
-    x = x ^ (x >> np.uint64(31))
-    return np.int64(x >> np.uint64(1))
-
-
-@njit_cached
-def build_key_set(keys, size):  # pragma: no cover - compiled
-    """Open-addressing set of non-negative int64 keys; ``size`` a power of two >= 2 len."""
-    table = np.full(size, _EMPTY, dtype=np.int64)
-    mask = size - 1
-    for i in range(keys.shape[0]):
-        k = keys[i]
-        p = mix64(k) & mask
-        while table[p] != _EMPTY and table[p] != k:
-            p = (p + 1) & mask
-        table[p] = k
-    return table
-
-
-@njit_cached(inline="always")
-def _in_set(table, mask, k):  # pragma: no cover - compiled
-    p = mix64(k) & mask
-    while True:
-        t = table[p]
-        if t == k:
-            return True
-        if t == _EMPTY:
-            return False
-        p = (p + 1) & mask
-
-
 # -- occupancy -----------------------------------------------------------------------------
 @njit_cached(inline="always")
-def _free(mode, grid, lo, dims, table, tmask, g, blo, bhi, i, j, k):  # pragma: no cover
+def cell_free(mode, grid, lo, dims, table, tmask, g, blo, bhi, i, j, k):  # pragma: no cover
     """True iff cell (i, j, k) is in bounds and not blocked (one occupancy lookup).
 
     Takes the occupancy tuple's members (unpacked once by the caller) and is inlined:
-    a non-inlined call with array arguments costs ~50 ns of reference counting."""
+    a non-inlined call with array arguments pays reference counting on every call."""
     if mode == 0:
         a = i - lo[0]
         b = j - lo[1]
@@ -113,13 +63,13 @@ def _free(mode, grid, lo, dims, table, tmask, g, blo, bhi, i, j, k):  # pragma: 
         x = g[r, 0] * i + g[r, 1] * j + g[r, 2] * k
         if x < blo[r] or x > bhi[r]:
             return False
-    return not _in_set(table, tmask, pack3(i, j, k))
+    return not in_key_set(table, tmask, pack3(i, j, k))
 
 
 @njit_cached(inline="always")
 def occ_free(occ, i, j, k):  # pragma: no cover - compiled
     """One lookup through the :class:`Occupancy` struct (inlined)."""
-    return _free(occ.mode, occ.grid, occ.lo, occ.dims, occ.table, occ.tmask, occ.gmat,
+    return cell_free(occ.mode, occ.grid, occ.lo, occ.dims, occ.table, occ.tmask, occ.gmat,
                  occ.blo, occ.bhi, i, j, k)
 
 
@@ -160,174 +110,6 @@ def clear_cells(grid, lo, dims, w):  # pragma: no cover - compiled
             grid[(a * dims[1] + b) * dims[2] + c] = 0
 
 
-# -- exact segment walk --------------------------------------------------------------------
-@njit_cached(inline="always")
-def _touches(u0, u1, u2, lim0, idq, wv, rhs):  # pragma: no cover - compiled
-    """Does the segment a + t (b - a), t in [0, 1], meet the closed Voronoi cell of the cell
-    at index offset u (relative to the walk's start cell)? Clip t against each half-space
-    ``(x - c_u) . v <= |v|^2 / 2``. Precomputed per walk (no division here):
-    ``lim0 = |v|^2 / 2 (1 + tol) - (a - c_start) . v``, ``idq = 1 / ((b - a) . v)`` (0 when
-    the segment is parallel to the facet), ``wv = rel @ G`` (so ``c_u . v = wv . u``)."""
-    lo = 0.0
-    hi = 1.0
-    for r in range(rhs.shape[0]):
-        lim = lim0[r] + (wv[r, 0] * u0 + wv[r, 1] * u1 + wv[r, 2] * u2)
-        q = idq[r]
-        if q > 0.0:
-            t = lim * q
-            if t < hi:
-                hi = t
-        elif q < 0.0:
-            t = lim * q
-            if t > lo:
-                lo = t
-        elif lim < 0.0:
-            return False
-        if lo > hi:
-            return False
-    return True
-
-
-@njit_cached
-def walk_scratch(length, step, nfull):  # pragma: no cover - compiled
-    """Scratch for :func:`walk_on` sized for segments up to ``length`` (m): visited-set keys,
-    their generation stamps (an entry is live iff its stamp is the walk's generation, so a
-    reused table needs no clearing) and the BFS queue. ``step``: shortest relevant vector."""
-    est = (int(length / step) + 4) * (nfull + 1)
-    size = 64
-    while size < 2 * est:
-        size *= 2
-    return (np.empty(size, dtype=np.int64), np.zeros(size, dtype=np.int64),
-            np.empty((max(64, est // 4), 3), dtype=np.int64))
-
-
-@njit_cached
-def walk_on(occ, walk, a, b, s, check, vis, vgen, gen, queue):
-    # pragma: no cover - compiled
-    """Core of :func:`segment_walk` on caller-owned scratch (see :func:`walk_scratch`;
-    ``gen`` must differ from every stamp already in ``vgen``). Returns ``(n, all_free,
-    lookups, ok)`` with the touched cells' offsets from ``s`` in ``queue[:n]``; ``ok`` is
-    False when the scratch was too small (retry with more). No array is reassigned in the
-    loop: numba then keeps reference counting out of it (measured ~10x)."""
-    mode, grid, lo, dims, table, tmask, gg, blo, bhi = occ
-    rel, rhs, full, wv = walk.rel, walk.rhs, walk.full, walk.wv
-    nrel = rel.shape[0]
-    c0 = gg @ s.astype(np.float64)
-    av = np.empty(nrel)
-    dq = np.empty(nrel)
-    for r in range(nrel):
-        x = (a[0] - c0[0]) * rel[r, 0] + (a[1] - c0[1]) * rel[r, 1] + (a[2] - c0[2]) * rel[r, 2]
-        av[r] = rhs[r] * (1.0 + _SEG_TOL) - x
-        y = (b[0] - a[0]) * rel[r, 0] + (b[1] - a[1]) * rel[r, 1] + (b[2] - a[2]) * rel[r, 2]
-        dq[r] = 1.0 / y if y != 0.0 else 0.0
-    # Forward offsets only: every touched cell but the start has a touched full neighbour
-    # it is entered from, at an offset f with (b - a) . (G f) >= 0 (the segment crosses
-    # their shared boundary moving away from that neighbour's centre). Backward offsets
-    # (beyond a small angular slack for the boundary tolerance) are skipped: about half
-    # of the candidates, each a hash probe and a clip.
-    nf = full.shape[0]
-    fwd = np.int64(-1)
-    if nf <= 63:
-        fwd = np.int64(0)
-        dn = np.sqrt((b[0] - a[0]) ** 2 + (b[1] - a[1]) ** 2 + (b[2] - a[2]) ** 2)
-        for f in range(nf):
-            x0 = gg[0, 0] * full[f, 0] + gg[0, 1] * full[f, 1] + gg[0, 2] * full[f, 2]
-            x1 = gg[1, 0] * full[f, 0] + gg[1, 1] * full[f, 1] + gg[1, 2] * full[f, 2]
-            x2 = gg[2, 0] * full[f, 0] + gg[2, 1] * full[f, 1] + gg[2, 2] * full[f, 2]
-            dot = (b[0] - a[0]) * x0 + (b[1] - a[1]) * x1 + (b[2] - a[2]) * x2
-            if dot >= -_FWD_SLACK * dn * np.sqrt(x0 * x0 + x1 * x1 + x2 * x2):
-                fwd |= np.int64(1) << f
-    size = vis.shape[0]
-    mask = size - 1
-    qcap = queue.shape[0]
-    lookups = 0
-    free = True
-    k0 = pack3(0, 0, 0)
-    p = mix64(k0) & mask
-    vis[p] = k0
-    vgen[p] = gen
-    nvis = 1
-    queue[0, 0] = 0
-    queue[0, 1] = 0
-    queue[0, 2] = 0
-    qh = 0
-    qt = 1
-    if check:
-        lookups += 1
-        if not _free(mode, grid, lo, dims, table, tmask, gg, blo, bhi, s[0], s[1], s[2]):
-            free = False
-    while qh < qt and free:
-        u0 = queue[qh, 0]
-        u1 = queue[qh, 1]
-        u2 = queue[qh, 2]
-        qh += 1
-        for f in range(nf):
-            if not (fwd >> f) & 1:
-                continue
-            v0 = u0 + full[f, 0]
-            v1 = u1 + full[f, 1]
-            v2 = u2 + full[f, 2]
-            kk = pack3(v0, v1, v2)
-            p = mix64(kk) & mask
-            seen = False
-            while vgen[p] == gen:
-                if vis[p] == kk:
-                    seen = True
-                    break
-                p = (p + 1) & mask
-            if seen:
-                continue
-            vis[p] = kk
-            vgen[p] = gen
-            nvis += 1
-            if 2 * nvis > size:  # keep load <= 0.5
-                return qt, free, lookups, False
-            if not _touches(v0, v1, v2, av, dq, wv, rhs):
-                continue
-            if qt == qcap:
-                return qt, free, lookups, False
-            queue[qt, 0] = v0
-            queue[qt, 1] = v1
-            queue[qt, 2] = v2
-            qt += 1
-            if check:
-                lookups += 1
-                if not _free(mode, grid, lo, dims, table, tmask, gg, blo, bhi,
-                             s[0] + v0, s[1] + v1, s[2] + v2):
-                    free = False
-                    break
-    return qt, free, lookups, True
-
-
-@njit_cached
-def segment_walk(occ, walk, a, b, s, check):  # pragma: no cover - compiled
-    """Cells whose closed Voronoi cell the segment [a, b] touches, by BFS from cell ``s``
-    (the cell containing ``a``) over full adjacency, keeping only touched cells (the touched
-    set is connected under full adjacency, so the BFS finds all of it).
-
-    With ``check`` each touched cell is looked up and the walk stops at the first blocked
-    one. Returns ``(cells (K, 3) int64, all_free, lookups)``.
-    """
-    length = np.sqrt(((b - a) ** 2).sum())
-    while True:
-        vis, vgen, queue = walk_scratch(length, np.sqrt(2.0 * walk.rhs.min()),
-                                        walk.full.shape[0])
-        # np.int64(1), not 1: a literal would compile walk_on once more for Literal[int](1)
-        qt, free, lookups, ok = walk_on(occ, walk, a, b, s, check, vis, vgen, np.int64(1),
-                                        queue)
-        if ok:
-            break
-        length = 2.0 * length + 1.0
-    out = queue[:qt].copy()
-    for n in range(qt):
-        out[n, 0] += s[0]
-        out[n, 1] += s[1]
-        out[n, 2] += s[2]
-    return out, free, lookups
-
-
-
-
 @njit_cached
 def point_free(occ, quant, x0, x1, x2, buf, out):  # pragma: no cover - compiled
     """Is the cell containing point (x0, x1, x2) (m) in bounds and free? One lookup.
@@ -341,16 +123,3 @@ def point_free(occ, quant, x0, x1, x2, buf, out):  # pragma: no cover - compiled
     return occ_free(occ, out[0, 0], out[0, 1], out[0, 2])
 
 
-@njit_cached
-def motion_free(occ, walk, quant, a0, a1, a2, b0, b1, b2, buf, out):  # pragma: no cover
-    """Exact segment test a -> b (m): ``(all touched cells free, lookups made)``."""
-    buf[0, 0] = a0
-    buf[0, 1] = a1
-    buf[0, 2] = a2
-    buf[1, 0] = b0
-    buf[1, 1] = b1
-    buf[1, 2] = b2
-    qk.quantize_generic3(buf[:1], quant.basis, quant.basis_inv, quant.cand, quant.cand_z,
-                         quant.counts, quant.reduction, out)
-    _, free, n = segment_walk(occ, walk, buf[0], buf[1], out[0], True)
-    return free, n

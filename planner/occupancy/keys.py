@@ -1,4 +1,4 @@
-"""Packing lattice indices into sortable int64 keys, and back.
+"""Packing lattice indices into sortable int64 keys, and back; sets of keys.
 
 3D: 21 bits per axis (indices in [-2**20, 2**20), about +-1 million cells per axis);
 2D: 31 bits per axis. Keys sort lexicographically by (i, j, k), so a sorted key array is
@@ -13,7 +13,10 @@ from planner._numba import njit_cached
 from planner.errors import MapError
 
 BITS = {2: 31, 3: 21}
-__all__ = ["BITS", "index_limit", "check_range", "pack", "unpack", "pack3", "unpack3"]
+__all__ = ["BITS", "build_key_set", "check_range", "in_key_set", "index_limit", "mix64", "pack",
+           "pack3", "unique_keys", "unpack", "unpack3"]
+
+_EMPTY = -1  # empty slot of a key set
 
 
 def index_limit(dim: int) -> int:
@@ -70,3 +73,54 @@ def pack3(i, j, k):  # pragma: no cover - compiled
 @njit_cached(inline="always")
 def unpack3(key):  # pragma: no cover - compiled
     return ((key >> 42) & _M3) - _L3, ((key >> 21) & _M3) - _L3, (key & _M3) - _L3
+
+
+def unique_keys(keys: np.ndarray) -> np.ndarray:
+    """Sorted unique int64 keys. Sort + mask: numpy 2.x ``np.unique`` hashes first, which is
+    slower on large key arrays. The stable sort finds sorted runs (keys here are mostly
+    concatenated sorted lists), so it is fast on them and no slower on random keys."""
+    k = np.sort(np.asarray(keys, dtype=np.int64), kind="stable")
+    if len(k) < 2:
+        return k
+    keep = np.empty(len(k), dtype=bool)
+    keep[0] = True
+    np.not_equal(k[1:], k[:-1], out=keep[1:])
+    return k[keep]
+
+
+# -- hashing and key sets ------------------------------------------------------------------
+@njit_cached(inline="always")
+def mix64(key):  # pragma: no cover - compiled
+    """splitmix64 finaliser: packed keys of neighbouring cells differ in few low bits."""
+    x = np.uint64(key)
+    x = (x ^ (x >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+    x = (x ^ (x >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+    x = x ^ (x >> np.uint64(31))
+    return np.int64(x >> np.uint64(1))
+
+
+@njit_cached
+def build_key_set(keys, size):  # pragma: no cover - compiled
+    """Open-addressing set of non-negative int64 keys; ``size`` a power of two >= 2 len."""
+    table = np.full(size, _EMPTY, dtype=np.int64)
+    mask = size - 1
+    for i in range(keys.shape[0]):
+        k = keys[i]
+        p = mix64(k) & mask
+        while table[p] != _EMPTY and table[p] != k:
+            p = (p + 1) & mask
+        table[p] = k
+    return table
+
+
+@njit_cached(inline="always")
+def in_key_set(table, mask, k):  # pragma: no cover - compiled
+    """Is key ``k`` in the open-addressing set ``table`` (size ``mask + 1``)?"""
+    p = mix64(k) & mask
+    while True:
+        t = table[p]
+        if t == k:
+            return True
+        if t == _EMPTY:
+            return False
+        p = (p + 1) & mask

@@ -1,17 +1,18 @@
 """Graph search over lattice cells: A*, Dijkstra, Theta*, Lazy Theta*, D* Lite, shortcutting.
 
-:func:`search` / :func:`search_many` (:mod:`~planner.search.run`), the move sets and the
-heuristic (:mod:`~planner.search.moves`), the A* family's kernel (:mod:`~planner.search.astar`),
-D* Lite (:mod:`~planner.search.dstar`, :class:`DStarLite`), the heap (:mod:`~planner.search._heap`),
+:func:`search` / :func:`search_many` (:mod:`~planner.search.run`), :class:`SearchResult` and
+its statuses (:mod:`~planner.search.result`), the move sets and the heuristic
+(:mod:`~planner.search.moves`), the A* family's kernel (:mod:`~planner.search.astar`), D* Lite
+(:mod:`~planner.search.dstar`, :class:`DStarLite`), the heap (:mod:`~planner.search._heap`),
 line of sight (:mod:`~planner.search._los`) and the networkx reference
 (:mod:`~planner.search.reference`).
 """
 
 from planner.search.dstar.lite import DStarLite
 from planner.search.moves import carries_guarantee, move_heuristic, move_stencils
+from planner.search.result import STATUSES, SearchResult
 from planner.search.run import (
     METHODS,
-    SearchResult,
     default_max_expansions,
     default_memory_budget,
     search,
@@ -20,6 +21,6 @@ from planner.search.run import (
     warm_up,
 )
 
-__all__ = ["DStarLite", "METHODS", "SearchResult", "carries_guarantee", "default_max_expansions",
-           "default_memory_budget", "move_heuristic", "move_stencils", "search", "search_many",
-           "shortcut", "warm_up"]
+__all__ = ["DStarLite", "METHODS", "STATUSES", "SearchResult", "carries_guarantee",
+           "default_max_expansions", "default_memory_budget", "move_heuristic", "move_stencils",
+           "search", "search_many", "shortcut", "warm_up"]

@@ -10,8 +10,8 @@ Order: lower ``f`` first; among equal ``f`` the larger ``g`` first (deeper nodes
 expansions on the many equal-cost paths of a lattice). Entries equal in both come out in an
 unspecified order.
 
-All functions are ``inline="always"``: a non-inlined call with array arguments costs ~50 ns
-of reference counting per call inside the search loop.
+All functions are ``inline="always"``: a non-inlined call with array arguments pays
+reference counting on every call inside the search loop.
 """
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
 """Line of sight between cell centres (numba): the exact segment walk of the validity
-checker (:mod:`planner.occupancy.grid`) on reusable scratch, and greedy path shortcutting.
+checker (:mod:`planner.occupancy.walk`) on reusable scratch, and greedy path shortcutting.
 
 Two cells see each other iff every cell whose closed Voronoi cell the centre-to-centre
 segment touches is free (the same test as a motion check of :class:`planner.world.
@@ -17,14 +17,8 @@ from typing import NamedTuple
 import numpy as np
 
 from planner._numba import njit_cached
-from planner.occupancy.grid import (
-    _SEG_TOL,
-    _free,
-    occ_free,
-    segment_walk,
-    walk_on,
-    walk_scratch,
-)
+from planner.occupancy.grid import cell_free, occ_free
+from planner.occupancy.walk import SEG_TOL, segment_walk, walk_on, walk_scratch
 
 
 class SightScratch(NamedTuple):
@@ -74,7 +68,7 @@ def cubic_sight(occ, p, q):  # pragma: no cover - compiled
     by nested clipping (x cells, then y cells within each x cell's t range, then z), in
     index units with p at the origin. Same cells as the generic walk; each costs a few
     divisions and one lookup. Returns ``(free, lookups)``."""
-    h = 0.5 * (1.0 + _SEG_TOL)
+    h = 0.5 * (1.0 + SEG_TOL)
     d0 = np.float64(q[0] - p[0])
     d1 = np.float64(q[1] - p[1])
     d2 = np.float64(q[2] - p[2])
@@ -134,8 +128,8 @@ def cubic_walk(occ, p0, p1, p2, q0, q1, q2):  # pragma: no cover - compiled
     k1 = b0 * b2 if a1 else big
     k2 = b0 * b1 if a2 else big
     i0, i1, i2 = 2 * k0, 2 * k1, 2 * k2
-    # Unpacked once: an inlined helper taking the struct costs reference counting of its
-    # arrays per call (~70 ns, measured), more than the lookup itself.
+    # Unpacked once: an inlined helper taking the struct pays reference counting of its
+    # arrays per call, more than the lookup itself.
     mode, grid, lo, dims, table, tmask, gg, blo, bhi = occ
     dense = mode == 0
     if dense:
@@ -152,13 +146,13 @@ def cubic_walk(occ, p0, p1, p2, q0, q1, q2):  # pragma: no cover - compiled
     c0, c1, c2 = p0, p1, p2
     lookups = 1
     if not (grid[idx] != 0 if dense else
-            _free(mode, grid, lo, dims, table, tmask, gg, blo, bhi, c0, c1, c2)):
+            cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi, c0, c1, c2)):
         return False, lookups
     left = a0 + a1 + a2
     if dense:
         # The common case without branches on the step axis, which changes unpredictably
-        # from step to step (x is 0 or 1, so -x is a mask): 4.3 instead of 5.4 ns per cell
-        # on geb079's Lazy Theta* sight lines (measured).
+        # from step to step (x is 0 or 1, so -x is a mask): no mispredicted branch per
+        # cell.
         while left > 0:
             m = min(k0, min(k1, k2))
             x0 = np.int64(k0 == m)
@@ -199,7 +193,7 @@ def cubic_walk(occ, p0, p1, p2, q0, q1, q2):  # pragma: no cover - compiled
                     continue
                 lookups += 1
                 if not (grid[idx + e0 * u0 + e1 * u1 + e2 * u2] != 0 if dense else
-                        _free(mode, grid, lo, dims, table, tmask, gg, blo, bhi,
+                        cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi,
                               c0 + s0 * u0, c1 + s1 * u1, c2 + s2 * u2)):
                     return False, lookups
         if x0:
@@ -217,7 +211,7 @@ def cubic_walk(occ, p0, p1, p2, q0, q1, q2):  # pragma: no cover - compiled
         left -= n
         lookups += 1
         if not (grid[idx] != 0 if dense else
-                _free(mode, grid, lo, dims, table, tmask, gg, blo, bhi, c0, c1, c2)):
+                cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi, c0, c1, c2)):
             return False, lookups
     return True, lookups
 

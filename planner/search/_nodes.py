@@ -22,8 +22,7 @@ from typing import NamedTuple
 import numpy as np
 
 from planner._numba import njit_cached
-from planner.occupancy.grid import mix64
-from planner.occupancy.keys import pack3, unpack3
+from planner.occupancy.keys import mix64, pack3, unpack3
 
 _EMPTY = -1
 

@@ -32,8 +32,8 @@ import numpy as np
 
 from planner._numba import njit_cached
 from planner.lattice import Lattice
-from planner.occupancy.grid import Occupancy, segment_walk
-from planner.world.world import _walk
+from planner.occupancy.grid import Occupancy
+from planner.occupancy.walk import segment_walk, walk_of
 
 __all__ = ["MoveSet", "move_allowed", "move_set", "move_stencils", "move_heuristic",
            "carries_guarantee"]
@@ -77,7 +77,7 @@ def _empty_occupancy(g: np.ndarray) -> Occupancy:
 @lru_cache(maxsize=64)
 def _stencils_cached(gen: bytes, neighbors: str, corner_cutting: bool, lat: Lattice):
     moves = np.ascontiguousarray(lat.neighbors(neighbors), dtype=np.int64)
-    walk = _walk(lat)
+    walk = walk_of(lat)
     occ = _empty_occupancy(walk.g)
     per_move = []
     for d in moves:

@@ -20,7 +20,7 @@ def search_networkx(world, s: np.ndarray, gl: np.ndarray, ms, cap: int | None = 
     BFS over the start's free component (at most ``cap`` cells, default 1,000,000)."""
     import networkx as nx
 
-    from planner.search.run import SearchResult
+    from planner.search.result import SearchResult
 
     cap = cap or NX_NODE_CAP
     t0 = time.perf_counter()

@@ -1,14 +1,9 @@
-"""Graph search over lattice cells: A*, Dijkstra, Theta*, Lazy Theta*, path shortcutting.
+"""Running a search: :func:`search` and :func:`search_many` (A*, Dijkstra, Theta*, Lazy
+Theta*) and :func:`shortcut`, over the kernel of :mod:`planner.search.astar`.
 
 Nodes are lattice cells, edges the offsets ``lattice.neighbors(neighbors)``, edge cost the
 Euclidean distance between cell centres (m). The movement rule, the radius guarantee and
 the heuristic are described in :mod:`planner.search.moves`.
-
-Layout: :mod:`~planner.search.moves` (move sets, safe-rule cells, heuristic),
-:mod:`~planner.search._heap` (binary heap kernels), :mod:`~planner.search._nodes` (node
-table, cell -> slot map), :mod:`~planner.search.astar.kernel` (the kernel),
-:mod:`~planner.search.astar.theta` (any-angle parent rules), :mod:`~planner.search._los` (line
-of sight, shortcutting), :mod:`~planner.search.reference` (networkx backend).
 
 Timing: :attr:`SearchResult.seconds` is the kernel time only; the first search in a process
 first compiles or loads the kernels (:func:`warm_up`, reported as
@@ -34,12 +29,12 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
 
 import numpy as np
 
 from planner import budget as _budget
 from planner.errors import PlanError
+from planner.occupancy.walk import as_cells
 from planner.search._los import new_scratch, shortcut_kernel
 from planner.search._nodes import BYTES_PER_NODE, ST_EXP, ST_LOOK, ST_N
 from planner.search.astar import driver as _driver
@@ -54,7 +49,8 @@ from planner.search.moves import (
     move_set,
     move_stencils,
 )
-from planner.world.world import World, _cells
+from planner.search.result import SearchResult
+from planner.world.world import World
 
 __all__ = ["SearchResult", "search", "search_many", "shortcut", "warm_up", "move_stencils",
            "move_heuristic", "METHODS", "carries_guarantee", "default_memory_budget",
@@ -78,56 +74,6 @@ def default_max_expansions(memory_budget: int | None = None) -> int:
     :func:`default_memory_budget`): the node budget ``budget // BYTES_PER_NODE``."""
     b = default_memory_budget() if memory_budget is None else int(memory_budget)
     return max(1, b // BYTES_PER_NODE)
-
-
-@dataclass
-class SearchResult:
-    """Outcome of one search.
-
-    Attributes
-    ----------
-    found : bool
-    cells : ndarray, shape (K, 3), int64
-        Path cells from start to goal (any-angle methods: only the turning cells).
-        Empty when not found.
-    cost : float
-        Path length between cell centres (m); ``inf`` when not found.
-    cell_checks : int
-        Occupancy lookups made by this search (each actual lookup counted once).
-    expansions : int
-        Nodes removed from the open list (the goal included).
-    generated : int
-        Distinct nodes created (start included).
-    seconds : float
-        Wall time of the search (numba backend: the kernel calls; networkx: build + search).
-    peak_bytes : int
-        Peak size of the search's own arrays (node table, heap, slot map, scratch).
-    reason : str
-        Why no path was found ("" when found).
-    status : str
-        ``"found"``, ``"unreachable"`` (the start's free component is exhausted) or
-        ``"budget"`` (stopped by ``max_expansions`` / ``max_nodes``).
-    guarantee : bool
-        Whether the path carries the radius guarantee
-        (:func:`planner.search.moves.carries_guarantee`).
-    compile_seconds : float
-        Time spent compiling or loading the search kernels before this search (its first
-        in the process; 0 after), never part of ``seconds`` (:func:`warm_up`).
-    """
-
-    found: bool
-    cells: np.ndarray
-    cost: float
-    cell_checks: int
-    expansions: int
-    generated: int
-    seconds: float
-    peak_bytes: int
-    reason: str = ""
-    extra: dict = field(default_factory=dict)
-    status: str = "found"
-    guarantee: bool = True
-    compile_seconds: float = 0.0
 
 
 _WARM: list[float] = []
@@ -321,7 +267,7 @@ def search_many(
 
     if method not in METHODS:
         raise PlanError(f"unknown method {method!r}; expected one of {', '.join(METHODS)}")
-    a, b = _cells(start_cells), _cells(goal_cells)
+    a, b = as_cells(start_cells), as_cells(goal_cells)
     if a.shape != b.shape:
         raise PlanError(f"start_cells and goal_cells must have the same shape (Q, 3), got "
                         f"{a.shape} and {b.shape}")
@@ -408,7 +354,7 @@ def shortcut(world: World, cells: np.ndarray) -> np.ndarray:
     -------
     ndarray, shape (K', 3), int64
     """
-    c = _cells(cells)
+    c = as_cells(cells)
     if len(c) <= 2:
         return c.copy()
     chk = world.checker

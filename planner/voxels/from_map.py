@@ -101,7 +101,7 @@ def inflated_obstacles(obst, lattice: Lattice, radius: float):
     -------
     OccupiedVoxelList
     """
-    from planner.voxels._checks import unique_keys
+    from planner.occupancy.keys import unique_keys
     from planner.voxels.inflate import exact_box_inflation, exact_inflation
     from planner.voxels.voxel_list import OccupiedVoxelList
 

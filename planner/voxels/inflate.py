@@ -16,10 +16,10 @@ import math
 
 import numpy as np
 
-from planner.budget import require
+from planner.checks import check_radius
 from planner.errors import MapError
 from planner.lattice import Lattice
-from planner.occupancy.keys import BITS, check_range, index_limit, pack, unpack
+from planner.occupancy.keys import BITS, check_range, index_limit, pack, unique_keys
 from planner.voxels import _box_kernels as bk
 from planner.voxels import kernels as vk
 from planner.voxels._checks import (
@@ -28,138 +28,19 @@ from planner.voxels._checks import (
     as_points,
     cell_diameter,
     check_lattice,
-    check_radius,
     grid_strides,
-    key_offsets,
     offsets_within,
     over_budget,
     resolve_budget,
-    unique_keys,
 )
+from planner.voxels.boxes import box_frame, box_keys, overlap_keys
+from planner.voxels.stencil import inflation_stencil, stencil_inflation
 from planner.voxels.voxel_list import OccupiedVoxelList
 
 __all__ = ["box_keys", "exact_box_inflation", "exact_inflation", "inflation_stencil",
            "stencil_inflation"]
 
-_BOX_CHUNK_KEYS = 1 << 24  # candidate keys per box chunk (128 MB of int64)
 
-
-# -- stencil inflation --------------------------------------------------------------------------
-def inflation_stencil(lat: Lattice, radius: float, memory_budget: float | None = DEFAULT_BUDGET
-                      ) -> np.ndarray:
-    """Offsets ``delta`` whose closed Voronoi cell comes closer than ``radius`` to V(0).
-
-    For the point-symmetric convex cell V, ``dist(V, V + G delta) = 2 dist(G delta / 2, V)``
-    (``V - V = 2V``); it is computed exactly. Candidates have ``|G delta| < r + 2 R`` (R the
-    covering radius). The zero offset is always included.
-
-    Parameters
-    ----------
-    lat : Lattice
-    radius : float
-        Metres, >= 0.
-
-    Returns
-    -------
-    ndarray, shape (n, d), int64
-        Zero offset first, then by world length.
-    """
-    r = check_radius(radius)
-    zero = np.zeros((1, lat.dim), dtype=np.int64)
-    if r == 0:
-        return zero
-    cand = offsets_within(lat, r + 2 * lat.covering_radius, memory_budget, r)
-    tol = REL_TOL * cell_diameter(lat)
-    half = np.ascontiguousarray(cand @ lat.generator.T / 2)
-    dist = np.empty(len(cand))
-    vk.cell_distances(half, vk.cell_polytope(lat.voronoi), tol, dist)
-    # Conservative by tol: a pair at distance exactly r (up to rounding) is blocked.
-    sel = cand[(2 * dist < r + tol) & np.any(cand != 0, axis=1)]
-    order = np.argsort(np.linalg.norm(sel @ lat.generator.T, axis=1), kind="stable")
-    return np.concatenate([zero, sel[order]])
-
-def stencil_inflation(keys: np.ndarray, lat: Lattice, r: float, budget: float | None
-                      ) -> np.ndarray:
-    """Keys of :meth:`OccupiedVoxelList.inflate`: sorted unique ``keys`` (M,) dilated by
-    :func:`inflation_stencil` (``r`` > 0 metres), on a dense grid when it fits ``budget``
-    bytes (None: the memory budget), else by key arithmetic in chunks."""
-    budget = resolve_budget(budget)
-    stencil = inflation_stencil(lat, r, budget)
-    full = lat.neighbors("full")
-    w = unpack(keys, lat.dim)
-    ext = np.maximum(np.abs(stencil).max(axis=0), np.abs(full).max(axis=0))
-    lo, hi = w.min(axis=0) - ext, w.max(axis=0) + ext
-    check_range(lo, hi, lat.dim)
-    # The result holds at least one whole stencil: a cheap lower bound for the budget.
-    least = len(stencil) * 8
-    dims = hi - lo + 1
-    cells = float(np.prod(dims.astype(float)))
-    if least > budget:
-        raise over_budget(r, least, budget)
-    if cells + 8 * len(keys) <= budget:
-        return _dilate_dense(keys, lo, dims, stencil, full, budget, r)
-    return _dilate_keys(keys, stencil, full, budget, r)
-
-
-def _dilate_dense(keys: np.ndarray, lo: np.ndarray, dims: np.ndarray, stencil: np.ndarray,
-                  full: np.ndarray, budget: float, radius: float) -> np.ndarray:
-    """Minkowski sum on a dense uint8 scratch grid over the padded index box."""
-    d = len(dims)
-    strides = grid_strides(dims)
-    grid = np.zeros(int(np.prod(dims)), dtype=np.uint8)
-    flat = np.empty(len(keys), dtype=np.int64)
-    vk.flat_positions(keys, lo.astype(np.int64), strides, BITS[d], index_limit(d), flat)
-    runs = _stencil_runs(stencil)
-    if runs is not None and grid.nbytes * 5 + 8 * len(keys) <= budget:  # + int32 diff
-        diff = np.zeros(grid.size + 1, dtype=np.int32)
-        vk.dilate_rows(grid, flat, full @ strides, runs[0] @ strides, runs[1], diff)
-        del diff
-    else:
-        vk.dilate(grid, flat, stencil @ strides, full @ strides)
-    n = int(np.count_nonzero(grid))
-    if grid.nbytes + 8 * n > budget:
-        raise over_budget(radius, grid.nbytes + 8 * n, budget)
-    out = np.empty(n, dtype=np.int64)
-    vk.grid_keys(grid, lo.astype(np.int64), dims.astype(np.int64), BITS[d], index_limit(d), out)
-    return out
-
-
-def _stencil_runs(stencil: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
-    """The stencil (S, d) as runs along its last axis: ``(starts (R, d), lengths (R,))``
-    covering exactly the same offsets, or None when a row has a gap (the stencil is the
-    lattice points of a convex set, so rows are runs; None only guards rounding)."""
-    order = np.lexsort(stencil.T[::-1])
-    s = stencil[order]
-    new_row = np.ones(len(s), dtype=bool)
-    new_row[1:] = (s[1:, :-1] != s[:-1, :-1]).any(axis=1)
-    first = np.flatnonzero(new_row)
-    lengths = np.diff(np.append(first, len(s)))
-    last = s[np.append(first[1:], len(s)) - 1, -1]
-    if not np.array_equal(last - s[first, -1] + 1, lengths):
-        return None
-    return np.ascontiguousarray(s[first]), lengths.astype(np.int64)
-
-
-def _dilate_keys(keys: np.ndarray, stencil: np.ndarray, full: np.ndarray, budget: float,
-                 radius: float) -> np.ndarray:
-    """Minkowski sum by key arithmetic in chunks (no scratch grid), for sparse huge boxes."""
-    nb = key_offsets(full)
-    # Boundary cells: some full neighbour is free (interior cells add nothing, see vk.dilate).
-    boundary = np.zeros(len(keys), dtype=bool)
-    for o in nb:
-        q = keys + o
-        pos = np.minimum(np.searchsorted(keys, q), len(keys) - 1)
-        boundary |= keys[pos] != q
-    src = keys[boundary]
-    sk = key_offsets(stencil)
-    chunk = max(1, int(budget / 4 / 8 / len(sk)))
-    out = keys
-    for s in range(0, len(src), chunk):
-        part = unique_keys((src[s: s + chunk, None] + sk[None, :]).ravel())
-        out = unique_keys(np.concatenate([out, part]))
-        if out.nbytes * 2 > budget:
-            raise over_budget(radius, out.nbytes * 2, budget)
-    return out
 
 # -- exact inflation ------------------------------------------------------------------------------
 def exact_inflation(points: np.ndarray, lattice: Lattice, radius: float,
@@ -248,94 +129,6 @@ def _check_result(r: float, cells: float, n: int, budget: float) -> None:
 
 
 # -- boxes --------------------------------------------------------------------------------------
-def box_keys(centres: np.ndarray, size: float, lattice: Lattice) -> np.ndarray:
-    """Sorted unique keys of the cells whose Voronoi cell overlaps a box (positive volume).
-
-    Exact up to a tolerance of 1e-9 cell diameters: overlaps thinner than that (touching
-    faces, edges, corners) do not count. The cell containing each box centre always counts.
-    A box of size 0 is a point (its containing cell).
-
-    Parameters
-    ----------
-    centres : ndarray, shape (M, d)
-        Centres of axis-aligned cubes (m).
-    size : float
-        Cube edge length (m), >= 0.
-    lattice : Lattice
-
-    Returns
-    -------
-    ndarray, shape (K,), int64
-    """
-    lat = check_lattice(lattice)
-    c = as_points(centres, lat.dim, "box centres")
-    s = float(size)
-    if not math.isfinite(s) or s < 0:
-        raise MapError(f"box size must be a non-negative number of metres, got {size!r}")
-    return _overlap_keys(c, np.full(c.shape, s / 2), np.eye(lat.dim), lat)
-
-
-def _overlap_keys(centres: np.ndarray, half: np.ndarray, rot: np.ndarray, lat: Lattice
-                  ) -> np.ndarray:
-    """Keys of the cells overlapping boxes ``{C + R x : |x| <= H}`` with positive volume,
-    plus the cell of each centre; ``centres``, ``half`` (K, d) metres, ``rot`` (d, d)."""
-    d = lat.dim
-    if not len(centres):
-        return np.zeros(0, dtype=np.int64)
-    base = lat.quantize(centres)
-    base_keys = pack(base)
-    if not half.any():
-        return unique_keys(base_keys)
-    # Each box overlaps at least its volume in cells (per chunk, before the merge): refuse a
-    # box set whose key lists alone exceed the budget before enumerating anything.
-    need = 8.0 * float(np.prod(2 * half, axis=1).sum()) / lat.cell_volume
-    require(need, f"the cells of {len(centres)} boxes")
-    t = bk.overlap_tests(lat, half, rot)
-    offs = t.offsets
-    ext = np.abs(offs).max(axis=0)
-    check_range(base.min(axis=0) - ext, base.max(axis=0) + ext, d)
-    base_world = lat.to_world(base)
-    offs_key = key_offsets(offs)
-    chunk = max(1, _BOX_CHUNK_KEYS // len(offs))
-    parts = []
-    buf = np.empty(min(chunk, len(centres)) * len(offs), dtype=np.int64)
-    for i in range(0, len(centres), chunk):
-        sl = slice(i, i + chunk)
-        n = bk.overlap_keys(np.ascontiguousarray(centres[sl]), np.ascontiguousarray(half[sl]),
-                            base_keys[sl], np.ascontiguousarray(base_world[sl]), t.offs_world,
-                            offs_key, t.axes, t.axes_box, t.support_v, t.packing, t.covering,
-                            t.tol, buf)
-        parts.append(unique_keys(buf[:n]))  # per chunk: neighbouring boxes share cells
-    parts.append(base_keys)  # the centre's cell, even for boxes thinner than the tolerance
-    return unique_keys(np.concatenate(parts))
-
-
-def _box_frame(lo, hi, rotation, translation, d: int) -> tuple[np.ndarray, ...]:
-    """Checked ``(centres (K, d) world, half sizes (K, d), R (d, d))`` of boxes
-    ``{R x + t : lo <= x <= hi}``."""
-    a = as_points(lo, d, "box lower corners")
-    b = as_points(hi, d, "box upper corners")
-    if a.shape != b.shape:
-        raise MapError(f"box corners differ in shape: lo {a.shape}, hi {b.shape}")
-    if len(a) and (b < a).any():
-        row = int(np.flatnonzero((b < a).any(axis=1))[0])
-        raise MapError(f"box {row}: upper corner {b[row].tolist()} is below the lower corner "
-                       f"{a[row].tolist()}")
-    rot = np.eye(d) if rotation is None else np.asarray(rotation, dtype=float)
-    if rot.shape != (d, d) or not np.isfinite(rot).all() or not np.allclose(
-            rot.T @ rot, np.eye(d), atol=1e-9) or np.linalg.det(rot) < 0:
-        raise MapError(f"rotation must be a proper {d}x{d} rotation matrix, got "
-                       f"{np.array2string(rot, separator=', ').replace(chr(10), '')}")
-    t = np.zeros(d) if translation is None else np.asarray(translation, dtype=float).ravel()
-    if t.shape != (d,) or not np.isfinite(t).all():
-        raise MapError(f"translation must be {d} finite numbers (m), got {translation!r}")
-    mid = (a + b) / 2
-    # No product with the identity (the same numbers; a small BLAS call can cost more than
-    # the whole inflation on a loaded machine).
-    centres = np.ascontiguousarray((mid if rotation is None else mid @ rot.T) + t)
-    return centres, np.ascontiguousarray((b - a) / 2), np.ascontiguousarray(rot)
-
-
 def _split_boxes(centres: np.ndarray, half: np.ndarray, rot: np.ndarray, max_half: float
                  ) -> tuple[np.ndarray, np.ndarray]:
     """Boxes cut into equal sub-boxes of half sizes <= ``max_half`` (same union, so the same
@@ -425,9 +218,9 @@ def exact_box_inflation(lo: np.ndarray, hi: np.ndarray, lattice: Lattice, radius
     lat = check_lattice(lattice)
     r = check_radius(radius)
     d = lat.dim
-    centres, half, rot = _box_frame(lo, hi, rotation, translation, d)
+    centres, half, rot = box_frame(lo, hi, rotation, translation, d)
     if r == 0 or not len(centres):
-        return OccupiedVoxelList._from_keys(lat, _overlap_keys(centres, half, rot, lat))
+        return OccupiedVoxelList._from_keys(lat, overlap_keys(centres, half, rot, lat))
     if d != 3:
         raise MapError(f"box inflation with a radius needs a 3D lattice, got {d}D")
     memory_budget = resolve_budget(memory_budget)

@@ -29,7 +29,8 @@ from planner._numba import njit_cached
 from planner.errors import MapError
 from planner.lattice import Lattice
 from planner.occupancy import grid as wk
-from planner.occupancy.keys import check_range, pack
+from planner.occupancy.keys import check_range, pack, unique_keys
+from planner.occupancy.walk import c_array, segment_walk, walk_of
 from planner.voxels import _box_kernels as bk
 from planner.voxels import _unknown_kernels as uk
 from planner.voxels import kernels as vk
@@ -37,8 +38,8 @@ from planner.voxels._checks import (
     DEFAULT_BUDGET,
     grid_strides,
     resolve_budget,
-    unique_keys,
 )
+from planner.voxels.stencil import _stencil_runs, inflation_stencil
 
 # Margins within which another summation order of G w could decide a voxel face (voxels)
 # or a bounds face (m, relative to the bounds' size) the other way: numpy decides those.
@@ -223,8 +224,6 @@ def unknown_box_space(boxes: np.ndarray, box_sizes: np.ndarray, free_boxes: np.n
         or None without ``radius``; both distinct, in ascending key order. None when the
         grids do not fit ``budget``.
     """
-    from planner.voxels.inflate import _stencil_runs, inflation_stencil
-
     lat = lattice
     g = np.ascontiguousarray(lat.generator, dtype=float)
     res = float(resolution)
@@ -320,7 +319,7 @@ def _mark_rays(occ, walk, a, b, s, grid, lo, dims):  # pragma: no cover - compil
     """Set to 0 in ``grid`` (flat uint8 over the index box ``lo``, ``dims``) every cell the
     segment a[i] -> b[i] touches, walking from cell s[i]."""
     for i in range(a.shape[0]):
-        cells, _, _ = wk.segment_walk(occ, walk, a[i], b[i], s[i], False)
+        cells, _, _ = segment_walk(occ, walk, a[i], b[i], s[i], False)
         wk.clear_cells(grid, lo, dims, cells)
 
 
@@ -346,8 +345,6 @@ def ray_free_keys(points: np.ndarray, origins: np.ndarray, point_origin: np.ndar
     ndarray, shape (F,), int64
         Sorted unique keys.
     """
-    from planner.world.world import _c, _walk
-
     if lattice.dim != 3:
         raise MapError(f"ray casting needs a 3D lattice, got {lattice.dim}D")
     b = np.ascontiguousarray(points, dtype=float)
@@ -360,10 +357,10 @@ def ray_free_keys(points: np.ndarray, origins: np.ndarray, point_origin: np.ndar
     lo = both.min(axis=0) - 2
     dims = both.max(axis=0) + 2 - lo + 1
     grid = np.ones(int(np.prod(dims)), dtype=np.uint8)  # 0: crossed by a ray
-    g = _c(lattice.generator, float)
+    g = c_array(lattice.generator, float)
     dummy = wk.Occupancy(0, np.ones(1, np.uint8), np.zeros(3, np.int64), np.ones(3, np.int64),
                          np.full(1, -1, np.int64), 0, g, np.zeros(3), np.zeros(3))
-    _mark_rays(dummy, _walk(lattice), a, b, s, grid, lo.astype(np.int64),
+    _mark_rays(dummy, walk_of(lattice), a, b, s, grid, lo.astype(np.int64),
                dims.astype(np.int64))
     grid[(ends - lo) @ grid_strides(dims)] = 1  # a point's own cell is occupied, not free
     flat = np.flatnonzero(grid == 0)

@@ -31,18 +31,19 @@ from pathlib import Path
 
 import numpy as np
 
+from planner.checks import check_radius
 from planner.errors import MapError
 from planner.fsutil import file_mode
 from planner.lattice import Lattice
-from planner.occupancy.keys import BITS, index_limit, pack, unpack
+from planner.occupancy.keys import BITS, index_limit, pack, unique_keys, unpack
 from planner.voxels._checks import (
     DEFAULT_BUDGET,
     as_indices,
     as_points,
     check_lattice,
-    check_radius,
-    unique_keys,
 )
+from planner.voxels.boxes import box_cell_keys
+from planner.voxels.stencil import stencil_inflation
 
 __all__ = ["OccupiedVoxelList", "FORMAT", "VERSION"]
 
@@ -133,10 +134,8 @@ class OccupiedVoxelList:
         boxes = as_points(obst.boxes, 3, f"{obst.source}: box centres")
         parts = [unique_keys(pack(lat.quantize(pts)))] if len(pts) else []
         if len(boxes):
-            from planner.voxels.inflate import exact_box_inflation
-
             half = np.asarray(obst.box_sizes, dtype=float)[:, None] / 2  # per leaf size
-            parts.append(exact_box_inflation(boxes - half, boxes + half, lat, 0.0).keys)
+            parts.append(box_cell_keys(boxes - half, boxes + half, lat))
         if not parts:
             return cls._from_keys(lat, np.zeros(0, dtype=np.int64))
         return cls._from_keys(lat, unique_keys(np.concatenate(parts)))
@@ -253,12 +252,10 @@ class OccupiedVoxelList:
         MapError
             Bad radius, or the inflation would exceed ``memory_budget``.
         """
-        from planner.voxels import inflate  # inflate builds lists of this class
-
         r = check_radius(radius)
         if r == 0 or not len(self._keys):
             return OccupiedVoxelList._from_keys(self._lattice, self._keys.copy())
-        keys = inflate.stencil_inflation(self._keys, self._lattice, r, memory_budget)
+        keys = stencil_inflation(self._keys, self._lattice, r, memory_budget)
         return OccupiedVoxelList._from_keys(self._lattice, keys)
 
     # -- files --------------------------------------------------------------------------------
@@ -359,7 +356,7 @@ class OccupiedVoxelList:
 
 def _member(keys: np.ndarray, q: np.ndarray, presorted: bool = False) -> np.ndarray:
     """(N,) bool: ``q`` in the sorted ``keys``. Large query sets are sorted first: numpy's
-    binary search then reuses the previous position, ~5x faster than random order."""
+    binary search then reuses the previous position (cache-friendly, unlike random order)."""
     if len(q) > 4096 and not presorted:
         order = np.argsort(q)
         found = np.empty(len(q), dtype=bool)

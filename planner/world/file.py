@@ -64,8 +64,7 @@ def is_world_file(path) -> bool:
 
 def save_world(world, path: str | os.PathLike) -> None:
     """Write ``world`` (a :class:`planner.World`) to ``path`` (``.npz``) atomically."""
-    from planner.occupancy.keys import pack
-    from planner.voxels._checks import unique_keys
+    from planner.occupancy.keys import pack, unique_keys
 
     src = world.source or ""
     digest = getattr(world, "source_sha256", "") or ""

@@ -42,9 +42,9 @@ class UnknownSpace:
         radius of unknown space), *unknown* (free to plan through only under the ``"free"``
         policy; this test) or *free* (observed free, or a plain cloud's non-occupied space).
         """
-        from planner.world.world import _cells
+        from planner.occupancy.walk import as_cells
 
-        w = _cells(indices)
+        w = as_cells(indices)
         if not len(self._unknown_keys) or not len(w):
             return np.zeros(len(w), dtype=bool)
         k = pack(w)

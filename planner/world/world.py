@@ -20,95 +20,23 @@ ships the checker itself to its worker process).
 
 from __future__ import annotations
 
-from functools import lru_cache
-
 import numpy as np
 
+from planner.checks import check_radius
 from planner.errors import MapError, PlanError
 from planner.io.obstacles import UNKNOWN_POLICIES
 from planner.lattice import Lattice
-from planner.lattice._quantize import Quantizer
 from planner.occupancy import grid as wk
-from planner.occupancy.grid import Occupancy, Walk
-from planner.occupancy.keys import check_range, pack
-from planner.voxels._checks import unique_keys
+from planner.occupancy.grid import Occupancy
+from planner.occupancy.keys import build_key_set, check_range, pack, unique_keys
+from planner.occupancy.walk import Walk, as_cells, c_array, segment_walk, walk_of
+from planner.world.checker import ValidityChecker
 from planner.world.unknown import UnknownSpace
 
 __all__ = ["World", "DENSE_BUDGET", "Occupancy", "ValidityChecker", "Walk", "as_point"]
 
 DENSE_BUDGET = 256 * 2**20  # bytes: above this the hash set is used
 _BOUNDS_TOL = 1e-9
-
-
-class ValidityChecker:
-    """State and motion validity on one world: the single checker every planner uses.
-
-    A state (point, m) is valid iff the lattice cell containing it is in bounds and free
-    (one occupancy lookup). A motion a -> b is valid iff every cell whose *closed* Voronoi
-    cell the segment touches is free (the exact segment walk; no resolution involved).
-    Lattice searches use the same structs directly inside their kernels
-    (:attr:`occupancy`, :attr:`walk`).
-
-    Parameters
-    ----------
-    occupancy : Occupancy
-    walk : Walk
-    lattice : Lattice
-        For the point quantizer tables (derived on the first :meth:`is_valid`).
-
-    Attributes
-    ----------
-    checks : int
-        Occupancy lookups made through :meth:`is_valid` / :meth:`check_motion`.
-    states, motions : int
-        Number of state and motion queries.
-    """
-
-    def __init__(self, occupancy: Occupancy, walk: Walk, lattice: Lattice):
-        self.occupancy = occupancy
-        self.walk = walk
-        self._lattice = lattice
-        self._quant: Quantizer | None = None
-        self._buf = np.zeros((2, 3))
-        self._out = np.zeros((1, 3), dtype=np.int64)
-        self.checks = 0
-        self.states = 0
-        self.motions = 0
-
-    @property
-    def quantizer(self) -> Quantizer:
-        """The compiled point quantizer's tables (derived once; shipped when pickled)."""
-        if self._quant is None:
-            self._quant = self._lattice.quantizer()
-        return self._quant
-
-    def __getstate__(self) -> dict:
-        self.quantizer  # noqa: B018 - a worker would otherwise redo the lattice geometry
-        return self.__dict__.copy()
-
-    def is_valid(self, point) -> bool:
-        """The cell containing ``point`` ((3,), m) is in bounds and free (one lookup)."""
-        self.checks += 1
-        self.states += 1
-        return bool(wk.point_free(self.occupancy, self.quantizer, float(point[0]),
-                                  float(point[1]), float(point[2]), self._buf, self._out))
-
-    def check_motion(self, a, b) -> bool:
-        """Exact segment walk a -> b ((3,) each, m): every touched cell free. Counts every
-        cell looked at (the walk stops at the first blocked one)."""
-        free, n = wk.motion_free(self.occupancy, self.walk, self.quantizer, float(a[0]),
-                                 float(a[1]), float(a[2]), float(b[0]), float(b[1]),
-                                 float(b[2]), self._buf, self._out)
-        self.checks += int(n)
-        self.motions += 1
-        return bool(free)
-
-    def cells_free(self, cells: np.ndarray) -> np.ndarray:
-        """(N,) bool: each cell of ``cells`` ((N, 3) int64, C-contiguous) in bounds and free.
-        Not counted here (the world counts its own lookups)."""
-        out = np.empty(len(cells), dtype=np.bool_)
-        wk.free_many(self.occupancy, cells, out)
-        return out
 
 
 class World(UnknownSpace):
@@ -195,12 +123,7 @@ class World(UnknownSpace):
         if bb.shape != (2, 3) or not np.isfinite(bb).all() or np.any(bb[1] < bb[0]):
             raise MapError(f"bounds must be [[xmin, ymin, zmin], [xmax, ymax, zmax]], got "
                            f"{bb.tolist() if bb.ndim else bb}")
-        try:
-            r = float(radius)
-        except (TypeError, ValueError):
-            raise MapError(f"radius must be a number of metres, got {radius!r}") from None
-        if not (np.isfinite(r) and r >= 0):
-            raise MapError(f"radius must be a non-negative number of metres, got {radius!r}")
+        r = check_radius(radius)
         self._lattice = lattice
         self._blocked = np.ascontiguousarray(b, dtype=np.int64)
         if len(b):  # now, not inside a kernel
@@ -285,7 +208,7 @@ class World(UnknownSpace):
     def checker(self) -> ValidityChecker:
         """The world's :class:`ValidityChecker` (built on first use)."""
         if self._checker is None:
-            self._checker = ValidityChecker(self._build(), _walk(self._lattice), self._lattice)
+            self._checker = ValidityChecker(self._build(), walk_of(self._lattice), self._lattice)
         return self._checker
 
     @property
@@ -294,8 +217,8 @@ class World(UnknownSpace):
         return self.checker.occupancy
 
     def _build(self) -> Occupancy:
-        g = _c(self._lattice.generator, float)
-        blo, bhi = (_c(x, float) for x in self._tol_bounds())
+        g = c_array(self._lattice.generator, float)
+        blo, bhi = (c_array(x, float) for x in self._tol_bounds())
         corners = np.array([[(blo, bhi)[c][a] for a, c in enumerate(bits)]
                             for bits in np.ndindex(2, 2, 2)])
         w = corners @ np.linalg.inv(g).T
@@ -311,14 +234,14 @@ class World(UnknownSpace):
         size = 16
         while size < 2 * len(keys):
             size *= 2
-        table = wk.build_key_set(keys, size)
+        table = build_key_set(keys, size)
         return Occupancy(1, np.zeros(1, np.uint8), np.zeros(3, np.int64),
                          np.zeros(3, np.int64), table, size - 1, g, blo, bhi)
 
     # -- queries ----------------------------------------------------------------------
     def in_bounds(self, indices: np.ndarray) -> np.ndarray:
         """(N,) bool: cell centre inside the bounds box (no lookup counted)."""
-        w = _cells(indices)
+        w = as_cells(indices)
         c = self._lattice.to_world(w)
         blo, bhi = self._tol_bounds()
         return np.all((c >= blo) & (c <= bhi), axis=1)
@@ -330,7 +253,7 @@ class World(UnknownSpace):
         ----------
         indices : array_like of int, shape (N, 3) or (3,)
         """
-        w = _cells(indices)
+        w = as_cells(indices)
         out = self.checker.cells_free(w)
         self.cell_checks += len(w)
         return out
@@ -346,7 +269,7 @@ class World(UnknownSpace):
             raise PlanError("segment end points must be finite")
         s = self._lattice.quantize(a[None])[0]
         chk = self.checker
-        return wk.segment_walk(chk.occupancy, chk.walk, a, b, s, check)
+        return segment_walk(chk.occupancy, chk.walk, a, b, s, check)
 
     def segment_cells(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Cells whose closed Voronoi cell the segment a-b (points, m) touches.
@@ -385,7 +308,7 @@ class World(UnknownSpace):
     def endpoint_cell(self, cell, what: str = "cell") -> np.ndarray:
         """:meth:`endpoint` for a lattice cell ((3,) int): returns it as (3,) int64, or
         raises the same PlanError (naming the cell and its centre)."""
-        c = _cells(cell)
+        c = as_cells(cell)
         if len(c) != 1:
             raise PlanError(f"{what} must be one cell (i, j, k), got shape {c.shape}")
         c = c[0]
@@ -416,7 +339,7 @@ class World(UnknownSpace):
         """Nearest free cell to ``cell`` by centre distance, searching outward in growing
         shells up to ``max_radius`` metres (default 64 cell sizes). None if there is none.
         Lookups are not counted (this is for error messages)."""
-        c = _cells(cell)[0]
+        c = as_cells(cell)[0]
         g = self._lattice.generator
         limit = max_radius if max_radius is not None else 64 * self.cell_size
         r = 2 * self.cell_size
@@ -451,7 +374,7 @@ class World(UnknownSpace):
         Cells outside the bounds stay out of bounds (blocked). Returns the (K, 3) int64
         distinct cells whose state changed, the batch to pass to an incremental search.
         """
-        w = np.unique(_cells(cells), axis=0)
+        w = np.unique(as_cells(cells), axis=0)
         occ = self.occupancy
         if occ.mode != 0:
             raise PlanError("set_cells needs dense occupancy storage (a smaller world)")
@@ -466,17 +389,6 @@ class World(UnknownSpace):
         elif len(w):
             self._blocked = self._blocked[~np.isin(pack(self._blocked), pack(w))]
         return w
-
-
-def _cells(indices) -> np.ndarray:
-    w = np.asarray(indices)
-    if w.ndim == 1 and w.shape[0] == 3:
-        w = w[None]
-    if w.ndim != 2 or w.shape[1] != 3:
-        raise PlanError(f"cells must have shape (N, 3), got {w.shape}")
-    if w.size and not np.issubdtype(w.dtype, np.integer):
-        raise PlanError(f"cells must be integer lattice indices, got dtype {w.dtype}")
-    return np.ascontiguousarray(w, dtype=np.int64)
 
 
 def as_point(p, what: str = "point", dim: int = 3) -> np.ndarray:
@@ -504,22 +416,3 @@ def _show(p) -> str:
 
 def _fmt(p: np.ndarray) -> str:
     return "(" + ", ".join(f"{v:.3f}" for v in np.asarray(p).reshape(-1)) + ")"
-
-
-def _c(a, dtype) -> np.ndarray:
-    """A fresh C-contiguous writable copy: one numba type for every lattice (MCC's generator
-    is not C-contiguous, cached lattice arrays are read-only)."""
-    return np.array(a, dtype=dtype, order="C", copy=True)
-
-
-@lru_cache(maxsize=64)
-def _walk_cached(gen: bytes, lattice: Lattice) -> Walk:
-    g = _c(lattice.generator, float)
-    rel = _c(lattice.relevant_vectors, float)
-    return Walk(g, rel, _c(0.5 * np.einsum("ij,ij->i", rel, rel), float),
-                _c(lattice.neighbors("full"), np.int64), _c(rel @ g, float))
-
-
-def _walk(lattice: Lattice) -> Walk:
-    """The segment-walk struct of a lattice (cached; shared, do not write)."""
-    return _walk_cached(lattice.generator.tobytes(), lattice)

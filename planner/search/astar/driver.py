@@ -11,6 +11,7 @@ import weakref
 import numpy as np
 
 from planner.lattice import Lattice
+from planner.occupancy.walk import walk_of
 from planner.search._heap import Heap, new_heap
 from planner.search._los import new_scratch
 from planner.search._nodes import (
@@ -29,7 +30,6 @@ from planner.search._nodes import (
     trace_path,
 )
 from planner.search.astar import kernel as _astar
-from planner.world.world import _walk
 
 
 def _grown(a: np.ndarray, size: int, keep: int) -> np.ndarray:
@@ -54,7 +54,7 @@ _NO_SIGHT: list = []
 def _no_sight():
     """A tiny sight scratch for lattice A* / Dijkstra (they never walk): allocated once."""
     if not _NO_SIGHT:
-        _NO_SIGHT.append(new_scratch(0.0, _walk(Lattice.named("cubic", 1.0))))
+        _NO_SIGHT.append(new_scratch(0.0, walk_of(Lattice.named("cubic", 1.0))))
     return _NO_SIGHT[0]
 
 

@@ -10,8 +10,8 @@ from typing import NamedTuple
 import numpy as np
 
 from planner._numba import njit_cached
-from planner.occupancy.grid import _free, mix64
-from planner.occupancy.keys import pack3, unpack3
+from planner.occupancy.grid import cell_free
+from planner.occupancy.keys import mix64, pack3, unpack3
 from planner.search import _heap
 from planner.search._los import cubic_walk, is_cubic, sight
 from planner.search._nodes import (
@@ -103,7 +103,7 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st):
     The node arrays are fixed-size inside the kernel: before each expansion it checks that
     the arrays and the slot map (load <= 0.5) can take every possible new node, else it
     returns ``RUN_GROW`` and the driver doubles them and calls again. Not reassigning arrays
-    inside the loop lets numba drop per-iteration reference counting (measured ~10x).
+    inside the loop lets numba drop per-iteration reference counting.
 
     Parameters
     ----------
@@ -191,7 +191,7 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st):
         u0, u1, u2 = unpack3(nkey[s])
         if mode == 0:
             # Dense grid lookups written out here: numba does not reliably inline the
-            # helper inside this large loop and a call costs ~50 ns of refcounting.
+            # helper inside this large loop and a call pays reference counting.
             a0, b0, c0 = u0 - lo0, u1 - lo1, u2 - lo2
             base = (a0 * d1 + b0) * d2 + c0
             if (a0 >= reach and b0 >= reach and c0 >= reach and a0 < d0 - reach
@@ -207,7 +207,7 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st):
                                 and c < d2 and grid[(a * d1 + b) * d2 + c] != 0)
         else:
             for j in range(nu):
-                ufree[j] = _free(mode, grid, lo, dims, otable, otmask, gg, blo, bhi,
+                ufree[j] = cell_free(mode, grid, lo, dims, otable, otmask, gg, blo, bhi,
                                  u0 + ust[j, 0], u1 + ust[j, 1], u2 + ust[j, 2])
         blocked = np.int64(0)
         if bits:
@@ -226,9 +226,9 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st):
             lookups += c
             if not ok:
                 # SetVertex: the best closed neighbour that an allowed move reaches (one
-                # exists: the node that generated s). Written out: as a call taking the
-                # structs it cost ~0.2 us more per failed sight line (Lazy Theta* 3-8%
-                # slower on geb079; a fifth of its sight lines fail).
+                # exists: the node that generated s). Written out: a call taking the
+                # structs pays reference counting on every failed sight line, and Lazy
+                # Theta* has many of those.
                 best = np.inf
                 bp = np.int64(-1)
                 for m in range(nm):
@@ -327,8 +327,8 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st):
                 par = s
             else:
                 # Any-angle g through s's parent, written out: numba did not inline a helper
-                # here and the call's reference counting cost ~2 us per expansion (26
-                # calls), more than the whole A* expansion.
+                # here, and the call's reference counting (once per move) outweighed the
+                # whole A* expansion.
                 e0 = v0 - p0
                 e1 = v1 - p1
                 e2 = v2 - p2

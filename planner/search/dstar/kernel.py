@@ -30,8 +30,8 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
 
+from planner._numba import njit_cached
 from planner.occupancy.grid import occ_free
 from planner.occupancy.keys import pack3, unpack3
 from planner.search._heap import push, sift_down, sift_up
@@ -114,7 +114,7 @@ def new_nodes(cap: int, keep: DNodes | None = None, n: int = 0) -> DNodes:
     return nd
 
 
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def _box(bx, v0, v1, v2):  # pragma: no cover - compiled
     a = v0 - bx.lo[0]
     b = v1 - bx.lo[1]
@@ -124,7 +124,7 @@ def _box(bx, v0, v1, v2):  # pragma: no cover - compiled
     return (a * bx.dims[1] + b) * bx.dims[2] + c
 
 
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def node(bx, nd, st, v0, v1, v2, create):  # pragma: no cover - compiled
     """Node of cell (v0, v1, v2); created (g = rhs = inf) when ``create``; -1 if none."""
     b = _box(bx, v0, v1, v2)
@@ -148,13 +148,13 @@ def node(bx, nd, st, v0, v1, v2, create):  # pragma: no cover - compiled
     return s
 
 
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def _near_path(nd, st, u):  # pragma: no cover - compiled
     """The stored path's extraction read ``u`` (on the path or next to it)."""
     return nd.near[u] == st[S_PID] or nd.near[u] == -st[S_PID]
 
 
-@njit(cache=True)
+@njit_cached
 def edges(occ, ms, ufree, bx, nd, st, s):  # pragma: no cover - compiled
     """Edge mask of node ``s`` (looked up once, then cached)."""
     if nd.mask[s] >= 0:
@@ -182,7 +182,7 @@ def edges(occ, ms, ufree, bx, nd, st, s):  # pragma: no cover - compiled
     return m
 
 
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def _h(ms, start, v0, v1, v2):  # pragma: no cover - compiled
     """Gauge heuristic between the start and a cell (symmetric: the move set is)."""
     hm = ms.hmat
@@ -197,7 +197,7 @@ def _h(ms, start, v0, v1, v2):  # pragma: no cover - compiled
     return hv
 
 
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def _key1(ms, g, rhs, hv, km, under):  # pragma: no cover - compiled
     """First key of a queued node. An underconsistent node (``under``: g < rhs, or a
     lazy node's rhs that may be too low) goes ahead of every
@@ -212,7 +212,7 @@ def _key1(ms, g, rhs, hv, km, under):  # pragma: no cover - compiled
     return k
 
 
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def _k1(ms, x):  # pragma: no cover - compiled
     """First key on a grid of 1e-9 move lengths: equal sums of the same moves in another
     order (float noise) mostly tie exactly, so the second key orders them."""
@@ -220,7 +220,7 @@ def _k1(ms, x):  # pragma: no cover - compiled
     return np.floor(x / q + 0.5) * q
 
 
-@njit(cache=True)
+@njit_cached
 def _remove(heap, pos, st, s):  # pragma: no cover - compiled
     i = pos[s]
     pos[s] = -1
@@ -236,7 +236,7 @@ def _remove(heap, pos, st, s):  # pragma: no cover - compiled
         sift_down(heap, pos, pos[x], hn)
 
 
-@njit(cache=True)
+@njit_cached
 def update_vertex(ms, nd, heap, st, km, start, s):  # pragma: no cover - compiled
     """Queue ``s`` with its key when inconsistent, dequeue it when consistent.
 
@@ -270,7 +270,7 @@ def update_vertex(ms, nd, heap, st, km, start, s):  # pragma: no cover - compile
         _remove(heap, pos, st, s)
 
 
-@njit(cache=True)
+@njit_cached
 def best_successor(occ, ms, ufree, bx, nd, st, s):  # pragma: no cover - compiled
     """``(min_m c(s, s + m) + g(s + m), node of the argmin or -1, its edge cost, m)``."""
     mk = edges(occ, ms, ufree, bx, nd, st, s)
@@ -293,7 +293,7 @@ def best_successor(occ, ms, ufree, bx, nd, st, s):  # pragma: no cover - compile
     return best, arg, bc, bm
 
 
-@njit(cache=True)
+@njit_cached
 def recompute_rhs(occ, ms, ufree, bx, nd, st, s):  # pragma: no cover - compiled
     """rhs(s) = min over its moves of c + g (looks its edges up if needed): exact again."""
     best, _, _, m = best_successor(occ, ms, ufree, bx, nd, st, s)
@@ -302,7 +302,7 @@ def recompute_rhs(occ, ms, ufree, bx, nd, st, s):  # pragma: no cover - compiled
     nd.lazy[s] = 0
 
 
-@njit(cache=True)
+@njit_cached
 def compute_path(occ, ms, ufree, bx, nd, heap, st, km, start, check_start):
     # pragma: no cover - compiled
     """ComputeShortestPath: expand until the start is consistent and no queued key is
@@ -341,7 +341,7 @@ def compute_path(occ, ms, ufree, bx, nd, heap, st, km, start, check_start):
         # an underconsistent w or a w resting on one would have a key below the start's.
         # So the search stops before it, as A* stops at the goal among equal f. (A tie
         # with a larger min(g, rhs) than the start's is a key from an earlier start, not
-        # refreshed: refreshing raises it. Refreshing them cost ~70 pops per MCC replan.)
+        # refreshed: refreshing raises it, and refreshing them costs extra pops per replan.)
         e1 = _TOL * (1.0 + abs(ks1)) if ks1 < np.inf else 0.0
         if not (srhs > sg or k1o < ks1 - e1 or (k1o <= ks1 + e1 and tbo == np.inf)):
             break

@@ -37,12 +37,13 @@ import numpy as np
 
 from planner.errors import PlanError
 from planner.occupancy.keys import unpack
+from planner.occupancy.walk import as_cells
 from planner.search._heap import Heap, new_heap
 from planner.search.dstar import kernel as dk
 from planner.search.dstar import replan as dr
 from planner.search.moves import H_GAUGE, carries_guarantee, move_set
-from planner.search.run import SearchResult
-from planner.world.world import World, _cells
+from planner.search.result import SearchResult
+from planner.world.world import World
 
 __all__ = ["DStarLite"]
 
@@ -200,7 +201,7 @@ class DStarLite:
     # -- the three operations ------------------------------------------------------------
     def move_start(self, cell) -> None:
         """The robot moved to ``cell`` ((3,) int): keys stay valid through ``km``."""
-        c = _cells(cell)[0]
+        c = as_cells(cell)[0]
         self._fs[0] += float(_gauge(self._ms.hmat, c - self._last))
         self._last = c.copy()
         self.start[:] = c  # in place: the replan's entry point is keyed on this array
@@ -219,7 +220,7 @@ class DStarLite:
         c = changed_cells
         if not (type(c) is np.ndarray and c.dtype == np.int64 and c.ndim == 2
                 and c.shape[1] == 3 and c.flags.c_contiguous and c.flags.writeable):
-            c = _cells(c) if len(c) else _NONE
+            c = as_cells(c) if len(c) else _NONE
             if not c.flags.writeable:  # the kernel's signature takes writeable arrays
                 c = c.copy()
         if not len(c):

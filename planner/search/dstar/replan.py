@@ -1,6 +1,6 @@
 """D* Lite per replan (numba): the changed cells' repair, the path, and :func:`replan`, the
-one compiled call a replan makes (a call from Python with the planner's structs costs
-~10 us of argument checks; a replan that reuses its path does little else).
+one compiled call a replan makes (each call from Python with the planner's structs pays
+numba's argument checks, and a replan that reuses its path does little else).
 
 Stored path: the last extraction's cells stay in the path buffer. Extraction reads only the
 edge masks of the path's nodes and the g of their neighbours, so until one of those
@@ -14,9 +14,10 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit, types
+from numba import types
 from numba.experimental import structref
 
+from planner._numba import njit_cached
 from planner.occupancy.keys import unpack3
 from planner.search.dstar.kernel import (
     BLOCKED,
@@ -82,20 +83,20 @@ structref.define_proxy(ReplanState, _StateType,
                        ["occ", "ms", "bx", "nd", "heap", "sc", "counts", "fs", "start"])
 
 
-@njit(cache=True)
+@njit_cached
 def new_state(occ, ms, bx, nd, heap, sc, st, fs, start):  # pragma: no cover - compiled
     """:class:`ReplanState` of these arrays (shared, not copied)."""
     return ReplanState(occ, ms, bx, nd, heap, sc, st, fs, start)
 
 
-@njit(cache=True)
+@njit_cached
 def replan_state(state, cells, blocked):  # pragma: no cover - compiled
     """:func:`replan` with the planner's arrays from ``state`` (:class:`ReplanState`)."""
     return replan(state.occ, state.ms, state.bx, state.nd, state.heap, state.sc,
                   state.counts, state.fs, state.start, cells, blocked)
 
 
-@njit(cache=True)
+@njit_cached
 def replan(occ, ms, bx, nd, heap, sc, st, fs, start, cells, blocked):
     # pragma: no cover - compiled
     """One replan, resumable: collect the changed cells' nodes (``cells`` (K, 3),
@@ -138,7 +139,7 @@ def replan(occ, ms, bx, nd, heap, sc, st, fs, start, cells, blocked):
     return DONE
 
 
-@njit(cache=True)
+@njit_cached
 def extract(occ, ms, ufree, bx, nd, st, start, out, step):  # pragma: no cover - compiled
     """Greedy descent from the start: next = argmin c(s, s') + g(s'), to the goal, or the
     stored path from the start on while it holds (module docstring). Returns
@@ -184,7 +185,7 @@ def extract(occ, ms, ufree, bx, nd, st, start, out, step):  # pragma: no cover -
     return 0, k, cost
 
 
-@njit(cache=True)
+@njit_cached
 def _descend(occ, ms, ufree, bx, nd, st, s, pid):  # pragma: no cover - compiled
     """:func:`best_successor` of a path node, marking each neighbour it reads as next to
     path ``pid``. Returns (the argmin or -1, its edge cost)."""
@@ -210,7 +211,7 @@ def _descend(occ, ms, ufree, bx, nd, st, s, pid):  # pragma: no cover - compiled
     return arg, bc
 
 
-@njit(cache=True)
+@njit_cached
 def collect(occ, ms, affect, bx, nd, st, cells, blocked, out_s, out_old, out_redo):
     # pragma: no cover - compiled
     """Nodes with a cached edge mask whose stencil holds a changed cell, each once, in
@@ -288,7 +289,7 @@ def collect(occ, ms, affect, bx, nd, st, cells, blocked, out_s, out_old, out_red
     return n
 
 
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def _touch(nd, u, stamp, touched, nt):  # pragma: no cover - compiled
     """List node ``u`` once per repair (its queue entry is updated after all flips)."""
     if nd.stamp[u] != stamp:
@@ -298,7 +299,7 @@ def _touch(nd, u, stamp, touched, nt):  # pragma: no cover - compiled
     return nt
 
 
-@njit(cache=True)
+@njit_cached
 def apply_changes(occ, ms, ufree, bx, nd, heap, st, km, start, ss, old, redo, n, touched):
     # pragma: no cover - compiled
     """Look up the edge masks of the collected nodes marked ``redo``, then repair every
@@ -380,7 +381,7 @@ def apply_changes(occ, ms, ufree, bx, nd, heap, st, km, start, ss, old, redo, n,
         update_vertex(ms, nd, heap, st, km, start, u)
 
 
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def _settle(bx, nd, heap, st, u):  # pragma: no cover - compiled
     """A node without edges: no rhs reads its g any more, so it is consistent at inf
     without queueing it, and it leaves the node map (later changes near it need not

@@ -1,0 +1,85 @@
+"""The one validity checker of a world: point and motion tests that search, shortcutting and
+OMPL all use (numba kernels over the world's :class:`~planner.occupancy.grid.Occupancy`)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from planner.lattice import Lattice
+from planner.lattice.quantize import Quantizer
+from planner.occupancy import grid as wk
+from planner.occupancy.grid import Occupancy
+from planner.occupancy.walk import Walk, motion_free
+
+__all__ = ["ValidityChecker"]
+
+
+class ValidityChecker:
+    """State and motion validity on one world: the single checker every planner uses.
+
+    A state (point, m) is valid iff the lattice cell containing it is in bounds and free
+    (one occupancy lookup). A motion a -> b is valid iff every cell whose *closed* Voronoi
+    cell the segment touches is free (the exact segment walk; no resolution involved).
+    Lattice searches use the same structs directly inside their kernels
+    (:attr:`occupancy`, :attr:`walk`).
+
+    Parameters
+    ----------
+    occupancy : Occupancy
+    walk : Walk
+    lattice : Lattice
+        For the point quantizer tables (derived on the first :meth:`is_valid`).
+
+    Attributes
+    ----------
+    checks : int
+        Occupancy lookups made through :meth:`is_valid` / :meth:`check_motion`.
+    states, motions : int
+        Number of state and motion queries.
+    """
+
+    def __init__(self, occupancy: Occupancy, walk: Walk, lattice: Lattice):
+        self.occupancy = occupancy
+        self.walk = walk
+        self._lattice = lattice
+        self._quant: Quantizer | None = None
+        self._buf = np.zeros((2, 3))
+        self._out = np.zeros((1, 3), dtype=np.int64)
+        self.checks = 0
+        self.states = 0
+        self.motions = 0
+
+    @property
+    def quantizer(self) -> Quantizer:
+        """The compiled point quantizer's tables (derived once; shipped when pickled)."""
+        if self._quant is None:
+            self._quant = self._lattice.quantizer()
+        return self._quant
+
+    def __getstate__(self) -> dict:
+        self.quantizer  # noqa: B018 - a worker would otherwise redo the lattice geometry
+        return self.__dict__.copy()
+
+    def is_valid(self, point) -> bool:
+        """The cell containing ``point`` ((3,), m) is in bounds and free (one lookup)."""
+        self.checks += 1
+        self.states += 1
+        return bool(wk.point_free(self.occupancy, self.quantizer, float(point[0]),
+                                  float(point[1]), float(point[2]), self._buf, self._out))
+
+    def check_motion(self, a, b) -> bool:
+        """Exact segment walk a -> b ((3,) each, m): every touched cell free. Counts every
+        cell looked at (the walk stops at the first blocked one)."""
+        free, n = motion_free(self.occupancy, self.walk, self.quantizer, float(a[0]),
+                                 float(a[1]), float(a[2]), float(b[0]), float(b[1]),
+                                 float(b[2]), self._buf, self._out)
+        self.checks += int(n)
+        self.motions += 1
+        return bool(free)
+
+    def cells_free(self, cells: np.ndarray) -> np.ndarray:
+        """(N,) bool: each cell of ``cells`` ((N, 3) int64, C-contiguous) in bounds and free.
+        Not counted here (the world counts its own lookups)."""
+        out = np.empty(len(cells), dtype=np.bool_)
+        wk.free_many(self.occupancy, cells, out)
+        return out
