@@ -29,6 +29,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from planner.errors import MapError, PlannerError
+from planner.keys import pack
 from planner.lattice import Lattice
 from planner.match import _kernels
 from planner.match.multires import MultiResVoxelList, resolve_lattice
@@ -123,12 +124,10 @@ def _as_cloud(points, what: str) -> np.ndarray:
 
 def _summary(points: np.ndarray, lattice: Lattice) -> tuple[np.ndarray, np.ndarray]:
     """Per-cell means of ``points`` and their counts, cells of ``lattice``."""
-    w = lattice.quantize(points)
-    _, inv, counts = np.unique(w, axis=0, return_inverse=True, return_counts=True)
-    inv = inv.ravel()
-    sums = np.zeros((len(counts), 3))
-    np.add.at(sums, inv, points)
-    return np.ascontiguousarray(sums / counts[:, None]), counts.astype(float)
+    _, inv, counts = np.unique(pack(lattice.quantize(points)), return_inverse=True,
+                               return_counts=True)
+    means = np.stack([np.bincount(inv, points[:, j], len(counts)) for j in range(3)], axis=1)
+    return np.ascontiguousarray(means / counts[:, None]), counts.astype(float)
 
 
 class _Scorer:
@@ -178,7 +177,7 @@ def _search(score: _Scorer, r, t, c_src, dt, dr, dt_stop) -> tuple:
 
 
 def match(source, reference, *, lattice: str | Lattice = "fcc", cell_volume: float = 0.001,
-          levels: int = 4, init=None, scale: float = 2.0) -> MatchResult:
+          levels: int = 4, init=None, scale: float = 2.0, summary: float = 2.0) -> MatchResult:
     """Estimate the rigid transform taking ``source`` into ``reference``'s frame.
 
     Parameters
@@ -200,6 +199,9 @@ def match(source, reference, *, lattice: str | Lattice = "fcc", cell_volume: flo
         Initial source -> reference transform (identity by default).
     scale : float
         Generator scale between levels.
+    summary : float
+        The source is summarised per cell of each level's generator divided by this
+        (per-cell means weighted by counts; 2: cells of half the side).
 
     Returns
     -------
@@ -224,8 +226,7 @@ def match(source, reference, *, lattice: str | Lattice = "fcc", cell_volume: flo
     iterations, evaluations = [], 0
     for k in range(ref.levels - 1, -1, -1):
         lv = ref.level(k)
-        half = Lattice(lv.lattice.generator / ref.scale)
-        pts, wts = _summary(src, half)
+        pts, wts = _summary(src, Lattice(lv.lattice.generator / summary))
         score = _Scorer(pts, wts, lv)
         dt = lv.side / 2
         stop = lv.side / (16 if k == 0 else 8)
