@@ -6,8 +6,8 @@
   counts source points falling in occupied reference cells;
 * :class:`PoseIndex` (:mod:`planner.match.pose_index`): "is this pose within r of any
   stored pose" in constant time;
-* :mod:`planner.match.experiment`: the paper's Fig. 6 (``planner match-eval``), with an ICP
-  anchor from :mod:`planner.match.anchor` (the ``match`` extra).
+* :mod:`planner.match.simulate`: LiDAR scans cast against an OctoMap's leaf boxes at known
+  poses; :mod:`planner.match.anchor`: an ICP baseline (the ``match`` extra).
 """
 
 from planner.match.matcher import MatchResult, match, pose_error, pose_matrix
