@@ -26,7 +26,7 @@ from planner.lattice.paper import NAMED_LATTICES_2D
 METHODS = "astar, dijkstra, theta, lazy-theta, ompl:<planner>"
 PLOT_SUFFIXES = (".png", ".pdf", ".svg")
 # options whose values may start with "-" (negative coordinates)
-_VECTOR_OPTIONS = ("--start", "--goal", "--bounds", "--generator")
+_VECTOR_OPTIONS = ("--start", "--goal", "--bounds", "--generator", "--init")
 # options of every command, accepted before or after the command name
 _GLOBAL_OPTIONS = ("--memory-budget", "--max-expansions")
 _NUMBERISH = re.compile(r"^-[0-9.]")
@@ -306,6 +306,17 @@ def build_parser() -> argparse.ArgumentParser:
                    help="most replan frames in the GIF (evenly subsampled; 150)")
     p.add_argument("--json", action="store_true", help="print the summaries as JSON")
 
+    p = sub.add_parser("match", help="rigid 6-DOF scan matching on multi-resolution lattice "
+                                     "voxel lists (4x4 source -> reference transform)")
+    p.add_argument("source", help="source scan (.pcd, .ply, .npy, .xyz, ...)")
+    p.add_argument("reference", help="reference scan or map (any point format read)")
+    p.add_argument("--lattice", default="fcc", choices=NAMED_LATTICES, help="lattice")
+    p.add_argument("--cell-volume", type=_positive, default=0.001, help="finest cell, m^3")
+    p.add_argument("--levels", type=_int_range(1, 12), default=4, help="resolutions")
+    p.add_argument("--init", type=lambda t: _numbers(t, 6, "six numbers x,y,z,roll,pitch,yaw"),
+                   default=None, help="initial pose x,y,z (m),roll,pitch,yaw (degrees)")
+    p.add_argument("--json", action="store_true", help="print the result as JSON")
+
     p = sub.add_parser("bench", help="run a benchmark suite (which lattice for my map?)")
     p.add_argument("suite", help="bundled suite name (quick, paper, full) or a TOML file")
     p.add_argument("--out", default=None, help="output folder (None: results/<suite>)")
@@ -490,6 +501,13 @@ def _per_lattice(out: str, name: str, several: bool) -> Path:
     return p.with_name(f"{p.stem}_{name}{p.suffix}") if several else p
 
 
+def _cmd_match(a) -> int:
+    from planner.match.cli_run import run_match
+
+    return run_match(a.source, a.reference, lattice=a.lattice, cell_volume=a.cell_volume,
+                     levels=a.levels, init=a.init, as_json=a.json)
+
+
 def _cmd_bench(a) -> int:
     from planner.bench.session import run_suite
 
@@ -499,7 +517,7 @@ def _cmd_bench(a) -> int:
 
 _COMMANDS = {"lattices": _cmd_lattices, "stats": _cmd_stats, "plan": _cmd_plan,
              "compare": _cmd_compare, "world": _cmd_world, "voxels": _cmd_world,
-             "explore": _cmd_explore,
+             "explore": _cmd_explore, "match": _cmd_match,
              "bench": _cmd_bench}
 
 

@@ -1,0 +1,177 @@
+"""Compiled kernels of scan matching: a hash set of packed lattice keys, the fused
+transform-quantize-lookup score of many poses, and ray casting through a voxel grid.
+
+The quantizer is the project's exact generic one (the tables of
+:meth:`planner.Lattice.quantizer`, the candidate test of ``quantize_generic3``), fused with
+the rigid transform and the lookup so that no (N, 3) temporary is made per pose, and the
+same code path serves every lattice (their match times compare on equal terms).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from planner._jit import njit_cached
+from planner.keys import pack3
+
+_EMPTY = -1  # packed keys are non-negative (indices are offset by 2**20)
+_LIM = 1 << 20  # packable index range [-_LIM, _LIM) per axis (planner.keys, 3D)
+_GOLDEN = np.uint64(0x9E3779B97F4A7C15)
+
+
+@njit(inline="always")
+def _slot(key, shift):  # pragma: no cover - compiled
+    return np.int64((np.uint64(key) * _GOLDEN) >> np.uint64(shift))
+
+
+@njit_cached(nogil=True)
+def build_table(keys, bits):  # pragma: no cover - compiled
+    """Open-addressing table (linear probing) of 2**bits slots holding ``keys``."""
+    table = np.full(1 << bits, _EMPTY, dtype=np.int64)
+    mask = (1 << bits) - 1
+    shift = 64 - bits
+    for k in keys:
+        h = _slot(k, shift)
+        while table[h] != _EMPTY and table[h] != k:
+            h = (h + 1) & mask
+        table[h] = k
+    return table
+
+
+@njit(inline="always")
+def _member(table, key, shift, mask):  # pragma: no cover - compiled
+    h = _slot(key, shift)
+    while True:
+        v = table[h]
+        if v == key:
+            return True
+        if v == _EMPTY:
+            return False
+        h = (h + 1) & mask
+
+
+@njit_cached(nogil=True)
+def contains_keys(table, bits, keys):  # pragma: no cover - compiled
+    """(N,) bool: which of ``keys`` are in ``table``."""
+    out = np.zeros(len(keys), dtype=np.bool_)
+    shift = 64 - bits
+    mask = (1 << bits) - 1
+    for i in range(len(keys)):
+        out[i] = _member(table, keys[i], shift, mask)
+    return out
+
+
+@njit(inline="always")
+def _quantize(x0, x1, x2, b, binv, cand, cand_z, counts, t, cn):  # pragma: no cover
+    y0 = binv[0, 0] * x0 + binv[0, 1] * x1 + binv[0, 2] * x2
+    y1 = binv[1, 0] * x0 + binv[1, 1] * x1 + binv[1, 2] * x2
+    y2 = binv[2, 0] * x0 + binv[2, 1] * x1 + binv[2, 2] * x2
+    z0, z1, z2 = np.rint(y0), np.rint(y1), np.rint(y2)
+    o = (1 if y0 > z0 else 0) | (2 if y1 > z1 else 0) | (4 if y2 > z2 else 0)
+    r0 = 2.0 * (x0 - b[0, 0] * z0 - b[0, 1] * z1 - b[0, 2] * z2)
+    r1 = 2.0 * (x1 - b[1, 0] * z0 - b[1, 1] * z1 - b[1, 2] * z2)
+    r2 = 2.0 * (x2 - b[2, 0] * z0 - b[2, 1] * z1 - b[2, 2] * z2)
+    best = 0
+    best_v = np.inf
+    for j in range(counts[o]):
+        s = cn[o, j] - r0 * cand[o, j, 0] - r1 * cand[o, j, 1] - r2 * cand[o, j, 2]
+        if s < best_v:
+            best_v = s
+            best = j
+    w0 = z0 + cand_z[o, best, 0]
+    w1 = z1 + cand_z[o, best, 1]
+    w2 = z2 + cand_z[o, best, 2]
+    return (np.int64(np.rint(t[0, 0] * w0 + t[0, 1] * w1 + t[0, 2] * w2)),
+            np.int64(np.rint(t[1, 0] * w0 + t[1, 1] * w1 + t[1, 2] * w2)),
+            np.int64(np.rint(t[2, 0] * w0 + t[2, 1] * w1 + t[2, 2] * w2)))
+
+
+@njit_cached(nogil=True)
+def score_poses(pts, wts, rots, trans, b, binv, cand, cand_z, counts, t, table, bits,
+                out):  # pragma: no cover - compiled
+    """out[p] = sum of wts[i] over points i whose cell, after pose p, is in ``table``.
+
+    pts (N, 3), wts (N,), rots (M, 3, 3), trans (M, 3), out (M,); the quantizer tables as
+    in :class:`planner.lattice.Quantizer`.
+    """
+    k = cand.shape[1]
+    cn = np.empty((8, k), dtype=np.float64)
+    for o in range(8):
+        for j in range(k):
+            cn[o, j] = cand[o, j, 0] ** 2 + cand[o, j, 1] ** 2 + cand[o, j, 2] ** 2
+    shift = 64 - bits
+    mask = (1 << bits) - 1
+    for p in range(rots.shape[0]):
+        r = rots[p]
+        tx, ty, tz = trans[p, 0], trans[p, 1], trans[p, 2]
+        s = 0.0
+        for i in range(pts.shape[0]):
+            a0, a1, a2 = pts[i, 0], pts[i, 1], pts[i, 2]
+            x0 = r[0, 0] * a0 + r[0, 1] * a1 + r[0, 2] * a2 + tx
+            x1 = r[1, 0] * a0 + r[1, 1] * a1 + r[1, 2] * a2 + ty
+            x2 = r[2, 0] * a0 + r[2, 1] * a1 + r[2, 2] * a2 + tz
+            w0, w1, w2 = _quantize(x0, x1, x2, b, binv, cand, cand_z, counts, t, cn)
+            if (w0 < -_LIM or w0 >= _LIM or w1 < -_LIM or w1 >= _LIM
+                    or w2 < -_LIM or w2 >= _LIM):
+                continue  # beyond the packable range: no stored cell is there
+            if _member(table, pack3(w0, w1, w2), shift, mask):
+                s += wts[i]
+        out[p] = s
+
+
+@njit_cached(nogil=True)
+def cast_rays(origin, dirs, grid, lo, h, max_range, out):  # pragma: no cover - compiled
+    """Distance along each unit ray to the first occupied voxel of ``grid`` (inf: none
+    within ``max_range`` or the grid).
+
+    Exact ray-box intersection by a voxel walk (Amanatides and Woo): ``grid`` (nx, ny, nz)
+    bool is the map's occupied boxes on their own axis-aligned grid of spacing ``h`` (m)
+    with corner ``lo`` (3,); the distance returned is the ray's entry into the first
+    occupied voxel, i.e. into the box that contains it.
+    """
+    nx, ny, nz = grid.shape
+    for r in range(dirs.shape[0]):
+        out[r] = np.inf
+        cell = np.empty(3, dtype=np.int64)
+        step = np.empty(3, dtype=np.int64)
+        tmax = np.empty(3)
+        tdel = np.empty(3)
+        inside = True
+        for a in range(3):
+            f = (origin[a] - lo[a]) / h
+            cell[a] = np.int64(np.floor(f))
+            d = dirs[r, a]
+            if d > 0:
+                step[a] = 1
+                tmax[a] = (lo[a] + (cell[a] + 1) * h - origin[a]) / d
+                tdel[a] = h / d
+            elif d < 0:
+                step[a] = -1
+                tmax[a] = (lo[a] + cell[a] * h - origin[a]) / d
+                tdel[a] = -h / d
+            else:
+                step[a] = 0
+                tmax[a] = np.inf
+                tdel[a] = np.inf
+        if not (0 <= cell[0] < nx and 0 <= cell[1] < ny and 0 <= cell[2] < nz):
+            inside = False
+        if inside and grid[cell[0], cell[1], cell[2]]:
+            out[r] = 0.0
+            continue
+        while inside:
+            a = 0
+            if tmax[1] < tmax[a]:
+                a = 1
+            if tmax[2] < tmax[a]:
+                a = 2
+            tt = tmax[a]
+            if tt > max_range:
+                break
+            cell[a] += step[a]
+            tmax[a] += tdel[a]
+            if cell[a] < 0 or cell[a] >= grid.shape[a]:
+                break
+            if grid[cell[0], cell[1], cell[2]]:
+                out[r] = tt
+                break

@@ -1,0 +1,88 @@
+"""Scan matching on multi-resolution lattice voxel lists, and pose proximity."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from planner.cli import main
+from planner.lattice import NAMED_LATTICES
+from planner.match import PoseIndex, match, pose_error, pose_matrix
+
+DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
+VELODYNE = DATA / "velodyne"
+
+
+def _room(rng, n=30000):
+    """Points on the walls, floor and ceiling of a 10 x 6 x 3 m room with two pillars."""
+    faces = []
+    for _ in range(n // 10):
+        u = rng.uniform(0, 1, 3) * [10, 6, 3]
+        faces += [[u[0], 0, u[2]], [u[0], 6, u[2]], [0, u[1], u[2]], [10, u[1], u[2]],
+                  [u[0], u[1], 0], [u[0], u[1], 3]]
+        faces += [[2 + 0.5 * np.cos(a), 2 + 0.5 * np.sin(a), u[2]] for a in
+                  rng.uniform(0, 2 * np.pi, 2)]
+        faces += [[7, 3 + u[1] / 6, u[2]], [7 + u[0] / 10, 3, u[2]]]
+    return np.array(faces) - [5, 3, 1.5]
+
+
+@pytest.mark.parametrize("lattice", NAMED_LATTICES)
+def test_recovers_a_known_transform_on_every_lattice(lattice):
+    rng = np.random.default_rng(7)
+    ref = _room(rng)
+    truth = pose_matrix([0.3, -0.2, 0.1, 2.0, -1.0, 6.0])
+    src = (_room(rng) - truth[:3, 3]) @ truth[:3, :3]  # the room seen from the moved pose
+    res = match(src, ref, lattice=lattice, cell_volume=0.001, levels=4)
+    pos, rot = pose_error(res.transform, truth)
+    assert pos < 0.05 and rot < 1.0
+    assert res.levels == 4 and len(res.iterations) == 4
+
+
+@pytest.mark.skipif(not VELODYNE.is_dir(), reason="Velodyne pair not present")
+def test_velodyne_pair_matches_its_published_relative_pose():
+    from planner.io import load_points
+
+    a = load_points(VELODYNE / "251370668.pcd")
+    b = load_points(VELODYNE / "251371071.pcd")
+    truth = np.loadtxt(VELODYNE / "relative.txt")
+    init = pose_matrix([0.3, -0.2, 0.1, 0, 0, 5]) @ truth
+    res = match(b, a, lattice="fcc", init=init)
+    pos, rot = pose_error(res.transform, truth)
+    assert pos < 0.05 and rot < 1.0
+
+
+def test_cli_match_prints_transform_as_json(tmp_path, capsys):
+    rng = np.random.default_rng(3)
+    truth = pose_matrix([0.2, 0.1, 0.0, 0, 0, 4])
+    np.save(tmp_path / "ref.npy", _room(rng, 20000))
+    np.save(tmp_path / "src.npy", (_room(rng, 20000) - truth[:3, 3]) @ truth[:3, :3])
+    assert main(["match", str(tmp_path / "src.npy"), str(tmp_path / "ref.npy"),
+                 "--lattice", "bcc", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert pose_error(np.array(out["transform"]), truth)[0] < 0.05
+    assert out["levels"] == 4 and out["score"] > 0
+
+
+def test_cli_match_bad_input_is_one_line_exit_2(tmp_path, capsys):
+    (tmp_path / "bad.npy").write_bytes(b"not numpy")
+    assert main(["match", str(tmp_path / "bad.npy"), str(tmp_path / "bad.npy")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("planner: error:")
+    with pytest.raises(SystemExit) as exc:
+        main(["match", "a.npy", "b.npy", "--init", "1,2,3"])
+    assert exc.value.code == 2
+
+
+@pytest.mark.parametrize("lattice", ["cubic", "fcc"])
+def test_pose_index_agrees_with_brute_force(lattice):
+    rng = np.random.default_rng(11)
+    stored = rng.uniform(-20, 20, (2000, 3))
+    queries = rng.uniform(-20, 20, (3000, 3))
+    idx = PoseIndex(1.0, lattice=lattice)
+    idx.add(stored)
+    d = np.linalg.norm(queries[:, None] - stored[None], axis=2).min(axis=1)
+    assert np.array_equal(idx.near(queries), d <= 1.0)
+    q = np.concatenate([stored[:5], Rotation.random(5, random_state=1).as_quat()], axis=1)
+    assert idx.near(q).all()  # (N, 7) pose rows: a stored position is near itself
