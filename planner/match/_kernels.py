@@ -12,8 +12,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from planner._jit import njit_cached
-from planner.keys import pack3
+from planner._numba import njit_cached
+from planner.occupancy.keys import pack3
 
 _EMPTY = -1  # packed keys are non-negative (indices are offset by 2**20)
 _LIM = 1 << 20  # packable index range [-_LIM, _LIM) per axis (planner.keys, 3D)

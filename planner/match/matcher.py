@@ -29,10 +29,10 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from planner.errors import MapError, PlannerError
-from planner.keys import pack
 from planner.lattice import Lattice
 from planner.match import _kernels
 from planner.match.multires import MultiResVoxelList, resolve_lattice
+from planner.occupancy.keys import pack
 
 __all__ = ["MatchResult", "match", "pose_matrix", "pose_error"]
 

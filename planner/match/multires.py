@@ -124,7 +124,7 @@ class MultiResVoxelList:
         """(N,) bool: whether each point ((N, 3), metres) falls in an occupied cell of
         ``level``."""
         lv = self._levels[level]
-        from planner.keys import pack
+        from planner.occupancy.keys import pack
 
         keys = pack(lv.lattice.quantize(points))
         return _kernels.contains_keys(lv.table, lv.bits, keys)

@@ -15,8 +15,8 @@ from __future__ import annotations
 import numpy as np
 
 from planner.errors import PlannerError
-from planner.keys import pack
 from planner.lattice import Lattice
+from planner.occupancy.keys import pack
 
 __all__ = ["PoseIndex"]
 
