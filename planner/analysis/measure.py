@@ -51,16 +51,21 @@ _CHUNK = 1 << 16
 # -- points ------------------------------------------------------------------------------
 def uniform_points(lattice: Lattice, n: int, rng: np.random.Generator,
                    cells_per_side: int = 16) -> np.ndarray:
-    """Points uniform in an axis-aligned cube ``cells_per_side`` cell sizes wide, at a
-    random offset (so no alignment with the lattice).
+    """Points uniform in the parallelepiped ``G [0, k)^d`` (``k = cells_per_side``) at a
+    random offset.
+
+    The parallelepiped is a union of ``k^d`` lattice translates of one fundamental domain,
+    so the points are exactly uniform modulo the lattice: Monte Carlo estimates of the
+    quantization error are unbiased for every lattice. (An axis-aligned cube is not a union
+    of cells; for a skewed generator such as MCC's its partial cells bias the estimate.)
 
     Returns
     -------
-    ndarray, shape (n, 3), float64, metres.
+    ndarray, shape (n, d), float64, metres.
     """
     side = cells_per_side * lattice.cell_volume ** (1 / lattice.dim)
     origin = rng.uniform(-side, side, size=lattice.dim)
-    return origin + side * rng.random((n, lattice.dim))
+    return origin + (cells_per_side * rng.random((n, lattice.dim))) @ lattice.generator.T
 
 
 def sample_in_cell(lattice: Lattice, n: int, rng: np.random.Generator) -> np.ndarray:
@@ -196,14 +201,20 @@ def lattice_table(cell_volume: float = 1.0, names: Iterable[str] = NAMED,
     (m); ``covering_radius``, ``packing_radius`` (m); ``nsm_exact`` (from the Voronoi cell)
     and ``nsm_mc`` (Monte Carlo on ``n_points`` uniform points); ``mean_error`` (eq. 13 on
     the same points, m); ``points_per_s`` (quantization throughput on those points).
+    When ``"hex"`` is named, the hex prism at :func:`optimal_hex_height` follows it (row
+    ``"hex h=<height>"``, the height in metres).
     """
-    rows = []
+    lats = []
     for name in names:
-        lat = Lattice.named(name, cell_volume)
+        lats.append(Lattice.named(name, cell_volume))
+        if name == "hex":
+            lats.append(hex_prism(cell_volume, optimal_hex_height(cell_volume)))
+    rows = []
+    for lat in lats:
         rng = np.random.default_rng(seed)
         pts = uniform_points(lat, n_points, rng)
         m = quantization_metrics(lat, pts)
-        row = {"lattice": name, "cell_volume": float(cell_volume)}
+        row = {"lattice": lat.name, "cell_volume": float(cell_volume)}
         for kind in ("face", "full"):
             d = neighbour_distances(lat, kind)
             row[f"n_{kind}"] = len(d)
