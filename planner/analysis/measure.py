@@ -16,6 +16,7 @@ from collections.abc import Iterable, Sequence
 
 import numpy as np
 from scipy.optimize import minimize
+from scipy.spatial.transform import Rotation
 
 from planner.analysis.tables import format_table
 from planner.keys import pack
@@ -116,29 +117,15 @@ def sample_in_cells(lattice: Lattice, offsets: np.ndarray, n: int,
 
 
 def random_rotations(k: int, seed: int | np.random.Generator = 0) -> np.ndarray:
-    """Uniformly distributed random 3D rotations (Shoemake, Graphics Gems III, 1992).
-
-    A unit quaternion built from three uniform numbers ``u1, u2, u3`` is uniform on S^3,
-    hence the rotation is Haar-distributed on SO(3).
+    """Uniformly distributed (Haar) random 3D rotations,
+    :meth:`scipy.spatial.transform.Rotation.random` drawn from ``default_rng(seed)``.
 
     Returns
     -------
     ndarray, shape (k, 3, 3), float64: proper rotation matrices (``R @ R.T = I``,
     ``det R = +1``).
     """
-    rng = np.random.default_rng(seed)
-    u1, u2, u3 = rng.random((3, k))
-    a, b = np.sqrt(1 - u1), np.sqrt(u1)
-    x, y = a * np.sin(2 * np.pi * u2), a * np.cos(2 * np.pi * u2)
-    z, w = b * np.sin(2 * np.pi * u3), b * np.cos(2 * np.pi * u3)
-    return np.stack(
-        [
-            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
-            np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
-            np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
-        ],
-        axis=1,
-    )
+    return Rotation.random(int(k), random_state=np.random.default_rng(seed)).as_matrix()
 
 
 # -- quantization quality ----------------------------------------------------------------

@@ -2,8 +2,8 @@
 
 Each ``sensor_msgs/PointCloud2`` on the chosen topic is transformed from its ``frame_id`` into
 the fixed frame with the ``/tf`` and ``/tf_static`` transforms at its header stamp (dynamic
-transforms interpolated: translation linearly, rotation by slerp).  The sensor origin of each
-cloud (its frame's origin in the fixed frame) is kept for ray-cast free space.
+transforms interpolated: translation linearly, rotation by scipy's ``Slerp``).  The sensor
+origin of each cloud (its frame's origin in the fixed frame) is kept for ray-cast free space.
 """
 
 from __future__ import annotations
@@ -13,11 +13,11 @@ from bisect import bisect_left
 from pathlib import Path
 
 import numpy as np
+from scipy.spatial.transform import Rotation, Slerp
 
 from planner.errors import MapError
 from planner.io._obstacles import Obstacles
 from planner.io._validate import finite_points, no_return_mask
-from planner.io.scans import quaternion_matrix
 
 CLOUD_TYPE = "sensor_msgs/msg/PointCloud2"
 TF_TYPE = "tf2_msgs/msg/TFMessage"
@@ -214,23 +214,12 @@ class TfTree:
             i = bisect_left(times, t)
             (t0, p0, q0), (t1, p1, q1) = series[i - 1], series[i]
             a = 0.0 if t1 == t0 else (t - t0) / (t1 - t0)
-            trans, quat = p0 + a * (p1 - p0), _slerp(q0, q1, a)
+            slerp = Slerp([0.0, 1.0], Rotation.from_quat([q0, q1]))
+            trans, quat = p0 + a * (p1 - p0), slerp([a]).as_quat()[0]
         out = np.eye(4)
-        out[:3, :3] = quaternion_matrix(quat)
+        out[:3, :3] = Rotation.from_quat(quat).as_matrix()
         out[:3, 3] = trans
         return out
-
-
-def _slerp(q0: np.ndarray, q1: np.ndarray, a: float) -> np.ndarray:
-    dot = float(q0 @ q1)
-    if dot < 0:  # the short way round
-        q1, dot = -q1, -dot
-    if dot > 0.9995:
-        q = q0 + a * (q1 - q0)
-    else:
-        theta = math.acos(dot)
-        q = (math.sin((1 - a) * theta) * q0 + math.sin(a * theta) * q1) / math.sin(theta)
-    return q / np.linalg.norm(q)
 
 
 def _frame(frame_id: str) -> str:
