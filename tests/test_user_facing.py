@@ -1,0 +1,49 @@
+"""What a new user meets on the command line: help that describes the software, every format
+listed, required options marked as such, no duplicate commands."""
+
+from __future__ import annotations
+
+import pytest
+
+from planner.cli import main
+
+
+def _help(capsys, *argv: str) -> str:
+    with pytest.raises(SystemExit) as info:
+        main([*argv, "--help"])
+    assert info.value.code == 0
+    return " ".join(capsys.readouterr().out.split())
+
+
+def test_top_level_help_describes_the_software_not_its_layout(capsys):
+    text = _help(capsys)
+    assert "argument parsing" not in text and "library modules" not in text
+    assert "lattice" in text.lower()
+
+
+@pytest.mark.parametrize("cmd", ["plan", "compare", "world", "explore"])
+def test_map_help_lists_every_format_and_bundled_map(capsys, cmd):
+    text = _help(capsys, cmd)
+    for fmt in ("bag", "LAS/LAZ", "E57", "map_server YAML", ".npz", ".3dmap", "PCD", "PLY",
+                ".bt", ".npy", "text", "office", "two_storey", "warehouse", "forest",
+                "narrow_passage"):
+        assert fmt in text, (cmd, fmt)
+    for name in ("bag", "las", "e57", "rosmap", "3dmap", "pcd", "ply", "bt", "npy", "xyz"):
+        assert f" {name}" in text.split("--format FORMAT", 2)[-1], (cmd, name)
+
+
+@pytest.mark.parametrize("cmd", ["plan", "explore"])
+def test_required_options_are_shown_as_required_without_a_none_default(capsys, cmd):
+    text = _help(capsys, cmd)
+    assert "(default: None)" not in text and "None:" not in text
+    for opt in ("--start START", "--goal GOAL"):
+        after = text.split(f"{opt} ", 2)[-1]  # the option's own help, after the usage line
+        assert after.split("--")[0].rstrip().endswith("(required)"), (opt, after[:80])
+
+
+def test_the_duplicate_voxels_command_is_gone(capsys):
+    with pytest.raises(SystemExit) as info:
+        main(["voxels", "office", "--out", "v.npz"])
+    assert info.value.code == 2
+    assert "invalid choice: 'voxels'" in capsys.readouterr().err
+    assert "voxels" not in _help(capsys)
