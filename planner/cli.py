@@ -196,7 +196,8 @@ def _check_output(option: str, text: str, suffixes: tuple[str, ...]) -> None:
 
 
 # -- parser --------------------------------------------------------------------------------
-def _add_world_args(p: argparse.ArgumentParser, *, lattice: bool = True) -> None:
+def _add_world_args(p: argparse.ArgumentParser, *, lattice: bool = True,
+                    bag: bool = True) -> None:
     p.add_argument("map", type=_map,
                    help="map file: ROS bag (.bag, rosbag2 folder, .db3, .mcap), LAS/LAZ, "
                         "E57, map_server YAML (+ PGM), saved world (.npz), MovingAI .3dmap, "
@@ -222,6 +223,12 @@ def _add_world_args(p: argparse.ArgumentParser, *, lattice: bool = True) -> None
                    help="file format instead of the extension: bag, las (LAS/LAZ), e57, "
                         "rosmap (map_server YAML), 3dmap, pcd, ply, bt, npy, xyz (text), or "
                         "poses (a pose list of scans, merged)")
+    if bag:
+        b = p.add_argument_group("ROS bags")
+        b.add_argument("--topic", help="PointCloud2 topic (default: the first in the bag)")
+        b.add_argument("--fixed-frame", help="frame the clouds are put into with /tf and "
+                                             "/tf_static (default: the root of the tf tree)")
+        b.add_argument("--max-clouds", type=_int_range(1), help="read at most this many clouds")
     p.add_argument("--unknown", choices=("blocked", "free"), default=None,
                    help="unknown space: blocked (kept the robot radius away, as obstacles) or "
                         "free (default: blocked when the map says what was observed free, else "
@@ -281,7 +288,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print the result as JSON")
 
     p = sub.add_parser("compare", help="plan the same queries on every lattice (main job)")
-    _add_world_args(p, lattice=False)
+    _add_world_args(p, lattice=False, bag=False)
     p.add_argument("--lattices", type=_lattice_list, default=",".join(NAMED_LATTICES),
                    help="comma-separated lattice names")
     p.add_argument("--generator", type=_generator, default=None,
@@ -300,7 +307,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("explore", help="explore an unknown map with a simulated range sensor, "
                                        "replanning with D* Lite (checked against A*)")
-    _add_world_args(p, lattice=False)
+    _add_world_args(p, lattice=False, bag=False)
     p.add_argument("--lattice", default="fcc", type=_explore_lattices,
                    help="named lattice, comma-separated names, or 'all'")
     p.add_argument("--start", type=_vec3, required=True, help="x,y,z (m); negatives allowed")
@@ -400,7 +407,14 @@ def _build(a):
     radius, cell_volume = map_defaults(a.map, a.radius, a.cell_volume)
     if a.generator is not None:
         cell_volume = a.cell_volume  # a custom generator keeps its own scale unless given
-    world = api.build_world(a.map, lattice, cell_volume=cell_volume, radius=radius,
+    source = a.map
+    bag = {k: v for k in ("topic", "fixed_frame", "max_clouds")
+           if (v := getattr(a, k, None)) is not None}
+    if bag:  # read here: the options belong to the bag reader
+        from planner.io import load_obstacles
+
+        source = load_obstacles(a.map, a.format, **bag)
+    world = api.build_world(source, lattice, cell_volume=cell_volume, radius=radius,
                             bounds=a.bounds, format=a.format, unknown=a.unknown)
     return world, (a.generator.name if a.generator is not None else world.lattice.name)
 

@@ -50,6 +50,8 @@ def read_bag(p: Path, topic: str | None = None, fixed_frame: str | None = None,
         PointCloud2 topic; default the first one in the bag.
     fixed_frame : str, optional
         Frame to express the points in; default the root of the first cloud's tf tree.
+        A bag without ``/tf`` is an error naming the missing transform unless this is the
+        clouds' own frame.
     max_clouds : int, optional
         Read at most this many clouds.
 
@@ -57,7 +59,7 @@ def read_bag(p: Path, topic: str | None = None, fixed_frame: str | None = None,
     -------
     Obstacles
         ``points`` (N, 3) in the fixed frame, ``origins`` (S, 3) one per cloud,
-        ``point_origin`` (N,), ``dropped_nonfinite``.
+        ``point_origin`` (N,), ``dropped_nonfinite``, ``frame`` (the fixed frame).
     """
     require("rosbags", ".bag", p.name)
     from rosbags.highlevel import AnyReader
@@ -96,6 +98,10 @@ def read_bag(p: Path, topic: str | None = None, fixed_frame: str | None = None,
             stamp = _stamp(msg.header.stamp)
             if fixed_frame is None:
                 fixed_frame = tree.root(frame)
+                if fixed_frame == frame and frame not in tree.parent.values():
+                    raise MapError(f"{p.name}: no /tf transform from the cloud frame "
+                                   f"{frame!r} to a fixed frame; pass --fixed-frame {frame} "
+                                   "to keep the clouds in the sensor frame")
             pose = tree.lookup(_frame(fixed_frame), frame, stamp)
             pts, keep = finite_points(cloud_xyz(msg, p.name), p.name)
             dropped += len(keep) - len(pts)
@@ -116,7 +122,8 @@ def read_bag(p: Path, topic: str | None = None, fixed_frame: str | None = None,
         raise MapError(f"{p.name}: topic {chosen!r} holds no finite points")
     return Obstacles(points=points, boxes=np.zeros((0, 3)), box_size=0.0, bounds=None,
                      resolution=None, source=p.name, origins=np.array(origins),
-                     point_origin=np.concatenate(owner), dropped_nonfinite=dropped)
+                     point_origin=np.concatenate(owner), dropped_nonfinite=dropped,
+                     frame=_frame(fixed_frame))
 
 
 def cloud_xyz(msg, name: str) -> np.ndarray:
