@@ -459,7 +459,7 @@ def _cmd_plan(a) -> int:
         write_path(a.out, res, world, a.start, a.goal)
     if a.plot and res.found:
         compare.plot_paths(a.plot, world, {label: res})
-    print(json.dumps(res.to_dict()) if a.json else compare.describe(res))
+    print(json.dumps(res.to_dict()) if a.json else compare.describe(res, world))
     return 0 if res.found else 1
 
 
