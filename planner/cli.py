@@ -333,6 +333,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--scheduler", default=None, help="Dask scheduler address tcp://host:port")
     p.add_argument("--resume", action="store_true",
                    help="keep finished rows and the sampled queries, run the rest")
+    p.add_argument("--force", action="store_true",
+                   help="start again in a folder that already holds results")
     p.add_argument("--no-progress", action="store_true", help="no progress on stderr")
     p.add_argument("--report-only", action="store_true",
                    help="no new runs: summarise the rows already in OUT/results.jsonl")
@@ -530,7 +532,8 @@ def _cmd_bench(a) -> int:
     from planner.bench.session import run_suite
 
     return run_suite(a.suite, out=a.out, jobs=a.jobs, scheduler=a.scheduler, resume=a.resume,
-                     progress=not a.no_progress, report_only=a.report_only)
+                     progress=not a.no_progress, report_only=a.report_only,
+                     force=a.force)
 
 
 _COMMANDS = {"lattices": _cmd_lattices, "stats": _cmd_stats, "plan": _cmd_plan,

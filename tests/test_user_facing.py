@@ -56,3 +56,14 @@ def test_plan_line_gives_the_cell_edge_and_says_when_unseen_space_counts_as_free
     assert len(line.splitlines()) == 1
     assert f"cell volume 0.01 m^3, edge {0.01 ** (1 / 3):.4g} m" in line
     assert "unknown space treated as free: the map records no free space" in line
+
+
+def test_rerunning_a_suite_into_a_folder_with_results_needs_resume_or_force(tmp_path, capsys):
+    out = tmp_path / "out"
+    out.mkdir()
+    row = '{"map": "office.ply", "found": true}\n'
+    (out / "results.jsonl").write_text(row)
+    assert main(["bench", "quick", "--out", str(out), "--no-progress"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "--resume" in err and "--force" in err
+    assert (out / "results.jsonl").read_text() == row  # nothing replaced
