@@ -1,4 +1,4 @@
-"""Command line: argument parsing only; the work lives in the library modules.
+"""Plan paths on cubic, BCC, FCC, MCC and hex-prism lattices; compare and benchmark them.
 
 Exit status: 0 success, 1 no path found, 2 bad input (one-line message, no traceback),
 130 / 143 interrupted by SIGINT / SIGTERM.
@@ -32,9 +32,21 @@ _GLOBAL_OPTIONS = ("--memory-budget", "--max-expansions")
 _NUMBERISH = re.compile(r"^-[0-9.]")
 
 
+class _HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
+    """Defaults shown only where there is one; required options say so."""
+
+    def _get_help_string(self, action: argparse.Action) -> str:
+        text = action.help or ""
+        if action.required and action.option_strings:
+            return f"{text} (required)"
+        if action.default is None or action.default is False:
+            return text
+        return super()._get_help_string(action)
+
+
 class _Parser(argparse.ArgumentParser):
     def __init__(self, *args, **kwargs):
-        kwargs.setdefault("formatter_class", argparse.ArgumentDefaultsHelpFormatter)
+        kwargs.setdefault("formatter_class", _HelpFormatter)
         super().__init__(*args, **kwargs)
 
     def error(self, message: str) -> None:  # one line, exit 2, as for every bad input
@@ -157,7 +169,6 @@ def _generator(text: str):
 
 
 _OUTPUTS = {("plan", "out"): (".csv", ".json"), ("world", "out"): (".npz",),
-            ("voxels", "out"): (".npz",),
             ("plan", "plot"): PLOT_SUFFIXES, ("compare", "plot"): PLOT_SUFFIXES,
             ("explore", "plot"): (".png",), ("explore", "gif"): (".gif",)}
 
@@ -185,10 +196,13 @@ def _check_output(option: str, text: str, suffixes: tuple[str, ...]) -> None:
 
 
 # -- parser --------------------------------------------------------------------------------
-def _add_world_args(p: argparse.ArgumentParser, *, lattice: bool = True) -> None:
+def _add_world_args(p: argparse.ArgumentParser, *, lattice: bool = True,
+                    bag: bool = True) -> None:
     p.add_argument("map", type=_map,
-                   help="map file (.ply .pcd .xyz/.txt/.dat[.gz|.bz2] .npy .bt .3dmap) or a "
-                        "bundled map name (office, two_storey, warehouse, forest, "
+                   help="map file: ROS bag (.bag, rosbag2 folder, .db3, .mcap), LAS/LAZ, "
+                        "E57, map_server YAML (+ PGM), saved world (.npz), MovingAI .3dmap, "
+                        "PCD, PLY, OctoMap .bt, .npy, text (.xyz/.txt/.dat[.gz|.bz2|.xz]); "
+                        "or a bundled map name (office, two_storey, warehouse, forest, "
                         "narrow_passage)")
     if lattice:
         g = p.add_mutually_exclusive_group()
@@ -199,18 +213,25 @@ def _add_world_args(p: argparse.ArgumentParser, *, lattice: bool = True) -> None
                        help="custom lattice: generator rows 'a,b,c;d,e,f;g,h,i' (columns are "
                             "the basis vectors, metres) or a .npy file")
     p.add_argument("--cell-volume", type=_positive, default=None,
-                   help="cell volume in m^3 (None: the map's suggestion or native resolution)")
+                   help="cell volume in m^3 (default: the map's suggestion or native resolution)")
     p.add_argument("--radius", type=_nonneg, default=None,
-                   help="robot radius in metres (None: the map's suggestion; required for "
+                   help="robot radius in metres (default: the map's suggestion; required for "
                         "maps without one)")
     p.add_argument("--bounds", type=_bounds, default=None,
                    help="world box xmin,ymin,zmin,xmax,ymax,zmax (m)")
     p.add_argument("--format", default=None,
-                   help="file format instead of the extension: ply, pcd, xyz, npy, bt, 3dmap, "
-                        "or poses (a pose list of scans, merged)")
+                   help="file format instead of the extension: bag, las (LAS/LAZ), e57, "
+                        "rosmap (map_server YAML), 3dmap, pcd, ply, bt, npy, xyz (text), or "
+                        "poses (a pose list of scans, merged)")
+    if bag:
+        b = p.add_argument_group("ROS bags")
+        b.add_argument("--topic", help="PointCloud2 topic (default: the first in the bag)")
+        b.add_argument("--fixed-frame", help="frame the clouds are put into with /tf and "
+                                             "/tf_static (default: the root of the tf tree)")
+        b.add_argument("--max-clouds", type=_int_range(1), help="read at most this many clouds")
     p.add_argument("--unknown", choices=("blocked", "free"), default=None,
                    help="unknown space: blocked (kept the robot radius away, as obstacles) or "
-                        "free (None: blocked when the map says what was observed free, else "
+                        "free (default: blocked when the map says what was observed free, else "
                         "free)")
 
 
@@ -218,12 +239,12 @@ def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="planner", description=__doc__.splitlines()[0])
     parser.add_argument("--memory-budget", type=_size, default=None,
                         help="bytes one step (inflation, grid, search) may use, e.g. 4G or "
-                             "512M; refused in one line above it (None: "
+                             "512M; refused in one line above it (default: "
                              "$PLANNER_MEMORY_BUDGET or an eighth of the physical memory); "
                              "any command")
     parser.add_argument("--max-expansions", type=_int_range(1), default=None,
                         help="give up a search after this many expansions (exit 1, status "
-                             "'budget'; None: as many as the memory budget holds); any "
+                             "'budget'; default: as many as the memory budget holds); any "
                              "command")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
@@ -246,7 +267,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="uniform samples per distribution for Fig. 4")
     p.add_argument("--seed", type=_int_range(0, 2**32 - 1), default=0, help="random seed")
     p.add_argument("--data", type=Path, default=None,
-                   help="real data folder (None: ../shared/data)")
+                   help="real data folder (default: ../shared/data)")
     p.add_argument("--quick", action="store_true",
                    help="CI-sized run: 4 rotations, 5e4 samples, scans subsampled to 2e4 points")
 
@@ -267,29 +288,28 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print the result as JSON")
 
     p = sub.add_parser("compare", help="plan the same queries on every lattice (main job)")
-    _add_world_args(p, lattice=False)
+    _add_world_args(p, lattice=False, bag=False)
     p.add_argument("--lattices", type=_lattice_list, default=",".join(NAMED_LATTICES),
                    help="comma-separated lattice names")
     p.add_argument("--generator", type=_generator, default=None,
                    help="also compare a custom lattice: rows 'a,b,c;d,e,f;g,h,i' or a .npy")
-    p.add_argument("--start", type=_vec3, default=None, help="x,y,z (m); None: map's queries")
-    p.add_argument("--goal", type=_vec3, default=None, help="x,y,z (m); None: map's queries")
+    p.add_argument("--start", type=_vec3, default=None, help="x,y,z (m); default: map's queries")
+    p.add_argument("--goal", type=_vec3, default=None, help="x,y,z (m); default: map's queries")
     p.add_argument("--method", default="astar", help=METHODS)
     p.add_argument("--neighbors", default="full", help="full, face, face+k or full+k")
     p.add_argument("--plot", help="write a figure of the paths")
     p.add_argument("--json", action="store_true", help="print the rows as JSON")
 
-    for name in ("world", "voxels"):  # "voxels": the former name, kept as an alias
-        p = sub.add_parser(name, help="build a planning world once and save it (.npz) for "
-                                      "plan and compare")
-        _add_world_args(p)
-        p.add_argument("--out", required=True, help="output .npz")
+    p = sub.add_parser("world", help="build a planning world once and save it (.npz) for "
+                                     "plan and compare")
+    _add_world_args(p)
+    p.add_argument("--out", required=True, help="output .npz")
 
     p = sub.add_parser("explore", help="explore an unknown map with a simulated range sensor, "
                                        "replanning with D* Lite (checked against A*)")
-    _add_world_args(p, lattice=False)
+    _add_world_args(p, lattice=False, bag=False)
     p.add_argument("--lattice", default=None, type=_explore_lattices,
-                   help="named lattice, comma-separated names, or 'all'; not given: fcc")
+                   help="named lattice, comma-separated names, or 'all' (default: fcc)")
     p.add_argument("--start", type=_vec3, required=True, help="x,y,z (m); negatives allowed")
     p.add_argument("--goal", type=_vec3, required=True, help="x,y,z (m); negatives allowed")
     p.add_argument("--neighbors", default="full", help="full, face, face+k or full+k")
@@ -319,11 +339,13 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("bench", help="run a benchmark suite (which lattice for my map?)")
     p.add_argument("suite", help="bundled suite name (quick, paper, full) or a TOML file")
-    p.add_argument("--out", default=None, help="output folder (None: results/<suite>)")
+    p.add_argument("--out", default=None, help="output folder (default: results/<suite>)")
     p.add_argument("--jobs", type=_int_range(1), default=1, help="local worker processes")
     p.add_argument("--scheduler", default=None, help="Dask scheduler address tcp://host:port")
     p.add_argument("--resume", action="store_true",
                    help="keep finished rows and the sampled queries, run the rest")
+    p.add_argument("--force", action="store_true",
+                   help="start again in a folder that already holds results")
     p.add_argument("--no-progress", action="store_true", help="no progress on stderr")
     p.add_argument("--report-only", action="store_true",
                    help="no new runs: summarise the rows already in OUT/results.jsonl")
@@ -388,7 +410,14 @@ def _build(a):
 
     # options not given stay None: build_world resolves them from the map, as in the API
     lattice = a.generator if a.generator is not None else a.lattice
-    world = build_world(a.map, lattice, cell_volume=a.cell_volume, radius=a.radius,
+    source = a.map
+    bag = {k: v for k in ("topic", "fixed_frame", "max_clouds")
+           if (v := getattr(a, k, None)) is not None}
+    if bag:  # read here: the options belong to the bag reader
+        from planner.io import load_obstacles
+
+        source = load_obstacles(a.map, a.format, **bag)
+    world = build_world(source, lattice, cell_volume=a.cell_volume, radius=a.radius,
                         bounds=a.bounds, format=a.format, unknown=a.unknown)
     return world, (a.generator.name if a.generator is not None else world.lattice.name
                    or "custom")
@@ -435,7 +464,7 @@ def _cmd_plan(a) -> int:
         write_path(a.out, res, world, a.start, a.goal)
     if a.plot and res.found:
         compare.plot_paths(a.plot, world, {label: res})
-    print(json.dumps(res.to_dict()) if a.json else api.describe(res))
+    print(json.dumps(res.to_dict()) if a.json else api.describe(res, world))
     return 0 if res.found else 1
 
 
@@ -512,11 +541,12 @@ def _cmd_bench(a) -> int:
     from planner.bench.session import run_suite
 
     return run_suite(a.suite, out=a.out, jobs=a.jobs, scheduler=a.scheduler, resume=a.resume,
-                     progress=not a.no_progress, report_only=a.report_only)
+                     progress=not a.no_progress, report_only=a.report_only,
+                     force=a.force)
 
 
 _COMMANDS = {"lattices": _cmd_lattices, "stats": _cmd_stats, "plan": _cmd_plan,
-             "compare": _cmd_compare, "world": _cmd_world, "voxels": _cmd_world,
+             "compare": _cmd_compare, "world": _cmd_world,
              "explore": _cmd_explore, "match": _cmd_match,
              "bench": _cmd_bench}
 

@@ -203,15 +203,25 @@ def plan(
     )
 
 
-def describe(res: PlanResult) -> str:
-    """One human-readable line about a :class:`PlanResult` (what ``planner plan`` prints)."""
+def describe(res: PlanResult, world=None) -> str:
+    """One human-readable line about a :class:`PlanResult` (what ``planner plan`` prints);
+    with its ``world``, it also says when unknown space was treated as free because the map
+    records no free space."""
     ompl = res.method.startswith("ompl:")
-    head = f"{res.lattice} (cell volume {res.cell_volume:.6g} m^3), {res.method}" + (
+    planar = world is not None and world.dim == 2
+    size = (f"cell area {res.cell_volume:.6g} m^2, edge {res.cell_volume ** 0.5:.4g} m"
+            if planar else
+            f"cell volume {res.cell_volume:.6g} m^3, edge {res.cell_volume ** (1 / 3):.4g} m")
+    head = f"{res.lattice} ({size}), {res.method}" + (
         " (continuous, validated on this lattice's world)" if ompl else f", {res.neighbors}")
+    blind = (world is not None and world.unknown_policy == "free"
+             and world.obstacles is not None and not world.obstacles.has_free_space)
+    unseen = ("; unknown space treated as free: the map records no free space "
+              "(--unknown blocked needs a map that does)") if blind else ""
     if not res.found:
-        return f"{head}: no path ({res.reason}); {res.cell_checks} cell checks"
+        return f"{head}: no path ({res.reason}); {res.cell_checks} cell checks{unseen}"
     work = "" if ompl else f", {res.expansions} expansions"
-    note = f"; {res.reason}" if res.reason else ""
+    note = (f"; {res.reason}" if res.reason else "") + unseen
     return (
         f"{head}: length {res.length:.3f} m, {len(res.path)} waypoints, "
         f"{res.cell_checks} cell checks{work}, "

@@ -211,7 +211,7 @@ def test_rotating_by_the_identity_gives_the_unrotated_world():
     p = str(map_path("office"))
     for lat in ("cubic", "fcc"):
         plain = build_world(p, lat, cell_volume=0.03, radius=0.2)
-        turned = rotated_world(p, lat, 0.03, 0.2, [1.0, 0.0, 0.0, 0.0])
+        turned = rotated_world(p, lat, 0.03, 0.2, [0.0, 0.0, 0.0, 1.0])  # x, y, z, w
         assert np.allclose(plain.bounds, turned.bounds)
         assert {tuple(c) for c in plain.blocked} == {tuple(c) for c in turned.blocked}
 
@@ -221,14 +221,16 @@ def test_rotating_by_the_identity_gives_the_unrotated_world():
 def test_turning_the_lattice_blocks_the_cells_turning_the_map_blocks(name):
     # The rotated world's premise: cell w of lattice G is within r of the turned points R p
     # exactly when cell w of lattice R^T G is within r of p.
+    from scipy.spatial.transform import Rotation
+
     from planner import Lattice
-    from planner.bench.rotations import quaternion_matrix, sample_rotations
+    from planner.bench.rotations import sample_rotations
     from planner.bench.worlds import rotated_lattice
     from planner.voxels import exact_inflation
 
     pts = np.random.default_rng(3).uniform(-2, 2, (300, 3))
     for q in sample_rotations("so3", 3, seed=1):
-        R = quaternion_matrix(q)
+        R = Rotation.from_quat(q).as_matrix()
         lat = Lattice.named(name, 0.05)
         turned_map = exact_inflation(pts @ R.T, lat, 0.21)
         turned_lattice = exact_inflation(pts, rotated_lattice(name, 0.05, q), 0.21)
@@ -239,8 +241,8 @@ def test_a_rotated_world_keeps_the_map_box_and_its_corridor():
     from planner.bench.worlds import rotated_world
 
     p = str(map_path("office"))
-    q = [np.cos(np.pi / 8), 0.0, 0.0, np.sin(np.pi / 8)]  # 45 degrees about z
-    plain = rotated_world(p, "bcc", 0.03, 0.2, [1.0, 0.0, 0.0, 0.0])
+    q = [0.0, 0.0, np.sin(np.pi / 8), np.cos(np.pi / 8)]  # 45 degrees about z (x, y, z, w)
+    plain = rotated_world(p, "bcc", 0.03, 0.2, [0.0, 0.0, 0.0, 1.0])
     w = rotated_world(p, "bcc", 0.03, 0.2, q)
     assert np.allclose(w.bounds, plain.bounds)
     assert w.points_free(np.array([[10.0, 6.0, 1.5]]))[0]  # the corridor
@@ -256,10 +258,10 @@ def test_rotated_suites_share_one_rotation_sample_and_record_it(tmp_path):
     assert (suite.rotation, suite.rotations) == ("yaw", 2)
     tasks, record = runner.plan_tasks(suite, log=lambda m: None)
     assert len(record) == 2
-    quats = {t["rotation"]: tuple(t["quaternion"]) for t in tasks}
+    quats = {t["rotation"]: tuple(t["quaternion_xyzw"]) for t in tasks}
     assert sorted(quats) == [0, 1] and quats[0] != quats[1]
     for t in tasks:  # every lattice and method of a rotation sees the same rotation
-        assert tuple(t["quaternion"]) == quats[t["rotation"]]
+        assert tuple(t["quaternion_xyzw"]) == quats[t["rotation"]]
     from planner.bench.worlds import map_frame
 
     frame = map_frame(str(map_path("office")))
@@ -268,7 +270,7 @@ def test_rotated_suites_share_one_rotation_sample_and_record_it(tmp_path):
         assert np.all(pts >= frame.bounds[0]) and np.all(pts <= frame.bounds[1])
     rows = runner.run(tasks, tmp_path / "results.jsonl", progress=False)
     assert {r["rotation"] for r in rows} == {0, 1}
-    assert all(len(r["quaternion"]) == 4 for r in rows)
+    assert all(len(r["quaternion_xyzw"]) == 4 for r in rows)
     assert all(r["commit"] for r in rows)  # the code that ran each row
     assert len({runner.row_key(r) for r in rows}) == len(rows)
     for r in rows:

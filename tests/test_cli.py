@@ -39,7 +39,7 @@ def one_line_error(r, *needles):
 
 
 def test_help_shows_every_default():
-    for cmd in ("plan", "compare", "voxels", "lattices", "stats", "bench"):
+    for cmd in ("plan", "compare", "world", "lattices", "stats", "bench"):
         r = planner(cmd, "--help")
         assert r.returncode == 0
         text = " ".join(r.stdout.split())
@@ -110,7 +110,7 @@ def test_outputs_that_cannot_be_written_are_refused_first(tmp_path, target, why)
     out = target.format(file=f, dir=tmp_path / "d")
     r = planner("plan", "office", "--start", "2,2,1", "--goal", "18,10,1", *FAST, "--out", out)
     one_line_error(r, "--out", why)
-    r = planner("voxels", "office", *FAST, "--out", out.replace(".json", ".npz"))
+    r = planner("world", "office", *FAST, "--out", out.replace(".json", ".npz"))
     one_line_error(r, "--out", why)
     r = planner("compare", "office", *FAST, "--plot", out.replace(".json", ".png"))
     one_line_error(r, "--plot", why)
@@ -124,7 +124,7 @@ def test_plot_with_an_unknown_suffix_is_refused_before_any_work(tmp_path):
 
 
 def test_missing_output_folders_are_created_alike(tmp_path):
-    r = planner("voxels", "office", *FAST, "--out", str(tmp_path / "a" / "b" / "v.npz"))
+    r = planner("world", "office", *FAST, "--out", str(tmp_path / "a" / "b" / "v.npz"))
     assert r.returncode == 0, r.stderr
     r = planner("plan", "office", "--start", "2,2,1", "--goal", "18,10,1", *FAST,
                 "--out", str(tmp_path / "c" / "d" / "p.csv"))

@@ -107,7 +107,7 @@ def _runs(case, i: int, out: Path) -> list[tuple[str, list[str], Path]]:
     runs = [("plan", ["plan", m, *query, *fmt, "--out", str(out / "path.csv")],
              out / "path.csv"),
             ("compare", ["compare", m, *query, *fmt, "--lattices", "cubic,fcc"], out / "none"),
-            ("voxels", ["voxels", m, "--radius", "0.1", *fmt, "--out", str(out / "v.npz")],
+            ("world", ["world", m, "--radius", "0.1", *fmt, "--out", str(out / "v.npz")],
              out / "v.npz")]
     return runs if FULL else [runs[i % 3]]
 

@@ -47,7 +47,7 @@ def _expected(t: float) -> tuple[np.ndarray, np.ndarray]:
     return pts @ pose[:3, :3].T + pose[:3, 3], pose[:3, 3]
 
 
-def _write_bag(path: Path, ros1: bool, topic: str = "/points") -> None:
+def _write_bag(path: Path, ros1: bool, topic: str = "/points", with_tf: bool = True) -> None:
     pytest.importorskip("rosbags")
     from rosbags.typesys import Stores, get_typestore
 
@@ -94,6 +94,7 @@ def _write_bag(path: Path, ros1: bool, topic: str = "/points") -> None:
                                                    (0, 0, 0, 1))]))]
     msgs += [("/tf", t, tfm(transforms=[tf(t, "odom", "base_link", (t, 0, 0),
                                            _yaw_quat(0.5 * t))])) for t in TF_TIMES]
+    msgs = msgs if with_tf else []
     msgs += [(topic, t, cloud(t)) for t in CLOUD_TIMES]
     msgs.sort(key=lambda m: m[1])
     if ros1:
@@ -122,6 +123,21 @@ def test_bag_clouds_are_moved_into_the_fixed_frame_by_tf_at_their_stamp(tmp_path
     np.testing.assert_allclose(obst.origins, [w[1] for w in want], atol=1e-6)
     assert obst.point_origin.tolist() == [0, 0, 0, 1, 1, 1, 2, 2, 2]
     assert obst.dropped_nonfinite == 3 and obst.unknown_default == "blocked"
+
+
+@pytest.mark.parametrize("ros1", [True, False], ids=["ros1", "ros2"])
+def test_bag_without_tf_names_the_missing_transform_and_keeps_its_frame(tmp_path, ros1):
+    path = tmp_path / ("run.bag" if ros1 else "run")
+    _write_bag(path, ros1, with_tf=False)
+    with pytest.raises(MapError, match=r"no /tf transform from the cloud frame 'lidar'.*"
+                                       r"--fixed-frame lidar"):
+        load_obstacles(path)
+    obst = load_obstacles(path, fixed_frame="lidar")  # the clouds as recorded
+    assert obst.frame == "lidar" and len(obst.origins) == len(CLOUD_TIMES)
+    np.testing.assert_allclose(obst.origins, 0.0)
+    with_tf = tmp_path / ("tf.bag" if ros1 else "tf")
+    _write_bag(with_tf, ros1)
+    assert load_obstacles(with_tf).frame == "odom"  # the root of the tf tree
 
 
 def test_ros2_bag_by_folder_storage_file_or_metadata(tmp_path):
@@ -222,3 +238,24 @@ def test_corrupt_robot_files_are_map_errors(tmp_path, name):
     (tmp_path / name).write_bytes(b"\x00garbage" * 40)
     with pytest.raises(MapError, match=name.replace(".", r"\.")):
         load_obstacles(tmp_path / name)
+
+
+def test_cli_bag_options_reach_the_reader_and_the_path_file_names_the_fixed_frame(tmp_path,
+                                                                                    capsys):
+    import json
+
+    from planner.cli import main
+
+    bag, no_tf = tmp_path / "run.bag", tmp_path / "bare.bag"
+    _write_bag(bag, ros1=True, topic="/velodyne_points")
+    _write_bag(no_tf, ros1=True, with_tf=False)
+    query = ["--radius", "0.05", "--cell-volume", "0.001", "--unknown", "free",
+             "--bounds", "-3,-3,-1,3,3,2", "--start", "-2.5,-2.5,1.5", "--goal", "2.5,2.5,1.5"]
+    out = tmp_path / "path.json"
+    assert main(["plan", str(bag), "--topic", "/velodyne_points", "--fixed-frame",
+                 "base_link", "--max-clouds", "2", *query, "--out", str(out)]) == 0
+    assert json.loads(out.read_text())["frame"] == "base_link"
+    capsys.readouterr()
+    assert main(["plan", str(no_tf), *query]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "no /tf transform" in err and "'lidar'" in err

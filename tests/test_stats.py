@@ -55,7 +55,12 @@ def test_sentence_says_direction_interval_and_p():
 
 
 def test_rotation_samples_are_uniform_and_shared():
-    from planner.bench.rotations import quaternion_matrix, sample_rotations
+    from scipy.spatial.transform import Rotation
+
+    from planner.bench.rotations import sample_rotations
+
+    def quaternion_matrix(q):  # the order is scipy's and ROS's: x, y, z, w
+        return Rotation.from_quat(q).as_matrix()
 
     a = sample_rotations("so3", 2000, seed=5)
     assert np.array_equal(a, sample_rotations("so3", 2000, seed=5))  # same for every lattice
@@ -65,6 +70,10 @@ def test_rotation_samples_are_uniform_and_shared():
     assert np.all(np.abs(z.var(axis=0) - 1 / 3) < 0.03)
     yaw = np.array([quaternion_matrix(q) for q in sample_rotations("yaw", 50, seed=2)])
     assert np.allclose(yaw[:, 2], [0, 0, 1]) and np.allclose(yaw[:, :, 2], [0, 0, 1])
+    assert np.all(a[:, 3] >= 0) and np.allclose(np.linalg.norm(a, axis=1), 1)
+    # x, y, z, w: a turn about z has x = y = 0 (in w, x, y, z order it would be y = z = 0).
+    q = sample_rotations("yaw", 5, seed=2)
+    assert np.allclose(q[:, :2], 0) and not np.allclose(q[:, 2], 0)
 
 
 def test_the_readme_results_are_spliced_from_the_run(tmp_path):

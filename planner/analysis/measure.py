@@ -16,6 +16,7 @@ from collections.abc import Iterable, Sequence
 
 import numpy as np
 from scipy.optimize import minimize
+from scipy.spatial.transform import Rotation
 
 from planner.analysis.tables import format_table
 from planner.lattice import NAMED_LATTICES, PAPER_DELTAS, Lattice
@@ -51,16 +52,21 @@ _CHUNK = 1 << 16
 # -- points ------------------------------------------------------------------------------
 def uniform_points(lattice: Lattice, n: int, rng: np.random.Generator,
                    cells_per_side: int = 16) -> np.ndarray:
-    """Points uniform in an axis-aligned cube ``cells_per_side`` cell sizes wide, at a
-    random offset (so no alignment with the lattice).
+    """Points uniform in the parallelepiped ``G [0, k)^d`` (``k = cells_per_side``) at a
+    random offset.
+
+    The parallelepiped is a union of ``k^d`` lattice translates of one fundamental domain,
+    so the points are exactly uniform modulo the lattice: Monte Carlo estimates of the
+    quantization error are unbiased for every lattice. (An axis-aligned cube is not a union
+    of cells; for a skewed generator such as MCC's its partial cells bias the estimate.)
 
     Returns
     -------
-    ndarray, shape (n, 3), float64, metres.
+    ndarray, shape (n, d), float64, metres.
     """
     side = cells_per_side * lattice.cell_volume ** (1 / lattice.dim)
     origin = rng.uniform(-side, side, size=lattice.dim)
-    return origin + side * rng.random((n, lattice.dim))
+    return origin + (cells_per_side * rng.random((n, lattice.dim))) @ lattice.generator.T
 
 
 def sample_in_cell(lattice: Lattice, n: int, rng: np.random.Generator) -> np.ndarray:
@@ -111,29 +117,15 @@ def sample_in_cells(lattice: Lattice, offsets: np.ndarray, n: int,
 
 
 def random_rotations(k: int, seed: int | np.random.Generator = 0) -> np.ndarray:
-    """Uniformly distributed random 3D rotations (Shoemake, Graphics Gems III, 1992).
-
-    A unit quaternion built from three uniform numbers ``u1, u2, u3`` is uniform on S^3,
-    hence the rotation is Haar-distributed on SO(3).
+    """Uniformly distributed (Haar) random 3D rotations,
+    :meth:`scipy.spatial.transform.Rotation.random` drawn from ``default_rng(seed)``.
 
     Returns
     -------
     ndarray, shape (k, 3, 3), float64: proper rotation matrices (``R @ R.T = I``,
     ``det R = +1``).
     """
-    rng = np.random.default_rng(seed)
-    u1, u2, u3 = rng.random((3, k))
-    a, b = np.sqrt(1 - u1), np.sqrt(u1)
-    x, y = a * np.sin(2 * np.pi * u2), a * np.cos(2 * np.pi * u2)
-    z, w = b * np.sin(2 * np.pi * u3), b * np.cos(2 * np.pi * u3)
-    return np.stack(
-        [
-            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
-            np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
-            np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
-        ],
-        axis=1,
-    )
+    return Rotation.random(int(k), random_state=np.random.default_rng(seed)).as_matrix()
 
 
 # -- quantization quality ----------------------------------------------------------------
@@ -196,14 +188,20 @@ def lattice_table(cell_volume: float = 1.0, names: Iterable[str] = NAMED,
     (m); ``covering_radius``, ``packing_radius`` (m); ``nsm_exact`` (from the Voronoi cell)
     and ``nsm_mc`` (Monte Carlo on ``n_points`` uniform points); ``mean_error`` (eq. 13 on
     the same points, m); ``points_per_s`` (quantization throughput on those points).
+    When ``"hex"`` is named, the hex prism at :func:`optimal_hex_height` follows it (row
+    ``"hex h=<height>"``, the height in metres).
     """
-    rows = []
+    lats = []
     for name in names:
-        lat = Lattice.named(name, cell_volume)
+        lats.append(Lattice.named(name, cell_volume))
+        if name == "hex":
+            lats.append(hex_prism(cell_volume, optimal_hex_height(cell_volume)))
+    rows = []
+    for lat in lats:
         rng = np.random.default_rng(seed)
         pts = uniform_points(lat, n_points, rng)
         m = quantization_metrics(lat, pts)
-        row = {"lattice": name, "cell_volume": float(cell_volume)}
+        row = {"lattice": lat.name, "cell_volume": float(cell_volume)}
         for kind in ("face", "full"):
             d = neighbour_distances(lat, kind)
             row[f"n_{kind}"] = len(d)

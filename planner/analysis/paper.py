@@ -389,7 +389,7 @@ def reproduce(out: Path, *, rotations: int = 100, volumes: Sequence[float] = (0.
     print("  rms_distance_error = sqrt(3 x mse_per_dim) (the paper's 'distance error' column);"
           " mean_distance_eq13 = mean |Q(x) - x|")
 
-    print(f"\n== Fig. 5 (rotated protocol): {k} uniform random rotations (Shoemake), "
+    print(f"\n== Fig. 5 (rotated protocol): {k} uniform random rotations, "
           "the same for every lattice; uniform random points as the reference")
     first = next(iter(scans.values()))
     lo, hi = first.min(axis=0), first.max(axis=0)

@@ -30,6 +30,7 @@ import time
 
 import numpy as np
 
+from planner.bench.rotations import IDENTITY_XYZW
 from planner.errors import PlannerError
 
 __all__ = ["EXPLORE_KEYS", "explore_rows", "check_explore_table"]
@@ -67,7 +68,7 @@ def _setting(task: dict):
 
     frame = cached_frame(task["map"])
     lat = rotated_lattice(task["lattice"], task["cell_volume"],
-                          task.get("quaternion", (1.0, 0.0, 0.0, 0.0)))
+                          task.get("quaternion_xyzw", IDENTITY_XYZW))
     return frame.obstacles, frame.bounds, lat
 
 
@@ -82,7 +83,7 @@ def explore_rows(task: dict) -> list[dict]:
         base = {k: task[k] for k in ("suite", "map", "cell_volume", "radius", "lattice",
                                      "neighbors", "method", "seed")}
         base.update(commit=row_commit(), rotation=task.get("rotation", 0),
-                    quaternion=list(task.get("quaternion", (1.0, 0.0, 0.0, 0.0))),
+                    quaternion_xyzw=list(task.get("quaternion_xyzw", IDENTITY_XYZW)),
                     query=q["id"], start=q["start"], goal=q["goal"],
                     optimal_cost=q.get("optimal_cost"), length=None, length_smoothed=None,
                     clearance=None, collision_free=None, peak_bytes=0,

@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from planner.bench.queries import sample_queries, scenario_queries
+from planner.bench.rotations import IDENTITY_XYZW
 from planner.bench.suite import Suite
 from planner.errors import PlannerError
 from planner.path import path_length
@@ -41,7 +42,7 @@ def _world(task: dict):
     :func:`planner.bench.worlds.cached_world`) each world once for all its queries."""
     from planner.bench.worlds import cached_world
 
-    quat = tuple(task.get("quaternion", (1.0, 0.0, 0.0, 0.0)))
+    quat = tuple(task.get("quaternion_xyzw", IDENTITY_XYZW))
     key = (task["map"], task["lattice"], task["cell_volume"], task["radius"], quat)
     if key not in _WORLDS:
         if len(_WORLDS) > 12:
@@ -91,7 +92,7 @@ def run_task(task: dict) -> list[dict]:
         base = {k: task[k] for k in ("suite", "map", "cell_volume", "radius", "lattice",
                                      "neighbors", "method", "seed")}
         base.update(commit=row_commit(), rotation=task.get("rotation", 0),
-                    quaternion=list(task.get("quaternion", (1.0, 0.0, 0.0, 0.0))))
+                    quaternion_xyzw=list(task.get("quaternion_xyzw", IDENTITY_XYZW)))
         base.update(query=q["id"], start=q["start"], goal=q["goal"],
                     optimal_cost=q.get("optimal_cost"))
         t0 = time.perf_counter()
@@ -200,12 +201,13 @@ def plan_tasks(suite: Suite, log=print, saved: dict | None = None,
                 for ri, quat in enumerate(quats):
                     group = group_name(m, cv, radius, ri)
                     common = {"suite": suite.name, "map": m.path, "cell_volume": cv,
-                              "radius": radius, "rotation": ri, "quaternion": quat.tolist(),
+                              "radius": radius, "rotation": ri,
+                              "quaternion_xyzw": quat.tolist(),
                               "rotated": rotated, "world_cache": world_cache}
                     n = m.queries or suite.queries
                     old = (saved or {}).get(group)
                     if (old and old.get("wanted") == n and "queries" in old
-                            and old.get("frame") == "map"):
+                            and old.get("frame") == "map" and "quaternion_xyzw" in old):
                         record[group] = old
                         tasks += _group_tasks(suite, common, old["queries"])
                         continue
@@ -230,7 +232,7 @@ def plan_tasks(suite: Suite, log=print, saved: dict | None = None,
                                      "frame": "map",
                                      "queries": queries, "map": m.path, "cell_volume": cv,
                                      "radius": radius, "rotation": ri,
-                                     "quaternion": quat.tolist()}
+                                     "quaternion_xyzw": quat.tolist()}
                     tasks += _group_tasks(suite, common, queries)
     return tasks, record
 

@@ -72,10 +72,12 @@ def _paper(suite: Suite, out: Path, jobs: int) -> int:
 
 def run_suite(name: str, *, out: str | None = None, jobs: int = 1,
               scheduler: str | None = None, resume: bool = False, progress: bool = True,
-              report_only: bool = False) -> int:
+              report_only: bool = False, force: bool = False) -> int:
     """Run the suite ``name`` (bundled name or TOML path); returns the exit status.
 
     0 when the suite completed, 130 / 143 after SIGINT / SIGTERM (partial report written).
+    A folder that already holds results needs ``resume`` (keep them, run the rest) or
+    ``force`` (start again).
 
     Raises
     ------
@@ -94,6 +96,11 @@ def run_suite(name: str, *, out: str | None = None, jobs: int = 1,
                          f"(skipped: {', '.join(suite.skipped) or 'none'})")
     log = (lambda m: print(m, file=sys.stderr)) if progress else (lambda m: None)
     with results_lock(folder):
+        results = folder / "results.jsonl"
+        if (results.is_file() and results.stat().st_size and not
+                (resume or force or report_only)):
+            raise SuiteError(f"{folder} already holds results; pass --resume to keep them "
+                             "and run the rest, or --force to start again")
         saved_path = folder / "queries.json"
         saved = None
         if (resume or report_only) and saved_path.is_file():

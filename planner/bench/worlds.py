@@ -17,8 +17,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
-from planner.bench.rotations import quaternion_matrix
+from planner.bench.rotations import IDENTITY_XYZW
 
 __all__ = ["MapFrame", "map_frame", "rotated_lattice", "rotated_world", "FreeSpace"]
 
@@ -97,20 +98,20 @@ def cached_frame(map_path: str) -> MapFrame:
 
 
 def rotated_lattice(lattice: str, cell_volume: float, quaternion):
-    """The named lattice turned by R^T, R the rotation of unit ``quaternion`` (w, x, y, z):
+    """The named lattice turned by R^T, R the rotation of unit ``quaternion`` (x, y, z, w):
     generator ``R^T G`` (3, 3), same name and cell volume (m^3)."""
     from planner.lattice import Lattice
 
     lat = Lattice.named(lattice, cell_volume=cell_volume)
     q = np.asarray(quaternion, dtype=float)
-    if np.allclose(q, [1.0, 0.0, 0.0, 0.0], atol=0, rtol=0):
+    if np.allclose(q, IDENTITY_XYZW, atol=0, rtol=0):
         return lat  # the identity keeps the named lattice and its fast quantizer
-    return Lattice(quaternion_matrix(q).T @ lat.generator, name=lattice)
+    return Lattice(Rotation.from_quat(q).as_matrix().T @ lat.generator, name=lattice)
 
 
 def rotated_world(map_path: str, lattice: str, cell_volume: float, radius: float,
                   quaternion) -> object:
-    """The World of the map at ``map_path`` turned by ``quaternion`` (w, x, y, z) against
+    """The World of the map at ``map_path`` turned by ``quaternion`` (x, y, z, w) against
     the lattice (module docstring): :func:`planner.build_world` with
     :func:`rotated_lattice`.
 

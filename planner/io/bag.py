@@ -2,8 +2,8 @@
 
 Each ``sensor_msgs/PointCloud2`` on the chosen topic is transformed from its ``frame_id`` into
 the fixed frame with the ``/tf`` and ``/tf_static`` transforms at its header stamp (dynamic
-transforms interpolated: translation linearly, rotation by slerp).  The sensor origin of each
-cloud (its frame's origin in the fixed frame) is kept for ray-cast free space.
+transforms interpolated: translation linearly, rotation by scipy's ``Slerp``).  The sensor
+origin of each cloud (its frame's origin in the fixed frame) is kept for ray-cast free space.
 """
 
 from __future__ import annotations
@@ -13,10 +13,10 @@ from bisect import bisect_left
 from pathlib import Path
 
 import numpy as np
+from scipy.spatial.transform import Rotation, Slerp
 
 from planner.errors import MapError
 from planner.io.obstacles import Obstacles
-from planner.io.scans import quaternion_matrix
 from planner.io.validate import finite_points, no_return_mask
 
 CLOUD_TYPE = "sensor_msgs/msg/PointCloud2"
@@ -50,6 +50,8 @@ def read_bag(p: Path, topic: str | None = None, fixed_frame: str | None = None,
         PointCloud2 topic; default the first one in the bag.
     fixed_frame : str, optional
         Frame to express the points in; default the root of the first cloud's tf tree.
+        A bag without ``/tf`` is an error naming the missing transform unless this is the
+        clouds' own frame.
     max_clouds : int, optional
         Read at most this many clouds.
 
@@ -57,7 +59,7 @@ def read_bag(p: Path, topic: str | None = None, fixed_frame: str | None = None,
     -------
     Obstacles
         ``points`` (N, 3) in the fixed frame, ``origins`` (S, 3) one per cloud,
-        ``point_origin`` (N,), ``dropped_nonfinite``.
+        ``point_origin`` (N,), ``dropped_nonfinite``, ``frame`` (the fixed frame).
     """
     require("rosbags", ".bag", p.name)
     from rosbags.highlevel import AnyReader
@@ -96,6 +98,10 @@ def read_bag(p: Path, topic: str | None = None, fixed_frame: str | None = None,
             stamp = _stamp(msg.header.stamp)
             if fixed_frame is None:
                 fixed_frame = tree.root(frame)
+                if fixed_frame == frame and frame not in tree.parent.values():
+                    raise MapError(f"{p.name}: no /tf transform from the cloud frame "
+                                   f"{frame!r} to a fixed frame; pass --fixed-frame {frame} "
+                                   "to keep the clouds in the sensor frame")
             pose = tree.lookup(_frame(fixed_frame), frame, stamp)
             pts, keep = finite_points(cloud_xyz(msg, p.name), p.name)
             dropped += len(keep) - len(pts)
@@ -116,7 +122,8 @@ def read_bag(p: Path, topic: str | None = None, fixed_frame: str | None = None,
         raise MapError(f"{p.name}: topic {chosen!r} holds no finite points")
     return Obstacles(points=points, boxes=np.zeros((0, 3)), box_size=0.0, bounds=None,
                      resolution=None, source=p.name, origins=np.array(origins),
-                     point_origin=np.concatenate(owner), dropped_nonfinite=dropped)
+                     point_origin=np.concatenate(owner), dropped_nonfinite=dropped,
+                     frame=_frame(fixed_frame))
 
 
 def cloud_xyz(msg, name: str) -> np.ndarray:
@@ -214,23 +221,12 @@ class TfTree:
             i = bisect_left(times, t)
             (t0, p0, q0), (t1, p1, q1) = series[i - 1], series[i]
             a = 0.0 if t1 == t0 else (t - t0) / (t1 - t0)
-            trans, quat = p0 + a * (p1 - p0), _slerp(q0, q1, a)
+            slerp = Slerp([0.0, 1.0], Rotation.from_quat([q0, q1]))
+            trans, quat = p0 + a * (p1 - p0), slerp([a]).as_quat()[0]
         out = np.eye(4)
-        out[:3, :3] = quaternion_matrix(quat)
+        out[:3, :3] = Rotation.from_quat(quat).as_matrix()
         out[:3, 3] = trans
         return out
-
-
-def _slerp(q0: np.ndarray, q1: np.ndarray, a: float) -> np.ndarray:
-    dot = float(q0 @ q1)
-    if dot < 0:  # the short way round
-        q1, dot = -q1, -dot
-    if dot > 0.9995:
-        q = q0 + a * (q1 - q0)
-    else:
-        theta = math.acos(dot)
-        q = (math.sin((1 - a) * theta) * q0 + math.sin(a * theta) * q1) / math.sin(theta)
-    return q / np.linalg.norm(q)
 
 
 def _frame(frame_id: str) -> str:

@@ -57,6 +57,9 @@ class Obstacles:
         missing returns this way).
     dim : int
         2 for 2D maps (ROS map_server), else 3.
+    frame : str or None
+        The coordinate frame the points are in when the file names one (a bag's fixed
+        frame); None otherwise.
     """
 
     points: np.ndarray
@@ -73,6 +76,7 @@ class Obstacles:
     unknown_default: str | None = None
     dropped_nonfinite: int = 0
     dim: int = 3
+    frame: str | None = None
 
     def __post_init__(self) -> None:
         # Coerce once here so every consumer can rely on float64 (N, d) arrays.

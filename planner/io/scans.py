@@ -12,6 +12,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from planner.errors import MapError
 from planner.io._files import read_text
@@ -118,19 +119,9 @@ def pose_from_quaternion(nums: list[float], where: str) -> np.ndarray:
     if not math.isfinite(n) or n < 1e-12:
         raise MapError(f"{where}: quaternion has zero or non-finite norm")
     pose = np.eye(4)
-    pose[:3, :3] = quaternion_matrix(np.array([qx, qy, qz, qw]) / n)
+    pose[:3, :3] = Rotation.from_quat([qx, qy, qz, qw]).as_matrix()
     pose[:3, 3] = (x, y, z)
     return pose
-
-
-def quaternion_matrix(q: np.ndarray) -> np.ndarray:
-    """Rotation matrix (3, 3) of a unit quaternion ``(x, y, z, w)``."""
-    qx, qy, qz, qw = q
-    return np.array([
-        [1 - 2 * (qy * qy + qz * qz), 2 * (qx * qy - qz * qw), 2 * (qx * qz + qy * qw)],
-        [2 * (qx * qy + qz * qw), 1 - 2 * (qx * qx + qz * qz), 2 * (qy * qz - qx * qw)],
-        [2 * (qx * qz - qy * qw), 2 * (qy * qz + qx * qw), 1 - 2 * (qx * qx + qy * qy)],
-    ])
 
 
 def check_pose(pose: np.ndarray, where: str) -> None:
