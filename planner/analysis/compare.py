@@ -107,6 +107,7 @@ def compare(
     format: str | None = None,
     max_expansions: int | None = None,
     unknown: str | None = None,
+    view: str | None = None,
 ) -> list[dict]:
     """Plan the same queries on every lattice and return one summary row per lattice.
 
@@ -118,6 +119,8 @@ def compare(
     ``max_expansions`` bounds each search (None: the memory budget's default).
     ``unknown`` is the unknown-space policy of :func:`planner.build_world` (None: the map's
     default); each row reports the unknown cells its paths cross.
+    ``plot`` / ``view``: a figure / an interactive 3D page (:mod:`planner.view`) of every
+    lattice's path of the first query over the last lattice's cells.
     """
     from planner import api
 
@@ -175,6 +178,13 @@ def compare(
         })
     if plot:
         plot_paths(plot, world, results)
+    if view:
+        from planner.view import write_view
+
+        s, g = queries[0]
+        write_view(view, world, {k: r.path for k, r in results.items() if r.found}, start=s,
+                   goal=g, title=f"{Path(map_path).name}: query 1 of {len(queries)}, cells of "
+                                 f"the {name} lattice")
     return rows
 
 
