@@ -213,10 +213,9 @@ def _success_figure(plt, pts: list[dict], rows: list[dict], maps: list[str],
             x = np.arange(len(mp))
             rate = np.array([k / n for k, n in counts])
             lo, hi = np.array([wilson_interval(k, n) for k, n in counts]).T
-            ax.bar(x, rate, color=[_colour(p["lattice"]) for p in mp], alpha=0.85,
-                   hatch=None)
-            ax.errorbar(x, rate, yerr=np.clip([rate - lo, hi - rate], 0, None), fmt="none", ecolor="black",
-                        capsize=3, lw=1)
+            ax.bar(x, rate, color=[_colour(p["lattice"]) for p in mp], alpha=0.85)
+            ax.errorbar(x, rate, yerr=np.clip([rate - lo, hi - rate], 0, None), fmt="none",
+                        ecolor="black", capsize=3, lw=1)
             for xi, (k, n) in zip(x, counts, strict=True):
                 ax.text(xi, 1.02, f"{k}/{n}", ha="center", va="bottom", fontsize=7)
             ax.set_xticks(x, [f"{p['lattice']} {p['neighbors']} {p['method']}" for p in mp],

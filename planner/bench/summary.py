@@ -184,8 +184,8 @@ def plot(rows: list[dict], out_dir: Path) -> list[Path]:
     lo, hi = np.array([wilson_interval(k, n) for k, n in counts]).T
     x = np.arange(len(labels))
     ax.bar(x, rates, color=[colours.get(lab.split()[0], OTHER_COLOR) for lab in labels])
-    ax.errorbar(x, rates, yerr=np.clip([rates - lo, hi - rates], 0, None), fmt="none", ecolor="black",
-                capsize=3, lw=1)
+    ax.errorbar(x, rates, yerr=np.clip([rates - lo, hi - rates], 0, None), fmt="none",
+                ecolor="black", capsize=3, lw=1)
     for xi, (k, n) in zip(x, counts, strict=True):
         ax.text(xi, 1.02, f"{k}/{n}", ha="center", va="bottom", fontsize=7)
     ax.set_xticks(x, labels, rotation=60, ha="right", fontsize=8)
