@@ -94,12 +94,13 @@ def plot_paths(path: str, world, results: dict, *, title: str | None = None,
     step = 2 * lat.packing_radius
     xe = np.arange(lo[0] - margin, hi[0] + margin + step, step)
     ye = np.arange(lo[1] - margin, hi[1] + margin + step, step)
-    z0, z1 = (lo[2] - 0.3, hi[2] + 0.3) if three_d else (-step, step)
+    # a 2D map: only the plane z = 0 of the prism lattice
+    z0, z1 = (lo[2] - 0.3, hi[2] + 0.3) if three_d else (-0.25 * step, 0.25 * step)
     extent = (xe[0], xe[-1], ye[0], ye[-1])
     in_slab = cells[(cells[:, 2] >= z0) & (cells[:, 2] <= z1)]
     im = ax2.imshow(_share(in_slab, lat, xe, ye, z0, z1).T, origin="lower", cmap="Greys",
                     extent=extent, vmin=0, vmax=1, interpolation="nearest")
-    fig.colorbar(im, ax=ax2, fraction=0.04, pad=0.02,
+    fig.colorbar(im, ax=ax2, fraction=0.04, pad=0.02, shrink=0.8 if three_d else 0.6,
                  label="share of blocked cells" + (" over the path's heights" if three_d
                                                    else ""))
     u_slab = unk[(unk[:, 2] >= z0) & (unk[:, 2] <= z1)]
