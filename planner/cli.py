@@ -168,7 +168,10 @@ def _generator(text: str):
         raise argparse.ArgumentTypeError(str(exc)) from None
 
 
-_OUTPUTS = {("plan", "out"): (".csv", ".json"), ("world", "out"): (".npz",),
+_OUTPUTS = {("plan", "out"): (".csv", ".json", ".tum"),
+            ("world", "out"): (".npz", ".ply", ".bt"),
+            ("view", "out"): (".html",), ("plan", "view"): (".html",),
+            ("compare", "view"): (".html",), ("explore", "view"): (".html",),
             ("plan", "plot"): PLOT_SUFFIXES, ("compare", "plot"): PLOT_SUFFIXES,
             ("explore", "plot"): (".png",), ("explore", "gif"): (".gif",)}
 
@@ -283,8 +286,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--shortcut", action="store_true", help="shortcut the A* path")
     p.add_argument("--time", type=_positive, default=1.0, help="OMPL time budget (s)")
     p.add_argument("--seed", type=_int_range(0, 2**32 - 1), default=0, help="OMPL seed")
-    p.add_argument("--out", help="write the path (.csv/.json)")
+    p.add_argument("--out", help="write the path (.json, .csv, or .tum: a TUM trajectory)")
+    p.add_argument("--bag", help="write the path as a ROS 2 bag folder (nav_msgs/msg/Path on "
+                                 "/plan; 'robot' extra)")
     p.add_argument("--plot", help="write a figure of the path")
+    p.add_argument("--view", help="write an interactive 3D view of the path (.html)")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
 
     p = sub.add_parser("compare", help="plan the same queries on every lattice (main job)")
@@ -298,12 +304,25 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--method", default="astar", help=METHODS)
     p.add_argument("--neighbors", default="full", help="full, face, face+k or full+k")
     p.add_argument("--plot", help="write a figure of the paths")
+    p.add_argument("--view", help="write an interactive 3D view of the paths (.html)")
     p.add_argument("--json", action="store_true", help="print the rows as JSON")
 
     p = sub.add_parser("world", help="build a planning world once and save it (.npz) for "
                                      "plan and compare")
     _add_world_args(p)
-    p.add_argument("--out", required=True, help="output .npz")
+    p.add_argument("--out", required=True,
+                   help="output .npz (the world), .ply (blocked and unknown cell centres) "
+                        "or .bt (OctoMap tree of the blocked cells; cubic lattice only)")
+
+    p = sub.add_parser("view", help="write an interactive 3D view (one self-contained .html) "
+                                    "of a map or saved world and paths")
+    _add_world_args(p)
+    p.add_argument("--path", action="append", default=[],
+                   help="a path file from 'planner plan --out P.json' (repeatable)")
+    p.add_argument("--max-cells", type=_int_range(1), default=400_000,
+                   help="most cells drawn per layer (hidden interior cells dropped first, "
+                        "then uniform decimation)")
+    p.add_argument("--out", required=True, help="output .html")
 
     p = sub.add_parser("explore", help="explore an unknown map with a simulated range sensor, "
                                        "replanning with D* Lite (checked against A*)")
@@ -320,6 +339,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--max-steps", type=_int_range(1), default=100_000, help="move budget")
     p.add_argument("--plot", help="summary figure (PNG); with several lattices, one per "
                                   "lattice (name suffixed)")
+    p.add_argument("--view", help="interactive 3D view (.html) of the true world and the "
+                                  "trajectory; with several lattices, one per lattice")
     p.add_argument("--gif", help="animated GIF of the exploration, one frame per replan "
                                  "(at most --frames); with several lattices, one per lattice")
     p.add_argument("--frames", type=_int_range(1), default=150,
@@ -458,12 +479,25 @@ def _cmd_plan(a) -> int:
         corner_cutting=a.corner_cutting, shortcut=a.shortcut, time_limit=a.time, seed=a.seed,
         max_expansions=a.max_expansions,
     )
-    if a.out:
+    if a.out and a.out.lower().endswith(".tum"):
+        from planner.export import write_tum
+
+        write_tum(a.out, res.path)
+    elif a.out:
         from planner.path import write_path
 
         write_path(a.out, res, world, a.start, a.goal)
+    if a.bag and res.found:
+        from planner.export import write_path_bag
+
+        write_path_bag(a.bag, res.path, frame=getattr(world.obstacles, "frame", None) or "map")
     if a.plot and res.found:
         compare.plot_paths(a.plot, world, {label: res})
+    if a.view:
+        from planner.view import write_view
+
+        write_view(a.view, world, {label: res.path} if res.found else {}, start=a.start,
+                   goal=a.goal)
     print(json.dumps(res.to_dict()) if a.json else api.describe(res, world))
     return 0 if res.found else 1
 
@@ -483,7 +517,7 @@ def _cmd_compare(a) -> int:
         a.map, lattices=lattices, cell_volume=a.cell_volume, radius=radius, bounds=a.bounds,
         start=a.start, goal=a.goal, method=a.method, neighbors=a.neighbors, plot=a.plot,
         progress=not a.json and sys.stderr.isatty(), format=a.format,
-        max_expansions=a.max_expansions, unknown=a.unknown,
+        max_expansions=a.max_expansions, unknown=a.unknown, view=a.view,
     )
     print(json.dumps(rows) if a.json else compare.format_rows(rows))
     return 0 if all(r["found"] for r in rows) else 1
@@ -492,8 +526,18 @@ def _cmd_compare(a) -> int:
 def _cmd_world(a) -> int:
     from planner.world.file import save_world
 
+    suffix = Path(a.out).suffix.lower()
+    if suffix == ".bt":  # refused before the (long) build when the lattice cannot be a tree
+        from planner.export.octomap import check_cubic_name
+
+        check_cubic_name(a.generator if a.generator is not None else a.lattice, a.map)
     world, label = _build(a)
-    save_world(world, a.out)
+    if suffix == ".npz":
+        save_world(world, a.out)
+    else:
+        from planner.export import write_world_cells
+
+        write_world_cells(a.out, world)
     print(f"{a.out}: {label} world, {world.n_blocked} blocked and {world.n_unknown} unknown "
           f"cells, radius {world.radius:g} m, unknown space {world.unknown_policy}, built in "
           f"{world.build_seconds:.2f} s")
@@ -518,10 +562,37 @@ def _cmd_explore(a) -> int:
             res.plot(_per_lattice(a.plot, name, several))
         if a.gif:
             res.animate(_per_lattice(a.gif, name, several), max_frames=a.frames)
+        if a.view:
+            _explore_view(_per_lattice(a.view, name, several), a, res, radius, cell_volume)
     print(json.dumps(rows) if a.json else format_table(rows))
     if bad:  # D* Lite disagreed with A* from scratch, or the robot touched the true map
         raise PlannerError(f"{bad} mismatches/contacts: see the table")
     return 0 if all(r["status"] == "reached" for r in rows) else 1
+
+
+def _explore_view(out: Path, a, res, radius, cell_volume) -> None:
+    """The true inflated world of one exploration, its trajectory and its last plan."""
+    from planner.view import write_view
+    from planner.world.build import build_world
+
+    world = build_world(a.map, res.lattice, cell_volume=cell_volume, radius=radius,
+                            bounds=a.bounds)
+    paths = {f"trajectory ({res.status})": res.trajectory}
+    if res.paths:
+        paths["last plan"] = res.paths[-1]
+    write_view(out, world, paths, start=res.start, goal=res.goal,
+               title=f"{Path(a.map).name}: exploration on {res.lattice}")
+
+
+def _cmd_view(a) -> int:
+    from planner.view import read_path_file, write_view
+
+    paths = dict(read_path_file(p) for p in a.path)  # bad files refused before the build
+    world, label = _build(a)
+    write_view(a.out, world, paths, max_cells=a.max_cells)
+    print(f"{a.out}: {label} world, {world.n_blocked} blocked and {world.n_unknown} unknown "
+          f"cells, {len(paths)} path(s)")
+    return 0
 
 
 def _per_lattice(out: str, name: str, several: bool) -> Path:
@@ -547,7 +618,7 @@ def _cmd_bench(a) -> int:
 
 _COMMANDS = {"lattices": _cmd_lattices, "stats": _cmd_stats, "plan": _cmd_plan,
              "compare": _cmd_compare, "world": _cmd_world,
-             "explore": _cmd_explore, "match": _cmd_match,
+             "explore": _cmd_explore, "match": _cmd_match, "view": _cmd_view,
              "bench": _cmd_bench}
 
 

@@ -1,8 +1,9 @@
-"""Path files written by ``planner plan --out``: JSON (everything) or CSV (waypoints + header).
+"""Path files written by ``planner plan --out``: JSON (everything) or CSV (waypoints only,
+with the JSON beside it as its sidecar).
 
 Both carry the map (file name and sha256 when known), frame, lattice, cell volume (area for
 a 2D map), radius, unknown policy, start, goal, raw and smoothed length, the number of path
-cells meeting unknown space, and per waypoint x, y, z and heading (yaw in the x-y plane,
+cells meeting unknown space, and per distinct waypoint x, y, z and heading (yaw in the x-y plane,
 radians, of the segment leaving the waypoint; the last repeats the one before). Numbers are
 rounded to 1 um / 1 urad so files carry no float noise.
 """
@@ -47,13 +48,16 @@ def path_record(res, world, start, goal) -> dict:
     raw = res.extra.get("raw_length", res.length)
     smooth = res.extra.get("smoothed_length")
     path = np.asarray(res.path, dtype=float)
-    yaw = headings(path)
     digest = getattr(world, "source_sha256", "") or ""
     src_file = getattr(world, "source_file", "")
     if not digest and src_file and Path(src_file).is_file():
         from planner.world.file import sha256
 
         digest = sha256(src_file)
+    if len(path) > 1:  # a start at a cell centre would appear twice
+        r = np.round(path, _DIGITS)
+        path = path[np.concatenate([[True], np.any(r[1:] != r[:-1], axis=1)])]
+    yaw = headings(path)
     pts = path[:, :2] if world.dim == 2 else path
     return {
         "map": Path(src).name if src else None,
@@ -76,8 +80,9 @@ def path_record(res, world, start, goal) -> dict:
 
 
 def write_path(path: str, res, world, start, goal) -> None:
-    """Write the path as JSON (:func:`path_record`) or CSV (``# key: value`` header lines,
-    then ``x,y[,z],yaw`` rows), atomically."""
+    """Write the path as JSON (:func:`path_record`) or CSV (one header row, then
+    ``x,y[,z],yaw`` rows; the metadata goes to the JSON sidecar beside it, the same name
+    with ``.json``), atomically."""
     suffix = Path(path).suffix.lower()
     if suffix not in (".csv", ".json"):
         raise PlanError(f"{path}: unknown output format {suffix!r}; use .csv or .json")
@@ -87,12 +92,12 @@ def write_path(path: str, res, world, start, goal) -> None:
             tmp.write_text(json.dumps(rec, indent=1))
             return
         with open(tmp, "w", newline="") as f:
-            for k, v in rec.items():
-                if k not in ("path", "waypoints", "waypoint_columns"):
-                    f.write(f"# {k}: {json.dumps(v)}\n")
             w = csv.writer(f)
             w.writerow(rec["waypoint_columns"])
             w.writerows(rec["waypoints"])
+    if suffix == ".csv":
+        with atomic_path(Path(path).with_suffix(".json")) as tmp:
+            tmp.write_text(json.dumps(rec, indent=1))
 
 
 def path_length(path: np.ndarray, empty: float = math.nan) -> float:

@@ -133,11 +133,10 @@ def test_cli_plan_writes_path_json_and_plot(wall_file, tmp_path, capsys):
             "--plot", str(png)]
     assert main(argv) == 0
     assert "bcc" in capsys.readouterr().out
-    lines = out.read_text().splitlines()
-    meta = [ln for ln in lines if ln.startswith("# ")]  # "# key: value" metadata first
-    assert "# lattice: \"bcc\"" in meta and "# radius: 0.3" in meta
-    body = [ln for ln in lines if not ln.startswith("#")]
-    assert body[0] == "x,y,z,yaw"
+    body = out.read_text().splitlines()
+    meta = json.loads(out.with_suffix(".json").read_text())  # the metadata: a sidecar
+    assert meta["lattice"] == "bcc" and meta["radius"] == 0.3
+    assert body[0] == "x,y,z,yaw" and not any(ln.startswith("#") for ln in body)
     rows = np.loadtxt(body[1:], delimiter=",")
     assert np.allclose(rows[0, :3], START) and np.allclose(rows[-1, :3], GOAL)
     assert png.stat().st_size > 10_000

@@ -286,7 +286,8 @@ def test_cli_world_round_trip_and_path_file(tmp_path, capsys):
     assert main(["plan", str(out), "--start", "-0.7,0.0", "--goal", "0.3,0.3", "--out",
                  str(csv_path)]) == 0
     text = csv_path.read_text()
-    assert "# radius: 0.05" in text and "x,y,yaw" in text
+    assert text.startswith("x,y,yaw\n") and "#" not in text
+    assert json.loads(csv_path.with_suffix(".json").read_text())["radius"] == 0.05
     capsys.readouterr()
     assert main(["plan", str(out), "--radius", "0.1", "--start", "-0.7,0.0", "--goal",
                  "0.3,0.3"]) == 2

@@ -9,7 +9,6 @@ from pathlib import Path
 
 import numpy as np
 
-from planner.analysis.style import LATTICE_COLORS
 from planner.analysis.tables import format_table
 from planner.errors import MapError, PlanError
 from planner.fsutil import atomic_path
@@ -37,6 +36,7 @@ def compare(
     format: str | None = None,
     max_expansions: int | None = None,
     unknown: str | None = None,
+    view: str | None = None,
 ) -> list[dict]:
     """Plan the same queries on every lattice and return one summary row per lattice.
 
@@ -49,6 +49,8 @@ def compare(
     ``max_expansions`` bounds each search (None: the memory budget's default).
     ``unknown`` is the unknown-space policy of :func:`planner.build_world` (None: the map's
     default); each row reports the unknown cells its paths cross.
+    ``plot`` / ``view``: a figure / an interactive 3D page (:mod:`planner.view`) of every
+    lattice's path of the first query over the last lattice's cells.
     """
     if not resolve(map_path).exists():
         raise MapError(f"{map_path}: no such file or bundled map")
@@ -104,7 +106,18 @@ def compare(
             "unknown_cells": int(sum(r.unknown_cells or 0 for r in found)),
         })
     if plot:
-        plot_paths(plot, world, results)
+        s, g = queries[0]
+        plot_paths(plot, world, results,
+                   title=f"{Path(map_path).name}: query 1 of {len(queries)}, "
+                         f"{_xyz(s)} -> {_xyz(g)}" + (f" (cells of {name})"
+                                                      if len(results) > 1 else ""))
+    if view:
+        from planner.view import write_view
+
+        s, g = queries[0]
+        write_view(view, world, {k: r.path for k, r in results.items() if r.found}, start=s,
+                   goal=g, title=f"{Path(map_path).name}: query 1 of {len(queries)}, cells of "
+                                 f"the {name} lattice")
     return rows
 
 
@@ -154,72 +167,13 @@ def format_rows(rows: list[dict], markdown: bool = False) -> str:
     return text
 
 
-def plot_paths(path: str, world, results: dict, max_cells: int = 4000) -> None:
-    """Figure of paths over the occupied cells near them: a 3D view and a top-down view.
+def plot_paths(path: str, world, results: dict, max_cells: int = 4000,
+               title: str | None = None) -> None:
+    """Figure of paths over the cells: see :func:`planner.analysis.path_figure.plot_paths`."""
+    from planner.analysis.path_figure import plot_paths as draw
 
-    Parameters
-    ----------
-    path : str
-        Output PNG file.
-    world : World
-        Its blocked cells are drawn (sub-sampled to ``max_cells`` near the paths).
-    results : dict of str -> PlanResult
-        Paths to draw, by label.
-    """
-    import matplotlib
+    draw(path, world, results, title=title, max_cells=max_cells)
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
-    paths = {k: r.path for k, r in results.items() if r.found and len(r.path)}
-    if not paths:
-        raise PlanError("nothing to plot: no path was found")
-    allp = np.concatenate(list(paths.values()))
-    lo, hi = allp.min(axis=0), allp.max(axis=0)
-    margin = 0.15 * (hi - lo).max() + 4 * world.lattice.covering_radius
-    centres = world.blocked_centres()
-    near = np.all((centres >= lo - margin) & (centres <= hi + margin), axis=1)
-    cells = centres[near]
-    if len(cells) > max_cells:
-        cells = cells[np.random.default_rng(0).choice(len(cells), max_cells, replace=False)]
-    fig = plt.figure(figsize=(13, 6))
-    ax3 = fig.add_subplot(1, 2, 1, projection="3d")
-    ax2 = fig.add_subplot(1, 2, 2)
-    ax3.scatter(*cells.T, s=2, c=cells[:, 2], cmap="Greys", alpha=0.25, depthshade=False)
-    # Top-down: the share of blocked cells in each x-y bin over the paths' height range, so
-    # walls read as dark lines and open floor as white (a scatter of all floors is noise).
-    slab = centres[near & (centres[:, 2] >= lo[2] - 0.3) & (centres[:, 2] <= hi[2] + 0.3)]
-    step = 2 * world.lattice.packing_radius
-    xe = np.arange(lo[0] - margin, hi[0] + margin + step, step)
-    ye = np.arange(lo[1] - margin, hi[1] + margin + step, step)
-    layers = max(1.0, (hi[2] - lo[2] + 0.6) / step)
-    if len(slab):
-        hist, _, _ = np.histogram2d(slab[:, 0], slab[:, 1], bins=(xe, ye))
-        ax2.imshow(np.minimum(hist.T / layers, 1.0), origin="lower", cmap="Greys",
-                   extent=(xe[0], xe[-1], ye[0], ye[-1]), vmin=0, vmax=1, alpha=0.8,
-                   interpolation="nearest")
-    for label, p in paths.items():
-        r = results[label]
-        text = f"{label}: {r.length:.2f} m, {r.cell_checks:,} checks"
-        colour = LATTICE_COLORS.get(label)  # None: matplotlib's next colour
-        ax3.plot(*p.T, lw=2, label=text, color=colour)
-        ax2.plot(p[:, 0], p[:, 1], lw=2, label=text, color=colour)
-    first = next(iter(paths.values()))
-    for ax, pts in ((ax3, (first[0], first[-1])), (ax2, (first[0][:2], first[-1][:2]))):
-        ax.scatter(*np.array(pts[:1]).T, marker="o", s=60, c="green", label="start", zorder=5)
-        ax.scatter(*np.array(pts[1:]).T, marker="*", s=120, c="red", label="goal", zorder=5)
-    ax3.set_xlabel("x (m)")
-    ax3.set_ylabel("y (m)")
-    ax3.set_zlabel("z (m)")
-    ax2.set_xlabel("x (m)")
-    ax2.set_ylabel("y (m)")
-    ax2.set_aspect("equal")
-    ax2.set_title("top-down view (grey: share of blocked cells over the path's heights)",
-                  fontsize=10)
-    ax3.set_title(f"{Path(str(getattr(world, 'source', ''))).name}: paths in 3D")
-    ax2.legend(fontsize=8, loc="best")
-    fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=110, format=Path(path).suffix.lstrip(".") or "png",
-                    bbox_inches="tight")
-    plt.close(fig)
+def _xyz(p) -> str:
+    return "(" + ", ".join(f"{v:.2f}" for v in np.asarray(p, dtype=float)) + ")"

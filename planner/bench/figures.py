@@ -7,8 +7,11 @@
   smaller covering radius at the same volume sits further left).
 - ``time_vs_length.png``: median search time against median smoothed length ratio.
 
-Colours are the project's one colour per lattice; markers tell the method; line styles
-(and hollow markers in ``pareto.png``) the neighbour set.
+Colours are the project's one colour per lattice; markers tell the method; filled markers
+are the full neighbour set, hollow ones the face neighbours (and in
+``success_vs_resolution.png`` line styles too). With a single cell volume per map the
+success figure is one bar per configuration with its 95% Wilson interval and n instead of
+curves over a one-point axis.
 """
 
 from __future__ import annotations
@@ -98,7 +101,9 @@ def _colour(lat: str) -> str:
     return LATTICE_COLORS.get(lat, OTHER_COLOR)
 
 
-def _legend(ax, pts: list[dict]) -> None:
+def _legend(ax, pts: list[dict], lines: bool = False) -> None:
+    """Lattice colours, method markers and the neighbour sets as the figure draws them:
+    hollow / filled markers, with their line styles when ``lines``."""
     from matplotlib.lines import Line2D
 
     lats = [lat for lat in LATTICE_COLORS if any(p["lattice"] == lat for p in pts)]
@@ -107,8 +112,9 @@ def _legend(ax, pts: list[dict]) -> None:
     h = [Line2D([], [], color=_colour(lat), marker="o", ls="", label=lat) for lat in lats]
     h += [Line2D([], [], color="black", markerfacecolor="white", marker=_MARKERS.get(m, "x"),
                  ls="", label=m) for m in meths]
-    h += [Line2D([], [], color="black", ls=_STYLES.get(n, ":"), label=f"{n} nbrs"
-                 + (" (hollow)" if n == "face" else "")) for n in nbs]
+    h += [Line2D([], [], color="black", marker="o", ls=_STYLES.get(n, ":") if lines else "",
+                 markerfacecolor="white" if n == "face" else "black",
+                 label=f"{n} nbrs") for n in nbs]
     ax.legend(handles=h, fontsize=7, loc="best")
 
 
@@ -159,39 +165,17 @@ def plot_tradeoffs(rows: list[dict], out_dir: Path) -> list[Path]:
     files.append(_save(fig, out_dir / "pareto.png"))
     plt.close(fig)
 
-    fig, axes = plt.subplots(len(maps), 2, figsize=(11, 3.8 * len(maps)), squeeze=False)
-    for i, m in enumerate(maps):
-        mp = [p for p in pts if p["map"] == m]
-        curves: dict = defaultdict(list)
-        for p in mp:
-            curves[(p["lattice"], p["neighbors"], p["method"])].append(p)
-        for j, (key, label) in enumerate((("cell_volume", "cell volume (m^3)"),
-                                          ("covering_radius", "covering radius (m)"))):
-            ax = axes[i, j]
-            for (lat, nb, meth), cps in curves.items():
-                cps = sorted(cps, key=lambda p: p[key])
-                ax.plot([p[key] for p in cps], [p["success"] for p in cps],
-                        color=_colour(lat), ls=_STYLES.get(nb, ":"),
-                        marker=_MARKERS.get(meth, "x"), alpha=0.8)
-            ax.set_xscale("log")
-            ax.set_ylim(-0.03, 1.03)
-            ax.set_xlabel(label)
-            ax.set_ylabel("success rate")
-            ax.set_title(f"{Path(m).name}: success vs {label.split(' (')[0]}", fontsize=9)
-            ax.grid(alpha=0.3)
-            if i == 0 and j == 0:
-                _legend(ax, mp)
-    fig.tight_layout()
-    files.append(_save(fig, out_dir / "success_vs_resolution.png"))
-    plt.close(fig)
+    files.append(_success_figure(plt, pts, rows, maps, out_dir))
 
     fig, axes = plt.subplots(1, len(maps), figsize=(5.5 * len(maps), 4.2), squeeze=False)
     for i, m in enumerate(maps):
         ax = axes[0, i]
         mp = [p for p in pts if p["map"] == m]
         for p in mp:
-            ax.scatter(p["length_ratio"], p["seconds"], color=_colour(p["lattice"]),
-                       marker=_MARKERS.get(p["method"], "x"), s=30)
+            c = _colour(p["lattice"])
+            ax.scatter(p["length_ratio"], p["seconds"], edgecolors=c, linewidths=1.4,
+                       facecolors="white" if p["neighbors"] == "face" else c,
+                       marker=_MARKERS.get(p["method"], "x"), s=36)
         _log_y(ax, [p["seconds"] for p in mp])
         ax.set_xlabel("median smoothed length / best on the query")
         ax.set_ylabel("median search time (s)")
@@ -203,3 +187,74 @@ def plot_tradeoffs(rows: list[dict], out_dir: Path) -> list[Path]:
     files.append(_save(fig, out_dir / "time_vs_length.png"))
     plt.close(fig)
     return files
+
+
+def _success_figure(plt, pts: list[dict], rows: list[dict], maps: list[str],
+                    out_dir: Path) -> Path:
+    """Success against cell volume and covering radius; one cell volume: bars with n."""
+    from matplotlib.ticker import FixedLocator, NullLocator
+
+    from planner.bench.summary import wilson_interval
+
+    single = all(len({p["cell_volume"] for p in pts if p["map"] == m}) == 1 for m in maps)
+    fig, axes = plt.subplots(len(maps), 1 if single else 2,
+                             figsize=(11, (4.2 if single else 3.8) * len(maps)), squeeze=False)
+    for i, m in enumerate(maps):
+        mp = sorted((p for p in pts if p["map"] == m),
+                    key=lambda p: (p["lattice"], p["neighbors"], p["method"], p["cell_volume"]))
+        if single:
+            ax = axes[i, 0]
+            counts = []
+            for p in mp:
+                rs = [r for r in rows if r["map"] == m and r["lattice"] == p["lattice"]
+                      and r["neighbors"] == p["neighbors"] and r["method"] == p["method"]
+                      and r["cell_volume"] == p["cell_volume"]]
+                counts.append((sum(bool(r.get("found")) for r in rs), len(rs)))
+            x = np.arange(len(mp))
+            rate = np.array([k / n for k, n in counts])
+            lo, hi = np.array([wilson_interval(k, n) for k, n in counts]).T
+            ax.bar(x, rate, color=[_colour(p["lattice"]) for p in mp], alpha=0.85)
+            ax.errorbar(x, rate, yerr=np.clip([rate - lo, hi - rate], 0, None), fmt="none",
+                        ecolor="black", capsize=3, lw=1)
+            for xi, (k, n) in zip(x, counts, strict=True):
+                ax.text(xi, 1.02, f"{k}/{n}", ha="center", va="bottom", fontsize=7)
+            ax.set_xticks(x, [f"{p['lattice']} {p['neighbors']} {p['method']}" for p in mp],
+                          rotation=45, ha="right", fontsize=8)
+            ax.set_ylim(0, 1.12)
+            ax.set_ylabel("success rate")
+            ax.set_title(f"{Path(m).name}: success at the one cell volume "
+                         f"{mp[0]['cell_volume']:g} m^3 (solved/n; 95% Wilson interval)",
+                         fontsize=9)
+            ax.grid(axis="y", alpha=0.3)
+            continue
+        curves: dict = defaultdict(list)
+        for p in mp:
+            curves[(p["lattice"], p["neighbors"], p["method"])].append(p)
+        # a small horizontal offset per configuration, so equal rates do not hide markers
+        shift = {k: 1.0 + 0.015 * (n - (len(curves) - 1) / 2) for n, k in enumerate(curves)}
+        for j, (key, label) in enumerate((("cell_volume", "cell volume (m^3)"),
+                                          ("covering_radius", "covering radius (m)"))):
+            ax = axes[i, j]
+            for (lat, nb, meth), cps in curves.items():
+                cps = sorted(cps, key=lambda p: p[key])
+                c = _colour(lat)
+                ax.plot([p[key] * shift[(lat, nb, meth)] for p in cps],
+                        [p["success"] for p in cps], color=c, ls=_STYLES.get(nb, ":"),
+                        marker=_MARKERS.get(meth, "x"), markeredgecolor=c,
+                        markerfacecolor="white" if nb == "face" else c, alpha=0.85)
+            ax.set_xscale("log")
+            ticks = sorted({p[key] for p in mp})
+            ax.xaxis.set_major_locator(FixedLocator(ticks))
+            ax.xaxis.set_minor_locator(NullLocator())
+            ax.set_xticklabels([f"{t:.3g}" for t in ticks], fontsize=8)
+            ax.set_ylim(-0.03, 1.03)
+            ax.set_xlabel(label)
+            ax.set_ylabel("success rate")
+            ax.set_title(f"{Path(m).name}: success vs {label.split(' (')[0]}", fontsize=9)
+            ax.grid(alpha=0.3)
+            if i == 0 and j == 0:
+                _legend(ax, mp, lines=True)
+    fig.tight_layout()
+    path = _save(fig, out_dir / "success_vs_resolution.png")
+    plt.close(fig)
+    return path

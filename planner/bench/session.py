@@ -19,6 +19,7 @@ from pathlib import Path
 from planner.bench import runner, summary
 from planner.bench.suite import Suite, SuiteError, load_suite
 from planner.errors import PlannerError
+from planner.export.arena import write_arena_db
 from planner.fsutil import write_text_atomic
 
 __all__ = ["run_suite"]
@@ -135,6 +136,7 @@ def run_suite(name: str, *, out: str | None = None, jobs: int = 1,
         missing = len(wanted - {runner.row_key(r) for r in rows})
         summ = summary.summarize(rows) if rows else []
         summary.write_csv(folder / "summary.csv", summ)
+        write_arena_db(folder / "planner_arena.db", rows, suite=suite.name)  # Planner Arena
         # figures take seconds: an interrupted run leaves them to --report-only
         figs = summary.plot(rows, folder) if rows and interrupted is None else []
         cmd = f"planner bench {name}" + (f" --out {out}" if out else "")

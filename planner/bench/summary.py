@@ -178,13 +178,20 @@ def plot(rows: list[dict], out_dir: Path) -> list[Path]:
         plt.close(fig)
         files.append(p)
     fig, ax = plt.subplots(figsize=(max(7, 0.55 * len(labels) + 2), 4))
-    rates = [np.mean([bool(r.get("found")) for r in rows if _label(r) == lab]) for lab in labels]
-    ax.bar(range(len(labels)), rates,
-           color=[colours.get(lab.split()[0], OTHER_COLOR) for lab in labels])
-    ax.set_xticks(range(len(labels)), labels, rotation=60, ha="right", fontsize=8)
-    ax.set_ylim(0, 1.05)
+    counts = [(sum(bool(r.get("found")) for r in rows if _label(r) == lab),
+               sum(_label(r) == lab for r in rows)) for lab in labels]
+    rates = np.array([k / n for k, n in counts])
+    lo, hi = np.array([wilson_interval(k, n) for k, n in counts]).T
+    x = np.arange(len(labels))
+    ax.bar(x, rates, color=[colours.get(lab.split()[0], OTHER_COLOR) for lab in labels])
+    ax.errorbar(x, rates, yerr=np.clip([rates - lo, hi - rates], 0, None), fmt="none",
+                ecolor="black", capsize=3, lw=1)
+    for xi, (k, n) in zip(x, counts, strict=True):
+        ax.text(xi, 1.02, f"{k}/{n}", ha="center", va="bottom", fontsize=7)
+    ax.set_xticks(x, labels, rotation=60, ha="right", fontsize=8)
+    ax.set_ylim(0, 1.12)
     ax.set_ylabel("success rate")
-    ax.set_title("fraction of queries solved")
+    ax.set_title("fraction of queries solved (solved/n above each bar; 95% Wilson interval)")
     fig.tight_layout()
     p = out_dir / "success.png"
     with atomic_path(p) as tmp:
@@ -194,6 +201,21 @@ def plot(rows: list[dict], out_dir: Path) -> list[Path]:
     from planner.bench.figures import plot_tradeoffs
 
     return files + plot_tradeoffs(rows, out_dir)
+
+
+def wilson_interval(k: int, n: int, z: float = 1.96) -> tuple[float, float]:
+    """Wilson score interval (default 95%) of a success rate ``k / n``; (0, 1) when n = 0.
+
+    >>> [round(v, 3) for v in wilson_interval(10, 10)]
+    [0.722, 1.0]
+    """
+    if n <= 0:
+        return 0.0, 1.0
+    p = k / n
+    d = 1 + z * z / n
+    mid = (p + z * z / (2 * n)) / d
+    half = z * np.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / d
+    return float(max(0.0, mid - half)), float(min(1.0, mid + half))
 
 
 def write_report(out_dir: Path, suite, rows: list[dict], summary: list[dict], record: dict,
@@ -222,8 +244,7 @@ def write_report(out_dir: Path, suite, rows: list[dict], summary: list[dict], re
     lines += [f"Rotations: `{rot}`, {len({r.get('rotation', 0) for r in rows})} per map "
               "(the lattice turned by R^T in the map's frame, i.e. the map by R; the same "
               "sample for every lattice, neighbour set and method).", ""]
-    lines += ["## Queries", ""] + _query_lines(record)
-    lines += ["", "## Lattice vs cubic (paired per query, 95% bootstrap CI, Wilcoxon p)", "",
+    lines += ["## Lattice vs cubic (paired per query, 95% bootstrap CI, Wilcoxon p)", "",
               paired.headline(rows), "",
               "## How much the answer moves with rotation", "",
               paired.rotation_spread(rows), "",
@@ -242,6 +263,7 @@ def write_report(out_dir: Path, suite, rows: list[dict], summary: list[dict], re
               "Clearance is measured against the raw obstacle points, not the voxels.", ""]
     for f in figures:
         lines += [f"![{f.stem}]({f.name})", ""]
+    lines += ["## Queries", ""] + _query_lines(record) + [""]
     p = out_dir / "report.md"
     write_text_atomic(p, "\n".join(lines))
     write_text_atomic(out_dir / "results_section.md", results_section(
@@ -250,18 +272,26 @@ def write_report(out_dir: Path, suite, rows: list[dict], summary: list[dict], re
 
 
 def _query_lines(record: dict) -> list[str]:
-    """One line per query group (kept / wanted, candidates dropped by reason), and totals."""
-    out, total = [], defaultdict(int)
+    """One markdown table: a row per query group (queries kept / wanted, candidates dropped
+    per reason), and a total row."""
+    reasons = sorted({k for rec in record.values() for k in rec["dropped"]})
+    head = ["group", "kept / wanted"] + [f"dropped: {k}" for k in reasons]
+    out = [_cells(head), "|" + "---|" * len(head)]
+    total = defaultdict(int)
+    kept = wanted = 0
     for group, rec in record.items():
-        drop = ", ".join(f"{k}: {v}" for k, v in sorted(rec["dropped"].items())) or "none"
-        out.append(f"- {group}: {rec['kept']}/{rec['wanted']} queries kept; "
-                   f"candidates dropped: {drop}")
+        out.append(_cells([group, f"{rec['kept']}/{rec['wanted']}"]
+                          + [rec["dropped"].get(k, 0) for k in reasons]))
+        kept, wanted = kept + rec["kept"], wanted + rec["wanted"]
         for k, v in rec["dropped"].items():
             total[k] += v
-    if total:
-        out.append("- all groups, candidates dropped: " + ", ".join(
-            f"{k}: {v}" for k, v in sorted(total.items())))
+    if len(record) > 1:
+        out.append(_cells(["all", f"{kept}/{wanted}"] + [total[k] for k in reasons]))
     return out
+
+
+def _cells(values: list) -> str:
+    return "| " + " | ".join(str(v) for v in values) + " |"
 
 
 def results_section(suite, rows: list[dict], record: dict, figures: list[Path], command: str,
@@ -279,8 +309,9 @@ def results_section(suite, rows: list[dict], record: dict, figures: list[Path], 
     lines = [f"Suite `{suite.name}`" + (" (PARTIAL)" if partial else "")
              + f", regenerated by `{command}` ({stamp}).", "", paired.headline(rows), "",
              "How much the answer moves with the map's rotation:", "",
-             paired.rotation_spread(rows), "", "Queries:", "", *_query_lines(record), ""]
+             paired.rotation_spread(rows), ""]
     for f in figures:
         if f.stem in ("pareto", "success_vs_resolution", "time_vs_length", "checks_vs_cubic"):
             lines += [f"![{f.stem}]({fig_prefix}{f.name})", ""]
+    lines += ["Queries:", "", *_query_lines(record), ""]
     return "\n".join(lines)

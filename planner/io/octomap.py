@@ -32,7 +32,16 @@ def read_octomap(p: Path) -> Obstacles:
         raise MapError(f"{p.name}: not an OctoMap .bt file (first line must be '{_MAGIC}')")
     lines, pos = header_lines(data, p.name, "OctoMap", "data")
     tree_id = size = res = None
+    shift = np.zeros(3)
     for line in lines[1:-1]:
+        if line.startswith("# planner_shift "):  # planner.export.octomap: tree frame -> ours
+            try:
+                shift = np.array([float(v) for v in line.split()[2:5]])
+            except ValueError:
+                raise MapError(f"{p.name}: bad planner_shift line {line[:60]!r}") from None
+            if shift.shape != (3,) or not np.isfinite(shift).all():
+                raise MapError(f"{p.name}: bad planner_shift line {line[:60]!r}")
+            continue
         if not line or line.startswith("#"):
             continue
         key, _, val = line.partition(" ")
@@ -71,7 +80,7 @@ def read_octomap(p: Path) -> Obstacles:
     if not occupied.any():
         raise MapError(f"{p.name}: OctoMap has no occupied voxels")
     side = (np.int64(1) << (_DEPTH - depths)).astype(np.float64)
-    centres = (keys - _CENTER + side[:, None] / 2) * res  # leaf min-corner key -> centre
+    centres = (keys - _CENTER + side[:, None] / 2) * res + shift  # min-corner key -> centre
     edges = side * res
     return Obstacles(points=np.zeros((0, 3)), boxes=centres[occupied], box_size=res,
                      box_sizes=edges[occupied], free_boxes=centres[~occupied],

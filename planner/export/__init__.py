@@ -1,0 +1,38 @@
+"""Writers for the rest of the robotics stack.
+
+========================  ==================================  ===============================
+what                      function                            read by
+========================  ==================================  ===============================
+path, TUM trajectory      :func:`write_tum`                   evo, SLAM tools
+path, ROS 2 bag           :func:`write_path_bag`              ros2 bag, RViz, rosbags
+world cells, PLY          :func:`write_ply_cells`             plyfile, Open3D, CloudCompare
+world cells, OctoMap      :func:`write_octomap`               OctoMap, octovis, octomap_server
+benchmark, SQLite         :func:`write_arena_db`              Planner Arena, OMPL's scripts
+========================  ==================================  ===============================
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from planner.errors import MapError
+from planner.export.arena import write_arena_db
+from planner.export.cells import write_ply_cells
+from planner.export.octomap import write_octomap
+from planner.export.rosbag import write_path_bag
+from planner.export.trajectory import distinct_waypoints, path_poses, write_tum
+
+__all__ = ["distinct_waypoints", "path_poses", "write_arena_db", "write_octomap",
+           "write_path_bag", "write_ply_cells", "write_tum", "write_world_cells"]
+
+
+def write_world_cells(out: str | os.PathLike, world) -> None:
+    """Write ``world``'s cells by the suffix of ``out``: ``.ply`` or ``.bt``."""
+    suffix = Path(out).suffix.lower()
+    if suffix == ".ply":
+        write_ply_cells(out, world)
+    elif suffix == ".bt":
+        write_octomap(out, world)
+    else:
+        raise MapError(f"{out}: unknown cell file type {suffix!r}; use .ply or .bt")
