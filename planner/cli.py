@@ -563,20 +563,20 @@ def _cmd_explore(a) -> int:
         if a.gif:
             res.animate(_per_lattice(a.gif, name, several), max_frames=a.frames)
         if a.view:
-            _explore_view(_per_lattice(a.view, name, several), a, res, radius, cell_volume)
+            _explore_view(_per_lattice(a.view, name, several), a, res)
     print(json.dumps(rows) if a.json else format_table(rows))
     if bad:  # D* Lite disagreed with A* from scratch, or the robot touched the true map
         raise PlannerError(f"{bad} mismatches/contacts: see the table")
     return 0 if all(r["status"] == "reached" for r in rows) else 1
 
 
-def _explore_view(out: Path, a, res, radius, cell_volume) -> None:
+def _explore_view(out: Path, a, res) -> None:
     """The true inflated world of one exploration, its trajectory and its last plan."""
     from planner.view import write_view
     from planner.world.build import build_world
 
-    world = build_world(a.map, res.lattice, cell_volume=cell_volume, radius=radius,
-                            bounds=a.bounds)
+    world = build_world(a.map, res.lattice, cell_volume=a.cell_volume, radius=a.radius,
+                        bounds=a.bounds)
     paths = {f"trajectory ({res.status})": res.trajectory}
     if res.paths:
         paths["last plan"] = res.paths[-1]

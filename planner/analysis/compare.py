@@ -11,7 +11,6 @@ import numpy as np
 
 from planner.analysis.tables import format_table
 from planner.errors import MapError, PlanError
-from planner.fsutil import atomic_path
 from planner.maps import resolve
 from planner.planning import plan
 from planner.search import warm_up
