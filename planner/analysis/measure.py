@@ -197,6 +197,12 @@ def lattice_table(cell_volume: float = 1.0, names: Iterable[str] = NAMED,
     and ``nsm_mc`` (Monte Carlo on ``n_points`` uniform points); ``mean_error`` (eq. 13 on
     the same points, m); ``points_per_s`` (quantization throughput on those points).
     """
+    from planner.budget import require
+    from planner.errors import PlannerError
+
+    # per point: the point, its cell, its error vector and the metrics' temporaries
+    require(float(n_points) * 3 * 8 * 6, f"{n_points} uniform points (--points)",
+            error=PlannerError)
     rows = []
     for name in names:
         lat = Lattice.named(name, cell_volume)
