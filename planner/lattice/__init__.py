@@ -214,20 +214,19 @@ class Lattice:
         ndarray, shape (k, d), int64
             Sorted by world distance.
         """
-        base, _, extra = str(kind).partition("+")
+        base, plus, extra = str(kind).partition("+")
         if base not in ("face", "full"):
             raise LatticeError(
                 f"unknown neighbour kind {kind!r}; expected face, full, face+k or full+k"
             )
         offs = self._geo[base]
-        if not extra:
+        if not plus:
             return offs.copy()
-        try:
-            shells = int(extra)
-        except ValueError:
-            raise LatticeError(f"bad shell count in neighbour kind {kind!r}") from None
-        if shells < 0:
-            raise LatticeError(f"bad shell count in neighbour kind {kind!r}")
+        # digits only: "face+" is no shorthand for face+0, nor is "face+ 1" or "face++1"
+        if not (extra.isascii() and extra.isdigit()):
+            raise LatticeError(f"bad shell count in neighbour kind {kind!r}: expected "
+                               f"{base}+k with k a whole number >= 0")
+        shells = int(extra)
         return self._with_shells(offs, shells)
 
     def _with_shells(self, offs: np.ndarray, shells: int) -> np.ndarray:
