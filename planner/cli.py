@@ -208,6 +208,10 @@ def _add_world_args(p: argparse.ArgumentParser, *, lattice: bool = True) -> None
     p.add_argument("--format", default=None,
                    help="file format instead of the extension: ply, pcd, xyz, npy, bt, 3dmap, "
                         "or poses (a pose list of scans, merged)")
+    p.add_argument("--check-source", action="store_true",
+                   help="with a saved world: refuse it unless its source map (beside the "
+                        "world file or in the current folder) still has the SHA-256 "
+                        "recorded at save")
     p.add_argument("--unknown", choices=("blocked", "free"), default=None,
                    help="unknown space: blocked (kept the robot radius away, as obstacles) or "
                         "free (None: blocked when the map says what was observed free, else "
@@ -383,6 +387,10 @@ def _build(a):
             lattice = None
         world = api.build_world(a.map, lattice, cell_volume=a.cell_volume, radius=a.radius,
                                 bounds=a.bounds, unknown=a.unknown)
+        if getattr(a, "check_source", False):
+            from planner._world_check import check_source
+
+            check_source(world)
         return world, world.lattice.name or "custom"
     radius, cell_volume = map_defaults(a.map, a.radius, a.cell_volume)
     if a.generator is not None:
@@ -444,6 +452,10 @@ def _cmd_compare(a) -> int:
     radius = a.radius
     if is_world_file(a.map):  # one lattice: the saved one
         saved = load_world(a.map)
+        if a.check_source:
+            from planner._world_check import check_source
+
+            check_source(saved)
         lattices = [saved.lattice]
         radius = saved.radius if radius is None else radius
     _check_neighbors(lattices, a.neighbors, a.method)
@@ -512,6 +524,15 @@ _COMMANDS = {"lattices": _cmd_lattices, "stats": _cmd_stats, "plan": _cmd_plan,
              "bench": _cmd_bench}
 
 
+def _os_error(exc: OSError) -> str:
+    """``path: reason`` of an OS error on one line (``[Errno 28] No space left ...``)."""
+    what = exc.strerror or str(exc) or type(exc).__name__
+    where = exc.filename if exc.filename is not None else ""
+    if exc.filename2 is not None:
+        where = f"{where} -> {exc.filename2}"
+    return " ".join(f"{where}: {what}".split()) if where else " ".join(what.split())
+
+
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     a = build_parser().parse_args(_hoist_global_options(_join_negative_values(argv)))
@@ -537,6 +558,9 @@ def main(argv: list[str] | None = None) -> int:
         except BrokenPipeError:  # output piped into `head`: stop quietly, as Unix tools do
             os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
             return 141
+        except OSError as exc:  # a full disk, a read-only folder, ...: outputs are atomic,
+            print(f"planner: error: {_os_error(exc)}", file=sys.stderr)  # nothing is half-
+            return 2  # written (fsutil.atomic_path removes its temporary file)
     for w in caught:
         with contextlib.suppress(Exception):
             print(f"planner: warning: {w.message}", file=sys.stderr)
