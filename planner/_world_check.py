@@ -54,6 +54,11 @@ def read_members(path: Path) -> dict[str, np.ndarray]:
     from planner.npyfile import read_array
 
     try:
+        with open(path, "rb") as f:  # np.savez writes no archive comment: the end record
+            f.seek(max(0, f.seek(0, os.SEEK_END) - 22))  # is the last 22 bytes
+            end = f.read(22)
+        if len(end) == 22 and (end[:4] != b"PK\x05\x06" or end[20:22] != b"\0\0"):
+            raise corrupt(path, "data after the end of the zip archive (or no end record)")
         with zipfile.ZipFile(path) as z:
             infos = z.infolist()
             names = [i.filename for i in infos]

@@ -533,7 +533,21 @@ def _os_error(exc: OSError) -> str:
     return " ".join(f"{where}: {what}".split()) if where else " ".join(what.split())
 
 
+def _leave(status: int) -> None:
+    """End the program now after an interrupt: flush the streams and ``os._exit``, with no
+    interpreter finalisation. Finalising tears down numba's compiler state (LLVM) and the
+    modules while an interrupted compilation, cache load or a worker thread inside a
+    ``nogil`` kernel may still hold them, which is where a Ctrl-C can turn into a crash."""
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(Exception):
+            stream.flush()
+    os._exit(status)
+
+
 def main(argv: list[str] | None = None) -> int:
+    """The ``planner`` program (``argv`` None: ``sys.argv[1:]``, and an interrupted run
+    ends the process at once with 130 / 143; with ``argv`` given it returns the status)."""
+    standalone = argv is None
     argv = sys.argv[1:] if argv is None else list(argv)
     a = build_parser().parse_args(_hoist_global_options(_join_negative_values(argv)))
     if a.memory_budget is not None:  # the one budget model reads it (and so do workers)
@@ -553,7 +567,12 @@ def main(argv: list[str] | None = None) -> int:
             print(f"planner: error: {' '.join(str(exc).split())}", file=sys.stderr)
             return 2
         except KeyboardInterrupt:
+            import signal
+
+            signal.signal(signal.SIGINT, signal.SIG_IGN)  # a second Ctrl-C: no traceback
             print("planner: interrupted", file=sys.stderr)
+            if standalone:
+                _leave(130)
             return 130
         except BrokenPipeError:  # output piped into `head`: stop quietly, as Unix tools do
             os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
@@ -564,6 +583,8 @@ def main(argv: list[str] | None = None) -> int:
     for w in caught:
         with contextlib.suppress(Exception):
             print(f"planner: warning: {w.message}", file=sys.stderr)
+    if standalone and status in (130, 143):  # bench stopped by SIGINT / SIGTERM
+        _leave(status)
     return status
 
 

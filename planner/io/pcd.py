@@ -122,7 +122,7 @@ def _pcd_decompress(body: bytes, npts: int, point_step: int, name: str) -> bytes
     if len(body) - 8 < csize:
         raise MapError(f"{name}: truncated PCD: compressed block needs {csize} bytes, file "
                        f"holds {len(body) - 8}")
-    if body[8 + csize:].strip(b"\r\n\0 "):  # as for binary: a trailing newline is harmless
+    if body[8 + csize:].strip(b"\r\n "):  # a trailing newline is harmless, padding is not
         raise MapError(f"{name}: {len(body) - 8 - csize} bytes of trailing data after the "
                        f"PCD's compressed block")
     if usize == 0:
