@@ -122,7 +122,8 @@ def _pcd_decompress(body: bytes, npts: int, point_step: int, name: str) -> bytes
     if len(body) - 8 < csize:
         raise MapError(f"{name}: truncated PCD: compressed block needs {csize} bytes, file "
                        f"holds {len(body) - 8}")
-    if body[8 + csize:].strip(b"\r\n "):  # a trailing newline is harmless, padding is not
+    # NUL padding after the block is PCL's own output (its writer sizes the file ahead)
+    if body[8 + csize:].strip(b"\r\n\0 "):
         raise MapError(f"{name}: {len(body) - 8 - csize} bytes of trailing data after the "
                        f"PCD's compressed block")
     if usize == 0:

@@ -155,6 +155,8 @@ def trailing_runs(corpus, root: Path) -> list[Run]:
         for k, tail in enumerate(tails + [data]):  # the last: the whole file again
             if ext.startswith("xyz") and tail == data:
                 continue  # concatenated streams are one valid multi-stream file
+            if ext == "pcd" and not tail.strip(b"\0"):
+                continue  # NUL padding after the block is what PCL itself writes
             p = root / f"t{k}.{ext}"
             p.write_bytes(data + tail)
             runs.append(Run("trailing", ("plan", str(p), *SMALL_QUERY), True, name=p.name))
