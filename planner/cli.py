@@ -226,6 +226,10 @@ def _add_world_args(p: argparse.ArgumentParser, *, lattice: bool = True,
                    help="file format instead of the extension: bag, las (LAS/LAZ), e57, "
                         "rosmap (map_server YAML), 3dmap, pcd, ply, bt, npy, xyz (text), or "
                         "poses (a pose list of scans, merged)")
+    p.add_argument("--check-source", action="store_true",
+                   help="with a saved world: refuse it unless its source map (beside the "
+                        "world file or in the current folder) still has the SHA-256 "
+                        "recorded at save")
     if bag:
         b = p.add_argument_group("ROS bags")
         b.add_argument("--topic", help="PointCloud2 topic (default: the first in the bag)")
@@ -428,6 +432,7 @@ def _cmd_stats(a) -> int:
 
 def _build(a):
     from planner.world.build import build_world
+    from planner.world.file import is_world_file
 
     # options not given stay None: build_world resolves them from the map, as in the API
     lattice = a.generator if a.generator is not None else a.lattice
@@ -440,6 +445,10 @@ def _build(a):
         source = load_obstacles(a.map, a.format, **bag)
     world = build_world(source, lattice, cell_volume=a.cell_volume, radius=a.radius,
                         bounds=a.bounds, format=a.format, unknown=a.unknown)
+    if getattr(a, "check_source", False) and is_world_file(a.map):
+        from planner.world.check import check_source
+
+        check_source(world)
     return world, (a.generator.name if a.generator is not None else world.lattice.name
                    or "custom")
 
@@ -510,6 +519,10 @@ def _cmd_compare(a) -> int:
     radius = a.radius
     if is_world_file(a.map):  # one lattice: the saved one
         saved = load_world(a.map)
+        if a.check_source:
+            from planner.world.check import check_source
+
+            check_source(saved)
         lattices = [saved.lattice]
         radius = saved.radius if radius is None else radius
     _check_neighbors(lattices, a.neighbors, a.method)
@@ -622,7 +635,30 @@ _COMMANDS = {"lattices": _cmd_lattices, "stats": _cmd_stats, "plan": _cmd_plan,
              "bench": _cmd_bench}
 
 
+def _os_error(exc: OSError) -> str:
+    """``path: reason`` of an OS error on one line (``[Errno 28] No space left ...``)."""
+    what = exc.strerror or str(exc) or type(exc).__name__
+    where = exc.filename if exc.filename is not None else ""
+    if exc.filename2 is not None:
+        where = f"{where} -> {exc.filename2}"
+    return " ".join(f"{where}: {what}".split()) if where else " ".join(what.split())
+
+
+def _leave(status: int) -> None:
+    """End the program now after an interrupt: flush the streams and ``os._exit``, with no
+    interpreter finalisation. Finalising tears down numba's compiler state (LLVM) and the
+    modules while an interrupted compilation, cache load or a worker thread inside a
+    ``nogil`` kernel may still hold them, which is where a Ctrl-C can turn into a crash."""
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(Exception):
+            stream.flush()
+    os._exit(status)
+
+
 def main(argv: list[str] | None = None) -> int:
+    """The ``planner`` program (``argv`` None: ``sys.argv[1:]``, and an interrupted run
+    ends the process at once with 130 / 143; with ``argv`` given it returns the status)."""
+    standalone = argv is None
     argv = sys.argv[1:] if argv is None else list(argv)
     a = build_parser().parse_args(_hoist_global_options(_join_negative_values(argv)))
     if a.memory_budget is not None:  # the one budget model reads it (and so do workers)
@@ -642,14 +678,24 @@ def main(argv: list[str] | None = None) -> int:
             print(f"planner: error: {' '.join(str(exc).split())}", file=sys.stderr)
             return 2
         except KeyboardInterrupt:
+            import signal
+
+            signal.signal(signal.SIGINT, signal.SIG_IGN)  # a second Ctrl-C: no traceback
             print("planner: interrupted", file=sys.stderr)
+            if standalone:
+                _leave(130)
             return 130
         except BrokenPipeError:  # output piped into `head`: stop quietly, as Unix tools do
             os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
             return 141
+        except OSError as exc:  # a full disk, a read-only folder, ...: outputs are atomic,
+            print(f"planner: error: {_os_error(exc)}", file=sys.stderr)  # nothing is half-
+            return 2  # written (fsutil.atomic_path removes its temporary file)
     for w in caught:
         with contextlib.suppress(Exception):
             print(f"planner: warning: {w.message}", file=sys.stderr)
+    if standalone and status in (130, 143):  # bench stopped by SIGINT / SIGTERM
+        _leave(status)
     return status
 
 

@@ -62,6 +62,7 @@ def compare(
         raise PlanError("give both --start and --goal, or neither to use the map's queries")
     else:
         queries = [(np.asarray(q["start"]), np.asarray(q["goal"])) for q in side.get("queries", [])]
+        queries = queries or _scenario_queries(map_path)
         if not queries:
             raise PlanError(f"{map_path}: no default queries; pass --start and --goal")
     rows, results = [], {}
@@ -118,6 +119,23 @@ def compare(
                    goal=g, title=f"{Path(map_path).name}: query 1 of {len(queries)}, cells of "
                                  f"the {name} lattice")
     return rows
+
+
+SCENARIO_QUERIES = 5  # of a MovingAI map's .3dscen file: its first ones, as in the file
+
+
+def _scenario_queries(map_path: str) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The first :data:`SCENARIO_QUERIES` queries of the ``MAP.3dscen`` file beside a
+    MovingAI map (voxel centres, m); none without that file. A corrupt one is a MapError
+    naming it, not a silent "no queries"."""
+    scen = Path(str(map_path) + ".3dscen")
+    if not scen.is_file():
+        return []
+    from planner.io import load_scenarios
+
+    sc = load_scenarios(scen)
+    k = min(len(sc), SCENARIO_QUERIES)
+    return [(sc.starts[i].astype(float), sc.goals[i].astype(float)) for i in range(k)]
 
 
 def _smoothed_length(world, res) -> float:

@@ -191,6 +191,12 @@ def lattice_table(cell_volume: float = 1.0, names: Iterable[str] = NAMED,
     When ``"hex"`` is named, the hex prism at :func:`optimal_hex_height` follows it (row
     ``"hex h=<height>"``, the height in metres).
     """
+    from planner.budget import require
+    from planner.errors import PlannerError
+
+    # per point: the point, its cell, its error vector and the metrics' temporaries
+    require(float(n_points) * 3 * 8 * 6, f"{n_points} uniform points (--points)",
+            error=PlannerError)
     lats = []
     for name in names:
         lats.append(Lattice.named(name, cell_volume))

@@ -336,6 +336,12 @@ def reproduce(out: Path, *, rotations: int = 100, volumes: Sequence[float] = (0.
     k, n, n_table = rotations, samples, 10**6
     if quick:
         k, n, n_table = min(k, 4), min(n, 50_000), 100_000
+    from planner.budget import require
+
+    # per sample: its point, its cell and the error vectors (float64 / int64 triples)
+    require(float(n) * 3 * 8 * 6, f"{n} samples per distribution (--samples)",
+            error=PlannerError)
+    require(float(k) * 4 * 8 * 4, f"{k} rotations (--rotations)", error=PlannerError)
     data = default_data_dir() if data is None else Path(data)
 
     import matplotlib

@@ -187,6 +187,7 @@ def load_suite(name_or_path: str) -> Suite:
             raise SuiteError(f"{path}: map {m.path} needs positive cell_volumes")
         if not all(0 <= r < math.inf for r in m.radii):
             raise SuiteError(f"{path}: map {m.path} needs finite radii >= 0")
+    _check_size(path, suite)
     for kind in suite.neighbors:
         for lat in suite.lattices:
             try:
@@ -194,6 +195,20 @@ def load_suite(name_or_path: str) -> Suite:
             except PlannerError as exc:
                 raise SuiteError(f"{path}: neighbors {kind!r}: {exc}") from None
     return suite
+
+
+def _check_size(path: Path, suite: Suite) -> None:
+    """Refuse a suite whose run list (every map x cell volume x radius x rotation x lattice
+    x move set x method x query) would not fit the memory budget, before it is listed."""
+    from planner.budget import require
+
+    methods = max(1, len(suite.methods) + len(suite.ompl_planners) * len(suite.ompl_seeds))
+    per_rotation = sum(len(m.cell_volumes) * len(m.radii) * (m.queries or suite.queries)
+                       for m in suite.maps) * len(suite.lattices) * len(suite.neighbors)
+    runs = float(per_rotation) * suite.rotations * methods
+    # a run's task and its result row: a few kB each
+    require(runs * 4096, f"{path.name}: the list of {runs:.3g} runs ({suite.rotations} "
+            f"rotations)", error=SuiteError)
 
 
 _KEYS = {"": {"name", "seed", "queries", "lattices", "neighbors", "methods", "min_distance",
@@ -218,10 +233,25 @@ def _check_raw(path: Path, raw: dict) -> None:
                              f"{', '.join(sorted(_KEYS[where]))})")
 
     unknown(raw, "")
-    for key, lo, hi in (("queries", 1, 10**6), ("seed", 0, 2**32 - 1)):
+    for key, lo, hi in (("queries", 1, 10**6), ("seed", 0, 2**32 - 1),
+                        ("rotations", 1, 10**6)):
         v = raw.get(key, lo)
         if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
             raise bad(key, f"an integer in {lo}..{hi}")
+    paper = raw.get("paper", {})
+    if not isinstance(paper, dict):
+        raise bad("paper", "a [paper] table")
+    for key, lo in (("rotations", 1), ("samples", 100), ("seed", 0)):
+        v = paper.get(key, lo)
+        if isinstance(v, bool) or not isinstance(v, int) or v < lo:
+            raise bad(f"paper.{key}", f"an integer >= {lo}")
+    vols = paper.get("volumes", [1.0])
+    if not isinstance(vols, list) or not vols or not all(
+            isinstance(x, int | float) and not isinstance(x, bool) and 0 < x < math.inf
+            for x in vols):
+        raise bad("paper.volumes", "a non-empty list of positive cell volumes")
+    if not isinstance(paper.get("quick", False), bool):
+        raise bad("paper.quick", "true or false")
     d = raw.get("min_distance", 0.3)
     if isinstance(d, bool) or not isinstance(d, int | float) or not 0 <= d < math.inf:
         raise bad("min_distance", "a finite number >= 0")

@@ -233,7 +233,7 @@ def explore(
     known = World(lat, np.zeros((0, 3), np.int64), truth.bounds, radius=truth.radius,
                   source=f"explored {obst.source}")
     sensor = Sensor(pts, obst.box_sizes if boxes else None, lat, walk_of(lat), dirs,
-                     sensor_range)
+                     _sensor_reach(sensor_range, truth, pts, lat))
     _warm_up(lat, neighbors, DStarLite)
     dl = DStarLite(known, s, gcell, neighbors=neighbors)
     rec = {k: [] for k in ("changed", "ds", "dc", "de", "dcost", "as", "ac", "ae", "acost",
@@ -352,3 +352,22 @@ def _scratch_astar(search, world, cur, goal, neighbors
 
 def _same(a: float, b: float) -> bool:
     return (math.isinf(a) and math.isinf(b)) or abs(a - b) <= 1e-9
+
+
+def _sensor_reach(sensor_range: float, truth, pts: np.ndarray, lat) -> float:
+    """The range a ray is cast over (m): ``sensor_range``, cut to the diagonal of the box
+    holding the world and every obstacle (nothing lies farther), and checked against the
+    memory budget (each ray's walk scratch grows with its length)."""
+    from planner.budget import require
+    from planner.world import _walk
+
+    lo = np.minimum(truth.bounds[0], pts.min(axis=0))
+    hi = np.maximum(truth.bounds[1], pts.max(axis=0))
+    reach = min(float(sensor_range), float(np.linalg.norm(hi - lo)) + 2 * lat.covering_radius)
+    walk = _walk(lat)
+    step = float(np.sqrt(2.0 * walk.rhs.min()))
+    # walk_scratch: two int64 tables of twice the estimate, a queue of a quarter of it
+    est = (reach / step + 4) * (len(walk.full) + 1)
+    require(est * 8 * (4 + 3 / 4), f"the ray walk of --sensor-range {sensor_range:g} m "
+            f"({reach:.3g} m inside the map)", error=PlanError)
+    return reach

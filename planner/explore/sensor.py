@@ -36,8 +36,14 @@ def ray_directions(fov=(360.0, 30.0), resolution: float = 3.0) -> np.ndarray:
         raise PlanError(f"need 0 < horizontal fov <= 360, 0 <= vertical half-fov <= 90 and "
                         f"0 < resolution <= 90 degrees, got {fov!r}, {resolution!r}")
     na = max(1, int(round(h / res)))
-    az = np.arange(na) * (h / na) if h >= 360 else np.linspace(-h / 2, h / 2, na + 1)
     nv = int(round(v / res))
+    from planner.budget import require
+
+    # per ray: its direction, the angle grids and the hit cell (float64 / int64 triples)
+    rays = float(na + 1) * (2 * nv + 1)
+    require(rays * 8 * 12, f"{rays:.3g} sensor rays (--resolution {res:g} degrees)",
+            error=PlanError)
+    az = np.arange(na) * (h / na) if h >= 360 else np.linspace(-h / 2, h / 2, na + 1)
     el = np.linspace(-v, v, 2 * nv + 1) if nv else np.zeros(1)
     a, e = np.meshgrid(np.radians(az), np.radians(el), indexing="ij")
     a, e = a.ravel(), e.ravel()

@@ -51,25 +51,60 @@ def decompress(p: Path, compression: str, budget: int | None = None) -> bytes:
     check_file(p)
     limit = budget if budget is not None else DECOMPRESSED_BUDGET
     limit = memory_budget() // 4 if limit is None else int(limit)
-    opener = {".gz": gzip.open, ".bz2": bz2.open, ".xz": lzma.open}[compression]
     out = bytearray()
+
+    def grow(chunk: bytes) -> None:
+        out.extend(chunk)
+        if len(out) > limit:
+            raise MapError(f"{p.name}: decompresses to more than {limit} bytes (the "
+                           "decompression budget, by default a quarter of the memory "
+                           "budget: --memory-budget); refusing to inflate it")
+
     try:
-        with opener(p, "rb") as f:
-            while True:
-                chunk = f.read(_CHUNK)
-                if not chunk:
-                    break
-                out += chunk
-                if len(out) > limit:
-                    raise MapError(f"{p.name}: decompresses to more than {limit} bytes (the "
-                                   "decompression budget, by default a quarter of the memory "
-                                   "budget: --memory-budget); refusing to inflate it")
+        if compression == ".gz":  # gzip's reader already rejects trailing garbage
+            with gzip.open(p, "rb") as f:
+                while chunk := f.read(_CHUNK):
+                    grow(chunk)
+        else:
+            _inflate_streams(p, compression, limit, grow)
     except MapError:
         raise
     except (OSError, EOFError, ValueError, zlib.error, lzma.LZMAError) as exc:
         msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise MapError(f"{p.name}: corrupt or truncated {compression} data ({msg})") from exc
     return bytes(out)
+
+
+def _inflate_streams(p: Path, compression: str, limit: int, grow) -> None:
+    """Every ``.bz2`` / ``.xz`` stream of ``p`` in turn, passed chunk by chunk to ``grow``.
+
+    Python's own readers stop quietly at bytes after the last stream that do not start a
+    new one; here they are an error, as is a stream cut short."""
+    make = bz2.BZ2Decompressor if compression == ".bz2" else lzma.LZMADecompressor
+    dec, streams = make(), 0
+    with open(p, "rb") as f:
+        pending = f.read(_CHUNK)
+        while True:
+            if dec.eof:
+                streams += 1
+                rest = dec.unused_data or f.read(_CHUNK)
+                if not rest:
+                    return
+                dec, pending = make(), rest
+                try:
+                    grow(dec.decompress(pending, max_length=limit + 1))
+                except (OSError, lzma.LZMAError, EOFError):
+                    raise MapError(f"{p.name}: trailing data after the {compression[1:]} "
+                                   f"stream (not another stream)") from None
+                pending = b""
+                continue
+            if dec.needs_input:
+                pending = pending or f.read(_CHUNK)
+                if not pending:
+                    raise MapError(f"{p.name}: truncated {compression[1:]} data (the stream "
+                                   f"{streams + 1} ends early)")
+            grow(dec.decompress(pending, max_length=limit + 1))
+            pending = b""
 
 
 def decode_text(data: bytes, name: str) -> str:

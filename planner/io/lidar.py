@@ -59,6 +59,35 @@ def check_las_header(p: Path) -> None:
     if not fits:
         raise MapError(f"{p.name}: LAS header declares {count} points, the file holds "
                        f"{body} bytes of point data")
+    if not compressed:  # the header fixes the size: points, then LAS 1.4's extended VLRs
+        end = _las_end(p, head, int(offset) + count * int(record), size)
+        if end < size:
+            raise MapError(f"{p.name}: {size - end} bytes of trailing data after the LAS "
+                           f"point records")
+
+
+def _las_end(p: Path, head: bytes, points_end: int, size: int) -> int:
+    """Byte offset where an uncompressed LAS file ends: after its points, or after the
+    last extended VLR (LAS 1.4), each a 60-byte header and its declared payload."""
+    if head[25] < 4 or len(head) < 247:
+        return points_end
+    start = int(np.frombuffer(head, "<u8", 1, 235)[0])
+    n = int(np.frombuffer(head, "<u4", 1, 243)[0])
+    if not n:
+        return points_end
+    if not points_end <= start <= size:
+        raise MapError(f"{p.name}: corrupt LAS header (extended VLRs at byte {start})")
+    end = start
+    with open(p, "rb") as f:
+        for _ in range(n):
+            f.seek(end)
+            rec = f.read(60)
+            if len(rec) < 60:
+                raise MapError(f"{p.name}: truncated LAS extended VLR")
+            end += 60 + int(np.frombuffer(rec, "<u8", 1, 20)[0])
+            if end > size:
+                raise MapError(f"{p.name}: truncated LAS extended VLR")
+    return end
 
 
 def read_e57(p: Path) -> Obstacles:

@@ -68,7 +68,7 @@ def read_octomap(p: Path) -> Obstacles:
         raise MapError(f"{p.name}: OctoMap tree is empty (size {size})")
 
     stream = np.frombuffer(data, dtype=np.uint8, offset=pos)
-    keys, depths, occupied, n_nodes, err = _walk(stream)
+    keys, depths, occupied, n_nodes, err, used = _walk(stream)
     if err == 1:
         raise MapError(f"{p.name}: truncated OctoMap: bit stream ends inside the tree")
     if err == 2:
@@ -77,6 +77,9 @@ def read_octomap(p: Path) -> Obstacles:
         # OctoMap's own reader rejects this too ("Tree size mismatch").
         raise MapError(f"{p.name}: corrupt OctoMap: header says {size} nodes, stream has "
                        f"{n_nodes}")
+    if used != len(stream):  # e.g. a second tree appended: OctoMap files hold one
+        raise MapError(f"{p.name}: {len(stream) - used} bytes of trailing data after the "
+                       f"OctoMap tree")
     if not occupied.any():
         raise MapError(f"{p.name}: OctoMap has no occupied voxels")
     side = (np.int64(1) << (_DEPTH - depths)).astype(np.float64)
@@ -94,7 +97,8 @@ def _walk(stream):  # pragma: no cover - compiled
 
     Returns (keys (L, 3) int64 min-corner keys of the leaves, depths (L,) int64, occupied
     (L,) bool, number of tree nodes incl. the root, error: 0 ok, 1 stream ended early,
-    2 too deep).  Child states: 0 unknown, 1 free leaf, 2 occupied leaf, 3 inner node.
+    2 too deep, bytes of the stream the tree used).  Child states: 0 unknown, 1 free
+    leaf, 2 occupied leaf, 3 inner node.
     """
     n = stream.shape[0]
     # Each 2-byte node holds at most 8 leaves, so 4 per byte bounds the leaf count.
@@ -109,7 +113,7 @@ def _walk(stream):  # pragma: no cover - compiled
     st_bits = np.empty(_DEPTH + 1, np.int64)
     st_child = np.empty(_DEPTH + 1, np.int64)
     if n < 2:
-        return keys[:0], depths[:0], occ[:0], 0, 1
+        return keys[:0], depths[:0], occ[:0], 0, 1, 0
     top = 0
     st_key[0, 0] = 0
     st_key[0, 1] = 0
@@ -136,9 +140,9 @@ def _walk(stream):  # pragma: no cover - compiled
         kz = st_key[top, 2] + ((i >> 2) & 1) * half
         if state == 3:  # inner node: its 2 bytes come next in the stream
             if d >= _DEPTH:
-                return keys[:0], depths[:0], occ[:0], n_nodes, 2
+                return keys[:0], depths[:0], occ[:0], n_nodes, 2, pos
             if pos + 2 > n:
-                return keys[:0], depths[:0], occ[:0], n_nodes, 1
+                return keys[:0], depths[:0], occ[:0], n_nodes, 1, pos
             top += 1
             st_key[top, 0] = kx
             st_key[top, 1] = ky
@@ -154,4 +158,4 @@ def _walk(stream):  # pragma: no cover - compiled
             depths[n_leaves] = d
             occ[n_leaves] = state == 2
             n_leaves += 1
-    return keys[:n_leaves], depths[:n_leaves], occ[:n_leaves], n_nodes, 0
+    return keys[:n_leaves], depths[:n_leaves], occ[:n_leaves], n_nodes, 0, pos

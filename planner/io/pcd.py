@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from planner._numba import njit_cached
+from planner.budget import require
 from planner.errors import MapError
 from planner.io._files import header_lines, loadtxt, read_bytes
 from planner.io.obstacles import Obstacles
@@ -121,8 +122,15 @@ def _pcd_decompress(body: bytes, npts: int, point_step: int, name: str) -> bytes
     if len(body) - 8 < csize:
         raise MapError(f"{name}: truncated PCD: compressed block needs {csize} bytes, file "
                        f"holds {len(body) - 8}")
+    # NUL padding after the block is PCL's own output (its writer sizes the file ahead)
+    if body[8 + csize:].strip(b"\r\n\0 "):
+        raise MapError(f"{name}: {len(body) - 8 - csize} bytes of trailing data after the "
+                       f"PCD's compressed block")
     if usize == 0:
         return b""
+    if usize > 88 * csize + 32:  # an LZF back reference (3 bytes) yields at most 264 bytes
+        raise MapError(f"{name}: corrupt PCD: {csize} compressed bytes cannot hold {usize}")
+    require(float(usize), f"{name}: its {npts}-point compressed block")
     src = np.frombuffer(body, dtype=np.uint8, count=csize, offset=8)
     out, n = _lzf_decompress(src, usize)
     if n != usize:

@@ -22,12 +22,11 @@ def read_xyz(p: Path, compression: str | None = None, budget: int | None = None)
 
 def read_npy(p: Path) -> Obstacles:
     """An (N, 3) numeric ``.npy`` array (no pickles)."""
+    from planner.npyfile import read_npy_file
+
     check_file(p)
-    try:
-        arr = np.load(p, allow_pickle=False)
-    except (ValueError, EOFError, OSError) as exc:  # bad magic, truncated data, pickled array
-        msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise MapError(f"{p.name}: not a valid .npy array ({msg})") from None
+    # header first: declared size against the budget and the file, no pickles, no trailer
+    arr = read_npy_file(p, p.name)
     if not isinstance(arr, np.ndarray) or arr.ndim != 2 or arr.shape[1] != 3:
         raise MapError(f"{p.name}: .npy array must have shape (N, 3), got "
                        f"{getattr(arr, 'shape', None)}")

@@ -54,6 +54,9 @@ def __getattr__(name: str):
 _CHUNK = 1 << 20  # points per chunk of the input checks (no full-size temporaries)
 # Largest |index| a quantized point may have: float64 holds integers exactly up to 2**53.
 _INDEX_LIMIT = 2.0**52
+# Cell sizes (m, cube root of the cell volume) whose geometry derives reliably: the linear
+# programs of the derivation have absolute tolerances, so far smaller or larger cells lose it.
+_SIDE_RANGE = (1e-6, 1e6)
 _SHELL_LIMIT = 5_000_000  # lattice vectors neighbors("face+k") may enumerate (24 bytes each)
 
 
@@ -93,6 +96,11 @@ class Lattice:
         if hadamard == 0 or abs(det) <= 1e-12 * hadamard:
             raise LatticeError(f"generator is singular or numerically singular (det = {det:.3g}"
                                f", column lengths {np.linalg.norm(g, axis=0).round(6).tolist()})")
+        side = abs(det) ** (1 / g.shape[0])
+        if not _SIDE_RANGE[0] <= side <= _SIDE_RANGE[1]:
+            raise LatticeError(f"cell volume {abs(det):.3g} m^{g.shape[0]} is outside the "
+                               f"supported range: cells {_SIDE_RANGE[0]:g} m to "
+                               f"{_SIDE_RANGE[1]:g} m across")
         g.setflags(write=False)
         self._g = g
         # Refuses lattices too ill-conditioned to derive, before any large enumeration.
@@ -206,20 +214,19 @@ class Lattice:
         ndarray, shape (k, d), int64
             Sorted by world distance.
         """
-        base, _, extra = str(kind).partition("+")
+        base, plus, extra = str(kind).partition("+")
         if base not in ("face", "full"):
             raise LatticeError(
                 f"unknown neighbour kind {kind!r}; expected face, full, face+k or full+k"
             )
         offs = self._geo[base]
-        if not extra:
+        if not plus:
             return offs.copy()
-        try:
-            shells = int(extra)
-        except ValueError:
-            raise LatticeError(f"bad shell count in neighbour kind {kind!r}") from None
-        if shells < 0:
-            raise LatticeError(f"bad shell count in neighbour kind {kind!r}")
+        # digits only: "face+" is no shorthand for face+0, nor is "face+ 1" or "face++1"
+        if not (extra.isascii() and extra.isdigit()):
+            raise LatticeError(f"bad shell count in neighbour kind {kind!r}: expected "
+                               f"{base}+k with k a whole number >= 0")
+        shells = int(extra)
         return self._with_shells(offs, shells)
 
     def _with_shells(self, offs: np.ndarray, shells: int) -> np.ndarray:

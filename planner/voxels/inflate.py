@@ -17,6 +17,7 @@ import math
 import numpy as np
 
 from planner.checks import check_radius
+from planner.budget import require
 from planner.errors import MapError
 from planner.lattice import Lattice
 from planner.occupancy.keys import BITS, check_range, index_limit, pack, unique_keys
@@ -129,12 +130,19 @@ def _check_result(r: float, cells: float, n: int, budget: float) -> None:
 
 
 # -- boxes --------------------------------------------------------------------------------------
-def _split_boxes(centres: np.ndarray, half: np.ndarray, rot: np.ndarray, max_half: float
-                 ) -> tuple[np.ndarray, np.ndarray]:
+def _split_boxes(centres: np.ndarray, half: np.ndarray, rot: np.ndarray, max_half: float,
+                 budget: float | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Boxes cut into equal sub-boxes of half sizes <= ``max_half`` (same union, so the same
     distances): per-box candidate balls then stay proportionate to the box (a large slab
-    would otherwise enumerate a ball of its half diagonal)."""
-    pieces = np.maximum(np.ceil(half / max_half - 1e-9), 1).astype(np.int64)
+    would otherwise enumerate a ball of its half diagonal). The piece count is checked
+    against ``budget`` bytes (None: the memory budget) before any piece is made."""
+    ratio = np.maximum(np.ceil(half / max_half - 1e-9), 1)
+    # float product: a coarse leaf of a lying file asks for more pieces than int64 holds
+    n_pieces = float(np.prod(ratio, axis=1).sum())
+    # per piece: its centre and half sizes, the step indices and the box-frame offsets
+    require(n_pieces * half.shape[1] * 8 * 4, f"the {n_pieces:.3g} sub-boxes of "
+            f"{len(half)} obstacle boxes (largest {2 * float(half.max()):.3g} m across)", budget)
+    pieces = ratio.astype(np.int64)
     if (pieces == 1).all():
         return centres, half
     out_c, out_h = [], []
@@ -226,7 +234,8 @@ def exact_box_inflation(lo: np.ndarray, hi: np.ndarray, lattice: Lattice, radius
     memory_budget = resolve_budget(memory_budget)
     cell = lat.voronoi
     tol = REL_TOL * cell_diameter(lat)
-    centres, half = _split_boxes(centres, half, rot, max(r, 2 * cell_diameter(lat)))
+    centres, half = _split_boxes(centres, half, rot, max(r, 2 * cell_diameter(lat)),
+                                 memory_budget)
     base = lat.quantize(centres)
     # Boxes by size class (half diagonals within a factor 2, e.g. OctoMap leaf depths), each
     # with candidates out to its own reach: a cell closer than r has its centre within

@@ -2,7 +2,7 @@
 
 File format (numpy ``.npz``, uncompressed for a fast load; written atomically):
 
-* ``format`` = ``"planner.World"``, ``version`` = 1;
+* ``format`` = ``"planner.World"``, ``version`` = 2;
 * ``generator`` (3, 3) float64 (m) and ``lattice`` (its name, ``""`` for a custom one);
 * ``blocked`` (M, 3) int16 or int32 (the smallest that holds them): the distinct in-bounds
   blocked cells (inflated for ``radius``; under the ``"blocked"`` policy unknown space too),
@@ -12,7 +12,15 @@ File format (numpy ``.npz``, uncompressed for a fast load; written atomically):
   touches none of them and leaving them out changes no plan and no count;
 * ``bounds`` (2, 3) float64 (m), ``radius`` (m), ``unknown_policy``;
 * ``source`` (the map file name) and ``source_sha256`` (hex digest of its bytes, ``""`` for
-  in-memory data); ``dim`` (2 for a 2D map planned on a prism of its 2D lattice).
+  in-memory data); ``dim`` (2 for a 2D map planned on a prism of its 2D lattice);
+* ``digest``: hex BLAKE2b over every other array (:func:`planner.world.check.digest`).
+
+Loading verifies the file (:mod:`planner.world.check`): each member's declared size
+against the memory budget and the member, every key's type, shape, dtype, range and
+order, the lattice name against the generator, and the digest. Any mismatch is a one-line
+``MapError`` "corrupt or modified world file: <what>". ``planner plan/compare WORLD
+--check-source`` also checks that the source map (found beside the world file) still has
+the SHA-256 recorded at save.
 """
 
 from __future__ import annotations
@@ -32,7 +40,7 @@ __all__ = ["FORMAT", "VERSION", "check_options", "is_world_file", "load_world", 
            "sha256"]
 
 FORMAT = "planner.World"
-VERSION = 1
+VERSION = 2  # 2: every key checked and a digest over the arrays
 _REL = 1e-9
 
 
@@ -46,7 +54,11 @@ def sha256(path: str | os.PathLike) -> str:
 
 
 def is_world_file(path) -> bool:
-    """True for an ``.npz`` written by :func:`save_world`."""
+    """True for an ``.npz`` that is not known to be another format: a world written by
+    :func:`save_world`, or a damaged ``.npz`` (which :func:`load_world` then reports as a
+    corrupt world file rather than as a map of no known format)."""
+    from planner.npyfile import read_array
+
     if not isinstance(path, str | os.PathLike):
         return False
     p = Path(path)
@@ -54,12 +66,13 @@ def is_world_file(path) -> bool:
         return False
     try:
         with zipfile.ZipFile(p) as z:
-            if "format.npy" not in z.namelist():
-                return False
-        with np.load(p, allow_pickle=False) as data:
-            return str(data["format"]) == FORMAT
-    except (OSError, ValueError, zipfile.BadZipFile):
-        return False
+            info = z.getinfo("format.npy")
+            with z.open(info) as f:
+                fmt = read_array(f, info.file_size, p.name)
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile,
+            NotImplementedError):
+        return True  # unreadable: corrupt, reported by load_world
+    return not (fmt.shape == () and fmt.dtype.kind == "U" and str(fmt[()]) != FORMAT)
 
 
 def save_world(world, path: str | os.PathLike) -> None:
@@ -89,6 +102,9 @@ def save_world(world, path: str | os.PathLike) -> None:
         "source": np.array(Path(src).name if src else ""),
         "source_sha256": np.array(digest), "dim": np.array(getattr(world, "dim", 3)),
     }
+    from planner.world.check import digest as array_digest
+
+    arrays["digest"] = np.array(array_digest(arrays))
     with atomic_path(path) as tmp, open(tmp, "wb") as f:
         np.savez(f, **arrays)
 
@@ -105,21 +121,18 @@ def load_world(path: str | os.PathLike):
     MapError
         Not a saved world, another format version, or a damaged file.
     """
+    from planner.world.check import check_schema, corrupt, read_members
     from planner.lattice import Lattice
     from planner.world.world import World
 
     p = Path(path)
-    try:
-        with np.load(p, allow_pickle=False) as data:
-            if "format" not in data.files or str(data["format"]) != FORMAT:
-                raise MapError(f"{p.name}: not a saved planner world")
-            version = int(data["version"])
-            if version != VERSION:
-                raise MapError(f"{p.name}: saved world version {version}; this planner reads "
-                               f"version {VERSION} (rebuild it with `planner world`)")
-            d = {k: data[k] for k in data.files}
-    except (OSError, ValueError, KeyError, zipfile.BadZipFile) as exc:
-        raise MapError(f"{p.name}: cannot read saved world: {exc}") from None
+    if not p.is_file():
+        raise MapError(f"{p}: file not found" if not p.exists() else f"{p}: not a regular file")
+    _check_version(p)
+    d = read_members(p)
+    check_schema(d, p)
+    if str(d["format"][()]) != FORMAT:
+        raise corrupt(p, f"format {str(d['format'][()])!r}")
     name = str(d["lattice"]) or None
     dim = int(d["dim"])
     g, bounds = d["generator"], d["bounds"]
@@ -129,12 +142,42 @@ def load_world(path: str | os.PathLike):
     world = World(lat, np.zeros((0, dim), np.int64), bounds, source=str(d["source"]),
                   radius=float(d["radius"]), unknown_policy=str(d["unknown_policy"]),
                   dim=dim)
-    # Written by save_world from a checked world: in range, distinct and sorted as stored.
+    # check_schema found them in range, distinct and sorted, as save_world wrote them.
     world._blocked = np.ascontiguousarray(d["blocked"], dtype=np.int64).reshape(-1, 3)
     world._unknown_keys = np.ascontiguousarray(d["unknown"], dtype=np.int64)
     world.source_sha256 = str(d["source_sha256"])
     world.saved_path = str(p)
     return world
+
+
+def _check_version(p: Path) -> None:
+    """MapError unless ``p`` is a saved world of this :data:`VERSION` (read from the small
+    ``format`` and ``version`` members only, through the checked reader)."""
+    from planner.world.check import corrupt
+    from planner.npyfile import read_array
+
+    try:
+        with zipfile.ZipFile(p) as z:
+            names = z.namelist()
+            if "format.npy" not in names or "version.npy" not in names:
+                raise corrupt(p, "no 'format' and 'version' keys (not a saved planner world)")
+            head = {}
+            for key in ("format", "version"):
+                info = z.getinfo(f"{key}.npy")
+                with z.open(info) as f:
+                    head[key] = read_array(f, info.file_size, f"{p.name}: {key}.npy")
+    except (zipfile.BadZipFile, EOFError, NotImplementedError) as exc:
+        raise corrupt(p, f"not a readable .npz ({str(exc).splitlines()[0]})") from None
+    except OSError as exc:
+        raise MapError(f"{p.name}: cannot read saved world: {exc.strerror or exc}") from None
+    fmt, ver = head["format"], head["version"]
+    if fmt.shape != () or fmt.dtype.kind != "U" or str(fmt[()]) != FORMAT:
+        raise corrupt(p, "'format' is not \"planner.World\"")
+    if ver.shape != () or ver.dtype.kind not in "iu":
+        raise corrupt(p, "'version' is not an integer")
+    if int(ver[()]) != VERSION:
+        raise MapError(f"{p.name}: saved world version {int(ver[()])}; this planner reads "
+                       f"version {VERSION} (rebuild it with `planner world`)")
 
 
 def check_options(world, lattice=None, cell_volume=None, radius=None, unknown=None,

@@ -123,6 +123,10 @@ class World(UnknownSpace):
         if bb.shape != (2, 3) or not np.isfinite(bb).all() or np.any(bb[1] < bb[0]):
             raise MapError(f"bounds must be [[xmin, ymin, zmin], [xmax, ymax, zmax]], got "
                            f"{bb.tolist() if bb.ndim else bb}")
+        reach = float(lattice._reach)
+        if np.abs(bb).max() > reach:  # else every cell test beyond it would say "blocked"
+            raise MapError(f"bounds reach {np.abs(bb).max():.3g} m, beyond the +-{reach:.3g} m "
+                           f"where lattice indices stay exact (+-2**52); give smaller bounds")
         r = check_radius(radius)
         self._lattice = lattice
         self._blocked = np.ascontiguousarray(b, dtype=np.int64)
