@@ -21,10 +21,10 @@ import pytest
 from test_fuzz_readers import corpus  # tests/fuzz/make_corpus.py
 
 import planner
-from planner.world.check import digest
-from planner.world.file import load_world, save_world
 from planner.cli import main
 from planner.errors import MapError
+from planner.world.check import digest
+from planner.world.file import load_world, save_world
 
 QUERY = ["--start", "1,1,1", "--goal", "7.6,7.8,0.8"]
 REPO = Path(__file__).resolve().parents[1]

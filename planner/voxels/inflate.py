@@ -16,8 +16,8 @@ import math
 
 import numpy as np
 
-from planner.checks import check_radius
 from planner.budget import require
+from planner.checks import check_radius
 from planner.errors import MapError
 from planner.lattice import Lattice
 from planner.occupancy.keys import BITS, check_range, index_limit, pack, unique_keys

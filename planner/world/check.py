@@ -101,9 +101,9 @@ def check_schema(d: dict[str, np.ndarray], path: Path) -> None:
         ``corrupt or modified world file: <what>`` for the first key that fails.
     """
     from planner.io.obstacles import UNKNOWN_POLICIES
-    from planner.occupancy.keys import index_limit
     from planner.lattice import NAMED_LATTICES, Lattice
     from planner.lattice.paper import NAMED_LATTICES_2D
+    from planner.occupancy.keys import index_limit
 
     try:
         dim = int(_scalar(d, "dim", "iu"))

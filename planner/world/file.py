@@ -121,8 +121,8 @@ def load_world(path: str | os.PathLike):
     MapError
         Not a saved world, another format version, or a damaged file.
     """
-    from planner.world.check import check_schema, corrupt, read_members
     from planner.lattice import Lattice
+    from planner.world.check import check_schema, corrupt, read_members
     from planner.world.world import World
 
     p = Path(path)
@@ -153,8 +153,8 @@ def load_world(path: str | os.PathLike):
 def _check_version(p: Path) -> None:
     """MapError unless ``p`` is a saved world of this :data:`VERSION` (read from the small
     ``format`` and ``version`` members only, through the checked reader)."""
-    from planner.world.check import corrupt
     from planner.npyfile import read_array
+    from planner.world.check import corrupt
 
     try:
         with zipfile.ZipFile(p) as z:
