@@ -359,12 +359,11 @@ def _sensor_reach(sensor_range: float, truth, pts: np.ndarray, lat) -> float:
     holding the world and every obstacle (nothing lies farther), and checked against the
     memory budget (each ray's walk scratch grows with its length)."""
     from planner.budget import require
-    from planner.world import _walk
 
     lo = np.minimum(truth.bounds[0], pts.min(axis=0))
     hi = np.maximum(truth.bounds[1], pts.max(axis=0))
     reach = min(float(sensor_range), float(np.linalg.norm(hi - lo)) + 2 * lat.covering_radius)
-    walk = _walk(lat)
+    walk = walk_of(lat)
     step = float(np.sqrt(2.0 * walk.rhs.min()))
     # walk_scratch: two int64 tables of twice the estimate, a queue of a quarter of it
     est = (reach / step + 4) * (len(walk.full) + 1)
