@@ -194,7 +194,7 @@ def _success_figure(plt, pts: list[dict], rows: list[dict], maps: list[str],
     """Success against cell volume and covering radius; one cell volume: bars with n."""
     from matplotlib.ticker import FixedLocator, NullLocator
 
-    from planner.bench.summary import wilson_interval
+    from planner.bench.paired import wilson_interval
 
     single = all(len({p["cell_volume"] for p in pts if p["map"] == m}) == 1 for m in maps)
     fig, axes = plt.subplots(len(maps), 1 if single else 2,

@@ -18,7 +18,7 @@ from planner.analysis.stats import describe, format_p, paired_ratio
 from planner.analysis.tables import format_table
 from planner.lattice import NAMED_LATTICES
 
-__all__ = ["query_key", "paired_table", "rotation_spread", "headline"]
+__all__ = ["query_key", "paired_table", "rotation_spread", "headline", "wilson_interval"]
 
 METRICS = (("cell_checks", "checks", "fewer", "more"),
            ("length", "raw length", "shorter", "longer"),
@@ -171,3 +171,18 @@ def headline(rows: list[dict]) -> str:
         "both solved, with a bootstrap 95% interval and a Wilcoxon signed-rank p-value; "
         "success compares the queries only one of the two solved (exact binomial test).", "",
         table, "", *prose])
+
+
+def wilson_interval(k: int, n: int, z: float = 1.96) -> tuple[float, float]:
+    """Wilson score interval (default 95%) of a success rate ``k / n``; (0, 1) when n = 0.
+
+    >>> [round(v, 3) for v in wilson_interval(10, 10)]
+    [0.722, 1.0]
+    """
+    if n <= 0:
+        return 0.0, 1.0
+    p = k / n
+    d = 1 + z * z / n
+    mid = (p + z * z / (2 * n)) / d
+    half = z * np.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / d
+    return float(max(0.0, mid - half)), float(min(1.0, mid + half))

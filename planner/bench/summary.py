@@ -13,6 +13,7 @@ import numpy as np
 
 from planner.analysis.style import LATTICE_COLORS, OTHER_COLOR
 from planner.analysis.tables import format_table
+from planner.bench.paired import wilson_interval
 from planner.bench.runner import unique_rows
 from planner.fsutil import atomic_path, write_text_atomic
 from planner.lattice import NAMED_LATTICES
@@ -203,19 +204,6 @@ def plot(rows: list[dict], out_dir: Path) -> list[Path]:
     return files + plot_tradeoffs(rows, out_dir)
 
 
-def wilson_interval(k: int, n: int, z: float = 1.96) -> tuple[float, float]:
-    """Wilson score interval (default 95%) of a success rate ``k / n``; (0, 1) when n = 0.
-
-    >>> [round(v, 3) for v in wilson_interval(10, 10)]
-    [0.722, 1.0]
-    """
-    if n <= 0:
-        return 0.0, 1.0
-    p = k / n
-    d = 1 + z * z / n
-    mid = (p + z * z / (2 * n)) / d
-    half = z * np.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / d
-    return float(max(0.0, mid - half)), float(min(1.0, mid + half))
 
 
 def write_report(out_dir: Path, suite, rows: list[dict], summary: list[dict], record: dict,

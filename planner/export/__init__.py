@@ -13,26 +13,11 @@ benchmark, SQLite         :func:`write_arena_db`              Planner Arena, OMP
 
 from __future__ import annotations
 
-import os
-from pathlib import Path
-
-from planner.errors import MapError
 from planner.export.arena import write_arena_db
-from planner.export.cells import write_ply_cells
+from planner.export.cells import write_ply_cells, write_world_cells
 from planner.export.octomap import write_octomap
 from planner.export.rosbag import write_path_bag
 from planner.export.trajectory import distinct_waypoints, path_poses, write_tum
 
 __all__ = ["distinct_waypoints", "path_poses", "write_arena_db", "write_octomap",
            "write_path_bag", "write_ply_cells", "write_tum", "write_world_cells"]
-
-
-def write_world_cells(out: str | os.PathLike, world) -> None:
-    """Write ``world``'s cells by the suffix of ``out``: ``.ply`` or ``.bt``."""
-    suffix = Path(out).suffix.lower()
-    if suffix == ".ply":
-        write_ply_cells(out, world)
-    elif suffix == ".bt":
-        write_octomap(out, world)
-    else:
-        raise MapError(f"{out}: unknown cell file type {suffix!r}; use .ply or .bt")

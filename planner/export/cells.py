@@ -11,12 +11,14 @@ Open3D, CloudCompare or MeshLab (which show the extra properties as scalar field
 from __future__ import annotations
 
 import os
+from pathlib import Path
 
 import numpy as np
 
+from planner.errors import MapError
 from planner.fsutil import atomic_path
 
-__all__ = ["BLOCKED", "UNKNOWN", "write_ply_cells"]
+__all__ = ["BLOCKED", "UNKNOWN", "write_ply_cells", "write_world_cells"]
 
 BLOCKED, UNKNOWN = 1, 2
 
@@ -49,3 +51,16 @@ def write_ply_cells(out: str | os.PathLike, world) -> tuple[int, int]:
         PlyData([PlyElement.describe(v, "vertex")], byte_order="<",
                 comments=comments).write(str(tmp))
     return len(blocked), len(unknown)
+
+
+def write_world_cells(out: str | os.PathLike, world) -> None:
+    """Write ``world``'s cells by the suffix of ``out``: ``.ply`` or ``.bt``."""
+    suffix = Path(out).suffix.lower()
+    if suffix == ".ply":
+        write_ply_cells(out, world)
+    elif suffix == ".bt":
+        from planner.export.octomap import write_octomap
+
+        write_octomap(out, world)  # imported here: the octree writer is its own module
+    else:
+        raise MapError(f"{out}: unknown cell file type {suffix!r}; use .ply or .bt")

@@ -229,7 +229,7 @@ def check_source(world, map_path: str | os.PathLike | None = None) -> None:
     MapError
         The world names no source, the source is not found, or its bytes changed.
     """
-    from planner.world.file import sha256
+    from planner.fsutil import sha256
 
     saved = Path(getattr(world, "saved_path", "") or "world.npz")
     src = Path(world.source or "").name

@@ -25,7 +25,6 @@ the SHA-256 recorded at save.
 
 from __future__ import annotations
 
-import hashlib
 import math
 import os
 import zipfile
@@ -34,7 +33,7 @@ from pathlib import Path
 import numpy as np
 
 from planner.errors import MapError
-from planner.fsutil import atomic_path
+from planner.fsutil import atomic_path, sha256
 
 __all__ = ["FORMAT", "VERSION", "check_options", "is_world_file", "load_world", "save_world",
            "sha256"]
@@ -43,14 +42,6 @@ FORMAT = "planner.World"
 VERSION = 2  # 2: every key checked and a digest over the arrays
 _REL = 1e-9
 
-
-def sha256(path: str | os.PathLike) -> str:
-    """Hex SHA-256 of a file's bytes."""
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
 
 
 def is_world_file(path) -> bool:
