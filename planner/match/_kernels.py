@@ -1,4 +1,4 @@
-"""Compiled kernels of scan matching: a hash set of packed lattice keys, the fused
+"""Compiled kernels of scan matching: membership in the occupancy layer's key sets, the fused
 transform-quantize-lookup score of many poses, and ray casting through a voxel grid.
 
 The quantizer is the project's exact generic one (the tables of
@@ -13,52 +13,16 @@ import numpy as np
 from numba import njit
 
 from planner._numba import njit_cached
-from planner.occupancy.keys import pack3
+from planner.occupancy.keys import in_key_set, pack3
 
-_EMPTY = -1  # packed keys are non-negative (indices are offset by 2**20)
 _LIM = 1 << 20  # packable index range [-_LIM, _LIM) per axis (planner.keys, 3D)
-_GOLDEN = np.uint64(0x9E3779B97F4A7C15)
-
-
-@njit(inline="always")
-def _slot(key, shift):  # pragma: no cover - compiled
-    return np.int64((np.uint64(key) * _GOLDEN) >> np.uint64(shift))
-
-
-@njit_cached(nogil=True)
-def build_table(keys, bits):  # pragma: no cover - compiled
-    """Open-addressing table (linear probing) of 2**bits slots holding ``keys``."""
-    table = np.full(1 << bits, _EMPTY, dtype=np.int64)
-    mask = (1 << bits) - 1
-    shift = 64 - bits
-    for k in keys:
-        h = _slot(k, shift)
-        while table[h] != _EMPTY and table[h] != k:
-            h = (h + 1) & mask
-        table[h] = k
-    return table
-
-
-@njit(inline="always")
-def _member(table, key, shift, mask):  # pragma: no cover - compiled
-    h = _slot(key, shift)
-    while True:
-        v = table[h]
-        if v == key:
-            return True
-        if v == _EMPTY:
-            return False
-        h = (h + 1) & mask
-
-
 @njit_cached(nogil=True)
 def contains_keys(table, bits, keys):  # pragma: no cover - compiled
-    """(N,) bool: which of ``keys`` are in ``table``."""
+    """(N,) bool: which of ``keys`` are in ``table`` (a key set of 2**bits slots)."""
     out = np.zeros(len(keys), dtype=np.bool_)
-    shift = 64 - bits
     mask = (1 << bits) - 1
     for i in range(len(keys)):
-        out[i] = _member(table, keys[i], shift, mask)
+        out[i] = in_key_set(table, mask, keys[i])
     return out
 
 
@@ -100,7 +64,6 @@ def score_poses(pts, wts, rots, trans, b, binv, cand, cand_z, counts, t, table, 
     for o in range(8):
         for j in range(k):
             cn[o, j] = cand[o, j, 0] ** 2 + cand[o, j, 1] ** 2 + cand[o, j, 2] ** 2
-    shift = 64 - bits
     mask = (1 << bits) - 1
     for p in range(rots.shape[0]):
         r = rots[p]
@@ -115,7 +78,7 @@ def score_poses(pts, wts, rots, trans, b, binv, cand, cand_z, counts, t, table, 
             if (w0 < -_LIM or w0 >= _LIM or w1 < -_LIM or w1 >= _LIM
                     or w2 < -_LIM or w2 >= _LIM):
                 continue  # beyond the packable range: no stored cell is there
-            if _member(table, pack3(w0, w1, w2), shift, mask):
+            if in_key_set(table, mask, pack3(w0, w1, w2)):
                 s += wts[i]
         out[p] = s
 

@@ -24,6 +24,7 @@ import numpy as np
 from planner.errors import LatticeError, MapError
 from planner.lattice import Lattice
 from planner.match import _kernels
+from planner.occupancy.keys import build_key_set
 from planner.voxels import OccupiedVoxelList
 
 __all__ = ["MultiResVoxelList", "level_lattices", "resolve_lattice"]
@@ -56,7 +57,7 @@ class _Level:
         self.lattice = voxels.lattice
         n = max(len(voxels), 1)
         self.bits = max(4, int(math.ceil(math.log2(2 * n))))
-        self.table = _kernels.build_table(voxels.keys, self.bits)
+        self.table = build_key_set(voxels.keys, 1 << self.bits)
         q = self.lattice.quantizer()
         self.tables = (q.basis, q.basis_inv, q.cand, q.cand_z, q.counts, q.reduction)
         self.side = self.lattice.cell_volume ** (1 / 3)
