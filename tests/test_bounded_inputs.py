@@ -241,6 +241,29 @@ def test_data_after_a_complete_file_is_refused(tmp_path, capsys, name):
     _refused(capsys, argv, name, "trailing data")
 
 
+@pytest.mark.parametrize("name", ["p12.las", "p12.laz", "p14.las", "p14.laz"])
+def test_data_after_a_complete_las_or_laz_file_is_refused(tmp_path, capsys, name):
+    laspy = pytest.importorskip("laspy")
+    if name.endswith(".laz"):
+        pytest.importorskip("lazrs")
+    las = laspy.LasData(laspy.LasHeader(point_format=3, version="1.4" if "14" in name else "1.2"))
+    xyz = np.random.default_rng(0).uniform(0, 2, (70_000, 3))  # two LAZ chunks
+    las.x, las.y, las.z = xyz.T
+    if "14" in name:  # an extended VLR after the points (after the chunk table in a LAZ)
+        from laspy.vlrs.vlrlist import VLRList
+
+        las.evlrs = VLRList([laspy.VLR(user_id="test", record_id=7, record_data=b"payload")])
+    p = tmp_path / name
+    las.write(str(p))
+    seed = p.read_bytes()
+    argv = ["plan", str(p), "--radius", "0.1", "--start", "0,0,0", "--goal", "1,1,1"]
+    main(argv)
+    assert "trailing" not in capsys.readouterr().err
+    for tail in (b"\x01", seed):  # one stray byte; the whole file again
+        p.write_bytes(seed + tail)
+        _refused(capsys, argv, name, f"{len(tail)} bytes of trailing data")
+
+
 def test_a_bare_plus_in_the_move_set_is_refused(capsys):
     _refused(capsys, ["plan", "office", *QUERY, "--neighbors", "face+"], "face+",
              "shell count")

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import io
 from pathlib import Path
 
 import numpy as np
@@ -59,11 +60,50 @@ def check_las_header(p: Path) -> None:
     if not fits:
         raise MapError(f"{p.name}: LAS header declares {count} points, the file holds "
                        f"{body} bytes of point data")
-    if not compressed:  # the header fixes the size: points, then LAS 1.4's extended VLRs
+    if compressed:  # the chunk table fixes where the compressed points end
+        end = _laz_end(p, head, int(offset), size)
+    else:  # the header fixes the size: points, then LAS 1.4's extended VLRs
         end = _las_end(p, head, int(offset) + count * int(record), size)
-        if end < size:
-            raise MapError(f"{p.name}: {size - end} bytes of trailing data after the LAS "
-                           f"point records")
+    if end < size:
+        raise MapError(f"{p.name}: {size - end} bytes of trailing data after the end of "
+                       f"the LAS/LAZ data")
+
+
+def _laz_end(p: Path, head: bytes, offset: int, size: int) -> int:
+    """Byte offset where a LAZ file ends: after its chunk table, or after the extended VLRs
+    that follow it (LAS 1.4). The table's length is found by encoding the decoded table
+    again (LASzip's coding is deterministic, so the bytes must also agree); ``size`` when
+    the file has no chunk table to check against (streamed LAZ, or no LASzip VLR)."""
+    import laspy  # the robot extra: read_las required laspy
+    try:
+        import lazrs
+    except ImportError:  # a compressed ".las" without lazrs: laspy refuses it
+        return size
+
+    with open(p, "rb") as f:
+        f.seek(offset)
+        start = int.from_bytes(f.read(8), "little", signed=True)
+        if not offset + 8 <= start < size:
+            return size  # table offset not written (-1) or unreadable: laspy decides
+        try:
+            vlrs = laspy.open(str(p)).header.vlrs
+            raw = next(v.record_data for v in vlrs if v.record_id == 22204)
+            f.seek(offset)
+            table = lazrs.read_chunk_table(f, lazrs.LazVlr(raw))
+            out = io.BytesIO()
+            lazrs.write_chunk_table(out, table, lazrs.LazVlr(raw))
+        except StopIteration:
+            return size
+        except Exception as exc:  # laspy / lazrs error types on corrupt headers or tables
+            raise MapError(f"{p.name}: unreadable LAZ chunk table ({first_line(exc)})") from None
+        encoded = out.getvalue()
+        f.seek(start)
+        if f.read(len(encoded)) != encoded:
+            raise MapError(f"{p.name}: corrupt LAZ chunk table at byte {start}")
+    end = start + len(encoded)
+    if head[25] >= 4 and len(head) >= 255 and int(np.frombuffer(head, "<u4", 1, 243)[0]):
+        end = max(end, _las_end(p, head, end, size))
+    return end
 
 
 def _las_end(p: Path, head: bytes, points_end: int, size: int) -> int:

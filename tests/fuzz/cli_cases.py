@@ -160,19 +160,22 @@ def trailing_runs(corpus, root: Path) -> list[Run]:
             p = root / f"t{k}.{ext}"
             p.write_bytes(data + tail)
             runs.append(Run("trailing", ("plan", str(p), *SMALL_QUERY), True, name=p.name))
-    las = root / "seed.las"
-    if _write_las(las):
-        for k, tail in enumerate(tails):
-            p = root / f"t{k}.las"
-            p.write_bytes(las.read_bytes() + tail)
-            runs.append(Run("trailing", ("plan", str(p), *SMALL_QUERY), True, name=p.name))
+    for ext in ("las", "laz"):
+        las = root / f"seed.{ext}"
+        if _write_las(las):
+            for k, tail in enumerate(tails + [las.read_bytes()]):
+                p = root / f"t{k}.{ext}"
+                p.write_bytes(las.read_bytes() + tail)
+                runs.append(Run("trailing", ("plan", str(p), *SMALL_QUERY), True, name=p.name))
     return runs
 
 
 def _write_las(path: Path) -> bool:
     try:
         import laspy
-    except ImportError:  # the robot extra is not installed: no LAS seed
+        if path.suffix == ".laz":
+            import lazrs  # noqa: F401
+    except ImportError:  # the robot extra is not installed: no LAS / LAZ seed
         return False
     las = laspy.LasData(laspy.LasHeader(point_format=3, version="1.4"))
     las.x, las.y, las.z = (np.array([1.0, 2.0, 3.0]),) * 3
