@@ -58,7 +58,7 @@ def _corners(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     return np.where(sel == 1, hi, lo)
 
 
-@pytest.mark.parametrize("radius", [0.0, 0.45, 1.3])
+@pytest.mark.parametrize("radius", [0.0, 0.45, pytest.param(1.3, marks=pytest.mark.slow)])
 @pytest.mark.parametrize("rotated", [False, True], ids=["aligned", "rotated"])
 @pytest.mark.parametrize("name", NAMED_LATTICES)
 def test_exact_box_inflation_matches_reference(name, rotated, radius):

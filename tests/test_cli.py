@@ -49,6 +49,7 @@ def test_help_shows_every_default():
         assert default in text
 
 
+@pytest.mark.slow
 def test_negative_coordinates_work_as_typed(tmp_path):
     # the office spans x 0..20: a negative start is parsed, then refused as outside the map
     for args in (["--start", "-2.96,-0.05,1"], ["--start=-2.96,-0.05,1"]):
@@ -123,6 +124,7 @@ def test_plot_with_an_unknown_suffix_is_refused_before_any_work(tmp_path):
     assert list(tmp_path.iterdir()) == []  # nothing written
 
 
+@pytest.mark.slow
 def test_missing_output_folders_are_created_alike(tmp_path):
     r = planner("world", "office", *FAST, "--out", str(tmp_path / "a" / "b" / "v.npz"))
     assert r.returncode == 0, r.stderr
@@ -262,6 +264,7 @@ def test_second_run_on_one_folder_is_refused_and_resume_reuses_queries(tmp_path)
     assert json.loads((tmp_path / "out" / "queries.json").read_text()) == saved
 
 
+@pytest.mark.slow
 def test_compare_includes_a_custom_generator_at_the_common_cell_volume():
     r = planner("compare", "office", "--lattices", "cubic", "--generator",
                 "1,0,0;0,1,0;0,0,1", *FAST, "--json")

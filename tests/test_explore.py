@@ -61,6 +61,7 @@ def test_step_budget_stops_the_robot_and_start_at_goal_is_reached():
     assert r.status == "reached" and r.distance == 0 and r.replans == 1
 
 
+@pytest.mark.slow
 def test_summary_figure_is_written(tmp_path):
     r = explore(_wall(door=True), [1, 1, 1], [9, 1, 1], lattice="cubic", radius=0.2,
                 cell_volume=0.1**3, bounds=BOUNDS, sensor_range=3.0, resolution=6.0)

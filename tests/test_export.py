@@ -158,6 +158,7 @@ radii = [0.1]
 """
 
 
+@pytest.mark.slow
 def test_every_suite_run_writes_the_planner_arena_database(tmp_path):
     (tmp_path / "tiny.toml").write_text(TINY)
     out = tmp_path / "out"

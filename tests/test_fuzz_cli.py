@@ -118,6 +118,7 @@ def _refused(argv: list[str], *words: str) -> str:
 @pytest.mark.parametrize("extra", [["--cell-volume", "1e-9", "--radius", "0"],
                                    ["--cell-volume", "1e-9", "--radius", "0.2"],
                                    ["--cell-volume", "1e-6", "--radius", "0"]])
+@pytest.mark.slow
 def test_huge_octomap_worlds_are_refused_by_the_memory_budget(extra):
     _refused(["plan", str(GEB079), "--start", "0,0,0.5", "--goal", "1,0,0.5", *extra],
              "geb079.bt", "over the memory budget", "--memory-budget")
@@ -136,6 +137,7 @@ def test_a_robot_wider_than_the_corridors_gets_one_line_within_the_memory_limit(
     assert "start (0.000, 0.000, 0.500) is blocked" in lines[0], lines[0]
 
 
+@pytest.mark.slow
 def test_huge_move_sets_and_gzip_bombs_are_refused(tmp_path):
     _refused(["plan", "office", "--start", "1,1,1", "--goal", "7.6,7.8,0.8", "--neighbors",
               "face+1000"], "neighbour shells")
@@ -148,6 +150,7 @@ def test_huge_move_sets_and_gzip_bombs_are_refused(tmp_path):
               "0,0,0", "--goal", "1,1,1"], "bomb.xyz.gz", "decompression budget")
 
 
+@pytest.mark.slow
 def test_any_angle_scratch_does_not_grow_with_the_box():
     # a 2000 km box: the sight-line scratch is capped by the budget, not sized by the box
     proc = _cli(["plan", "office", "--method", "lazy-theta", "--start", "1,1,1", "--goal",
@@ -172,6 +175,7 @@ def _sealed(tmp_path: Path, shell: int) -> tuple[Path, str, str]:
     return path, ",".join(start), ",".join(goal)
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not DA1.exists(), reason="shared Warframe data not present")
 def test_a_sealed_goal_on_a_large_map_is_unreachable_at_once(tmp_path):
     path, start, goal = _sealed(tmp_path, 2)

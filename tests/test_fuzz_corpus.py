@@ -152,6 +152,7 @@ def test_the_corpus_is_seeded(tmp_path):
     assert [r.argv for r in a] == [r.argv for r in b]
 
 
+@pytest.mark.slow
 def test_every_case_is_one_clean_line_or_a_usable_file(runs):
     assert len(runs) >= 500, len(runs)
     results = _run_all(runs)

@@ -5,6 +5,7 @@ re-export."""
 from __future__ import annotations
 
 import ast
+import functools
 from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parents[1] / "planner"
@@ -45,14 +46,20 @@ def _type_checking_only(node: ast.AST, parents: dict) -> bool:
     return False
 
 
-def _imports(name: str):
+@functools.cache
+def _imports(name: str) -> tuple[tuple[str, str], ...]:
+    return tuple(_find_imports(name))
+
+
+def _find_imports(name: str):
     """(imported module, private name or None) for every import of planner modules in
     ``name``, at any depth (functions included), TYPE_CHECKING blocks left out."""
     tree = ast.parse(MODULES[name].read_text())
     parents = {c: n for n in ast.walk(tree) for c in ast.iter_child_nodes(n)}
     here = name.split(".") if _is_package(name) else name.split(".")[:-1]
     for node in ast.walk(tree):
-        if _type_checking_only(node, parents):
+        if not isinstance(node, ast.Import | ast.ImportFrom) or _type_checking_only(node,
+                                                                                    parents):
             continue
         if isinstance(node, ast.Import):
             for a in node.names:

@@ -45,7 +45,20 @@ def _is_setup(code: str) -> bool:
     return bool(lines) and all(any(ln.startswith(c) for c in SETUP_COMMANDS) for ln in lines)
 
 
-RUNNABLE = [(no, lang, code) for no, lang, code in code_blocks()
+def _commands(code: str) -> int:
+    """Command lines of a bash block (continuation lines count with their command)."""
+    lines = [ln for ln in code.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
+    return sum(1 for k, ln in enumerate(lines) if k == 0 or not lines[k - 1].endswith("\\"))
+
+
+def _tier(no: int, lang: str, code: str):
+    """Blocks on the real data or running more than three commands: the slow tier."""
+    slow = "../shared/data" in code or (lang == "bash" and _commands(code) > 3)
+    return pytest.param(no, lang, code, id=f"line{no}",
+                        marks=[pytest.mark.slow] if slow else [])
+
+
+RUNNABLE = [_tier(no, lang, code) for no, lang, code in code_blocks()
             if lang in ("bash", "python") and not _is_setup(code)]
 
 
@@ -61,7 +74,7 @@ def checkout(tmp_path: Path) -> Path:
     return work
 
 
-@pytest.mark.parametrize("no,lang,code", RUNNABLE, ids=[f"line{no}" for no, _, _ in RUNNABLE])
+@pytest.mark.parametrize("no,lang,code", RUNNABLE)
 def test_readme_block_runs_as_written(no: int, lang: str, code: str, checkout: Path):
     if "../shared/data" in code and not DATA.is_dir():
         pytest.skip("the block uses ../shared/data, which is absent")

@@ -70,6 +70,7 @@ def test_cli_view_refuses_a_bad_path_file_in_one_line(tmp_path, capsys):
     assert not (tmp_path / "v.html").exists()
 
 
+@pytest.mark.slow
 @pytest.mark.real_data
 def test_geb079_view_renders_in_headless_chromium_with_the_path_visible(real_data, tmp_path):
     from planner.view.browser import find_browser, open_page
