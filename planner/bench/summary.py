@@ -14,7 +14,7 @@ import numpy as np
 from planner.analysis.style import LATTICE_COLORS, OTHER_COLOR
 from planner.analysis.tables import format_table
 from planner.bench.paired import wilson_interval
-from planner.bench.runner import unique_rows
+from planner.bench.rows import unique_rows
 from planner.fsutil import atomic_path, write_text_atomic
 from planner.lattice import NAMED_LATTICES
 
