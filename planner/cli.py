@@ -52,8 +52,16 @@ class _Parser(argparse.ArgumentParser):
 
 
 # -- parser --------------------------------------------------------------------------------
-def _add_world_args(p: argparse.ArgumentParser, *, lattice: bool = True,
-                    bag: bool = True) -> None:
+def _add_bag_args(p: argparse.ArgumentParser) -> None:
+    """The bag reader's options (``--topic``, ``--fixed-frame``, ``--max-clouds``)."""
+    b = p.add_argument_group("ROS bags")
+    b.add_argument("--topic", help="PointCloud2 topic (default: the first in the bag)")
+    b.add_argument("--fixed-frame", help="frame the clouds are put into with /tf and "
+                                         "/tf_static (default: the root of the tf tree)")
+    b.add_argument("--max-clouds", type=T.int_range(1), help="read at most this many clouds")
+
+
+def _add_world_args(p: argparse.ArgumentParser, *, lattice: bool = True) -> None:
     p.add_argument("map", type=T.map_file,
                    help="map file: ROS bag (.bag, rosbag2 folder, .db3, .mcap), LAS/LAZ, "
                         "E57, map_server YAML (+ PGM), saved world (.npz), MovingAI .3dmap, "
@@ -83,12 +91,7 @@ def _add_world_args(p: argparse.ArgumentParser, *, lattice: bool = True,
                    help="with a saved world: refuse it unless its source map (beside the "
                         "world file or in the current folder) still has the SHA-256 "
                         "recorded at save")
-    if bag:
-        b = p.add_argument_group("ROS bags")
-        b.add_argument("--topic", help="PointCloud2 topic (default: the first in the bag)")
-        b.add_argument("--fixed-frame", help="frame the clouds are put into with /tf and "
-                                             "/tf_static (default: the root of the tf tree)")
-        b.add_argument("--max-clouds", type=T.int_range(1), help="read at most this many clouds")
+    _add_bag_args(p)
     p.add_argument("--unknown", choices=("blocked", "free"), default=None,
                    help="unknown space: blocked (kept the robot radius away, as obstacles) or "
                         "free (default: blocked when the map says what was observed free, else "
@@ -151,7 +154,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print the result as JSON")
 
     p = sub.add_parser("compare", help="plan the same queries on every lattice (main job)")
-    _add_world_args(p, lattice=False, bag=False)
+    _add_world_args(p, lattice=False)
     p.add_argument("--lattices", type=T.lattice_list, default=",".join(NAMED_LATTICES),
                    help="comma-separated lattice names")
     p.add_argument("--generator", type=T.generator, default=None,
@@ -183,7 +186,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("explore", help="explore an unknown map with a simulated range sensor, "
                                        "replanning with D* Lite (checked against A*)")
-    _add_world_args(p, lattice=False, bag=False)
+    _add_world_args(p, lattice=False)
     p.add_argument("--lattice", default=None, type=T.explore_lattices,
                    help="named lattice, comma-separated names, or 'all' (default: fcc)")
     p.add_argument("--start", type=T.vec3, required=True, help="x,y,z (m); negatives allowed")

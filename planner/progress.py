@@ -13,9 +13,10 @@ log stays short and still shows a slow step is alive::
 
 from __future__ import annotations
 
+import contextlib
 import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from typing import TextIO
 
 __all__ = ["Progress", "format_seconds"]
@@ -68,6 +69,21 @@ class Progress:
         head = f"{self.label} " if self.label else ""
         return f"{head}{self.done}/{self.total} {self.what}  {format_seconds(el)}  {eta}"
 
+    def set_total(self, total: int) -> None:
+        """A new estimate of the whole work (an exploration learns its length as it goes)."""
+        self.total = int(total)
+
+    @contextlib.contextmanager
+    def paused(self) -> Iterator[None]:
+        """Print other lines inside the block: the live line is cleared, then redrawn."""
+        if self.tty and self._drawn:
+            print("\r\033[K", end="", file=self.stream, flush=True)
+            self._drawn = False
+            yield
+            self._draw()
+        else:
+            yield
+
     def step(self, k: int = 1) -> None:
         """``k`` more units are done."""
         self.done += k
@@ -75,9 +91,7 @@ class Progress:
             return
         frac = self.done / self.total if self.total > 0 else 1.0
         if self.tty:
-            bar = "#" * int(30 * min(frac, 1.0))
-            print(f"\r[{bar:<30}] {self.text()}\033[K", end="", file=self.stream, flush=True)
-            self._drawn = True
+            self._draw()
             return
         now = self.clock()
         if now - self.t0 < self.quiet:
@@ -86,6 +100,12 @@ class Progress:
             self.next_tenth = int(frac * 10) + 1
             self.last = now
             print(f"progress {frac:4.0%}: {self.text()}", file=self.stream, flush=True)
+
+    def _draw(self) -> None:
+        frac = self.done / self.total if self.total > 0 else 1.0
+        bar = "#" * int(30 * min(max(frac, 0.0), 1.0))
+        print(f"\r[{bar:<30}] {self.text()}\033[K", end="", file=self.stream, flush=True)
+        self._drawn = True
 
     def close(self) -> None:
         """End the live line on a terminal (a message printed next starts on its own line)."""

@@ -115,7 +115,7 @@ def run_suite(name: str, *, out: str | None = None, jobs: int = 1,
         try:
             tasks, record = plan_tasks(suite, log=log, saved=saved,
                                        world_cache=str(folder / "worlds"),
-                                       jobs=1 if scheduler else jobs)
+                                       jobs=1 if scheduler else jobs, progress=progress)
         except Interrupted as exc:  # while building worlds: nothing run yet
             print(f"\nplanner bench: {exc} while building the worlds; built ones are kept "
                   f"in {folder / 'worlds'} for --resume", file=sys.stderr)

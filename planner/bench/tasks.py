@@ -12,6 +12,7 @@ from planner.bench.queries import sample_queries, scenario_queries
 from planner.bench.stopping import Interrupted, signals_raise, stop_processes, worker_init
 from planner.bench.suite import Suite
 from planner.errors import PlannerError
+from planner.progress import Progress
 
 __all__ = ["plan_tasks"]
 
@@ -23,7 +24,7 @@ def _build_cached(spec: tuple) -> None:
     cached_world(*spec)
 
 
-def _prebuild(specs: list[tuple], jobs: int) -> None:
+def _prebuild(specs: list[tuple], jobs: int, progress: bool = False) -> None:
     """Build the worlds the query sampler needs in ``jobs`` processes, into the cache.
 
     SIGINT / SIGTERM raise :class:`Interrupted` and stop the builders at once (finished
@@ -32,9 +33,12 @@ def _prebuild(specs: list[tuple], jobs: int) -> None:
     ex = ProcessPoolExecutor(max_workers=jobs, mp_context=get_context("spawn"),
                              initializer=worker_init)
     try:
-        with signals_raise():
+        with signals_raise(), Progress(len(specs), "worlds", label="building",
+                                       enabled=progress) as bar:
+            bar.step(0)
             for fut in as_completed([ex.submit(_build_cached, s) for s in specs]):
                 fut.result()
+                bar.step()
     except Interrupted as exc:
         ex.shutdown(wait=False, cancel_futures=True)
         stop_processes(exc.processes)
@@ -43,7 +47,8 @@ def _prebuild(specs: list[tuple], jobs: int) -> None:
 
 
 def plan_tasks(suite: Suite, log=print, saved: dict | None = None,
-               world_cache: str | None = None, jobs: int = 1) -> tuple[list[dict], dict]:
+               world_cache: str | None = None, jobs: int = 1,
+               progress: bool = False) -> tuple[list[dict], dict]:
     """Expand a suite into tasks; sample the queries once per map x volume x radius x
     rotation group.
 
@@ -54,10 +59,12 @@ def plan_tasks(suite: Suite, log=print, saved: dict | None = None,
     ``saved`` is a record returned earlier (kept in ``queries.json`` beside the results):
     its groups' queries are reused as they are, so ``--resume`` does not sample again.
 
+    ``progress``: the worlds built (in the pool, then for sampling: one per lattice and
+    group) with an ETA on stderr (:class:`planner.progress.Progress`).
+
     Returns the tasks and, per group, the query record (kept, dropped by reason, queries).
     """
     from planner.bench.rotations import sample_rotations
-    from planner.bench.worlds import cached_world, map_frame
 
     rotated = suite.rotation != "none"
     quats = sample_rotations(suite.rotation, suite.rotations, seed=suite.seed)
@@ -67,6 +74,31 @@ def plan_tasks(suite: Suite, log=print, saved: dict | None = None,
             f" rotation {ri}" if rotated else "")
 
     n_wanted = {m.path: m.queries or suite.queries for m in suite.maps}
+    to_sample = sum(len(suite.lattices) for m in suite.maps if not m.scenarios
+                    for cv in m.cell_volumes for radius in m.radii for ri in range(len(quats))
+                    if not _reusable((saved or {}).get(group_name(m, cv, radius, ri)),
+                                     n_wanted[m.path]))
+    bar = Progress(to_sample, "worlds", label="sampling queries", enabled=progress)
+    try:
+        _expand(suite, saved, world_cache, jobs, progress, quats, group_name, n_wanted, bar,
+                log, tasks, record)
+    finally:
+        bar.close()
+    return tasks, record
+
+
+def _reusable(old: dict | None, n: int) -> bool:
+    """A saved group record holds the queries to reuse (same number wanted, current form)."""
+    return bool(old and old.get("wanted") == n and "queries" in old
+                and old.get("frame") == "map" and "quaternion_xyzw" in old)
+
+
+def _expand(suite, saved, world_cache, jobs, progress, quats, group_name, n_wanted, bar,
+            log, tasks, record) -> None:
+    """The body of :func:`plan_tasks`: fills ``tasks`` and ``record``."""
+    from planner.bench.worlds import cached_world, map_frame
+
+    rotated = suite.rotation != "none"
     for m in suite.maps:
         frame = map_frame(m.path) if not m.scenarios else None
         if world_cache and jobs > 1 and not m.scenarios:
@@ -77,9 +109,10 @@ def plan_tasks(suite: Suite, log=print, saved: dict | None = None,
                      != n_wanted[m.path]
                      for lat in suite.lattices]
             if specs:
-                log(f"building {len(specs)} worlds of {Path(m.path).name} in {jobs} "
-                    f"processes ...")
-                _prebuild(specs, jobs)
+                with bar.paused():
+                    log(f"building {len(specs)} worlds of {Path(m.path).name} in {jobs} "
+                        f"processes ...")
+                    _prebuild(specs, jobs, progress)
         for cv in m.cell_volumes:
             for radius in m.radii:
                 for ri, quat in enumerate(quats):
@@ -90,8 +123,7 @@ def plan_tasks(suite: Suite, log=print, saved: dict | None = None,
                               "rotated": rotated, "world_cache": world_cache}
                     n = m.queries or suite.queries
                     old = (saved or {}).get(group)
-                    if (old and old.get("wanted") == n and "queries" in old
-                            and old.get("frame") == "map" and "quaternion_xyzw" in old):
+                    if _reusable(old, n):
                         record[group] = old
                         tasks += _group_tasks(suite, common, old["queries"])
                         continue
@@ -102,10 +134,14 @@ def plan_tasks(suite: Suite, log=print, saved: dict | None = None,
                         s, g, costs = scenario_queries(m.scenarios, n, suite.seed)
                         dropped = {}
                     else:
-                        log(f"sampling {n} queries for {group} ...")
-                        worlds = {lat: cached_world(world_cache, m.path, lat, cv, radius,
-                                                    tuple(quat.tolist()))
-                                  for lat in suite.lattices}
+                        with bar.paused():
+                            log(f"sampling {n} queries for {group} ...")
+                        bar.step(0)
+                        worlds = {}
+                        for lat in suite.lattices:
+                            worlds[lat] = cached_world(world_cache, m.path, lat, cv, radius,
+                                                       tuple(quat.tolist()))
+                            bar.step()
                         s, g, dropped = sample_queries(worlds, frame.bounds, n, suite.seed,
                                                        suite.min_distance, free=frame.free)
                         costs = [None] * len(s)
@@ -118,7 +154,6 @@ def plan_tasks(suite: Suite, log=print, saved: dict | None = None,
                                      "radius": radius, "rotation": ri,
                                      "quaternion_xyzw": quat.tolist()}
                     tasks += _group_tasks(suite, common, queries)
-    return tasks, record
 
 
 def _group_tasks(suite: Suite, common: dict, queries: list[dict]) -> list[dict]:

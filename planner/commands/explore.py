@@ -14,15 +14,17 @@ def explore(a: argparse.Namespace) -> int:
     import json
 
     from planner.analysis.tables import format_table
+    from planner.commands.worlds import map_source
     from planner.explore import explore as run
 
     rows, bad = [], 0
     lattices = a.lattice or [None]  # None: explore's default, resolved from the map
+    source = map_source(a)  # a bag is read once, with its topic and frame
     for name in lattices:
-        res = run(a.map, a.start, a.goal, lattice=name, radius=a.radius,
+        res = run(source, a.start, a.goal, lattice=name, radius=a.radius,
                   cell_volume=a.cell_volume, bounds=a.bounds, sensor_range=a.sensor_range,
                   fov=a.fov, resolution=a.resolution, neighbors=a.neighbors,
-                  max_steps=a.max_steps)
+                  max_steps=a.max_steps, progress=not a.json)
         rows.append(res.summary())
         bad += res.mismatches + res.contacts
         several = len(lattices) > 1
@@ -31,7 +33,7 @@ def explore(a: argparse.Namespace) -> int:
         if a.gif:
             res.animate(per_lattice(a.gif, name, several), max_frames=a.frames)
         if a.view:
-            _view(per_lattice(a.view, name, several), a, res)
+            _view(per_lattice(a.view, name, several), a, res, source)
     print(json.dumps(rows) if a.json else format_table(rows))
     if bad:  # D* Lite disagreed with A* from scratch, or the robot touched the true map
         raise PlannerError(f"{bad} mismatches/contacts: see the table")
@@ -44,12 +46,12 @@ def per_lattice(out: str, name: str | None, several: bool) -> Path:
     return p.with_name(f"{p.stem}_{name}{p.suffix}") if several else p
 
 
-def _view(out: Path, a: argparse.Namespace, res) -> None:
+def _view(out: Path, a: argparse.Namespace, res, source) -> None:
     """The true inflated world of one exploration, its trajectory and its last plan."""
     from planner.view import write_view
     from planner.world.build import build_world
 
-    world = build_world(a.map, res.lattice, cell_volume=a.cell_volume, radius=a.radius,
+    world = build_world(source, res.lattice, cell_volume=a.cell_volume, radius=a.radius,
                         bounds=a.bounds)
     paths = {f"trajectory ({res.status})": res.trajectory}
     if res.paths:

@@ -4,9 +4,8 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 
-from planner.commands.worlds import build, check_dim, check_neighbors
+from planner.commands.worlds import bag_options, build, check_dim, check_neighbors, map_source
 
 
 def plan(a: argparse.Namespace) -> int:
@@ -66,8 +65,8 @@ def compare(a: argparse.Namespace) -> int:
     rows = compare.compare(
         a.map, lattices=lattices, cell_volume=a.cell_volume, radius=radius, bounds=a.bounds,
         start=a.start, goal=a.goal, method=a.method, neighbors=a.neighbors, plot=a.plot,
-        progress=not a.json and sys.stderr.isatty(), format=a.format,
-        max_expansions=a.max_expansions, unknown=a.unknown, view=a.view,
+        progress=not a.json, format=a.format, max_expansions=a.max_expansions,
+        unknown=a.unknown, view=a.view, source=map_source(a) if bag_options(a) else None,
     )
     print(json.dumps(rows) if a.json else compare.format_rows(rows))
     return 0 if all(r["found"] for r in rows) else 1
