@@ -44,8 +44,8 @@ def tiny_tasks(tiny_suite):
 
 
 def _stable(rows):
-    """Everything but timings."""
-    drop = {"seconds"}
+    """Everything but timings and the Dask worker's address."""
+    drop = {"seconds", "worker"}
     return sorted(json.dumps({k: v for k, v in r.items() if k not in drop}, sort_keys=True)
                    for r in rows)
 
@@ -91,7 +91,14 @@ def test_results_are_identical_in_processes_and_on_a_dask_cluster(tiny_tasks, tm
                                   protocol="tcp", dashboard_address=None) as cluster:
         dask_rows = runner.run(tasks, tmp_path / "c.jsonl", scheduler=cluster.scheduler_address,
                                progress=False)
+        workers = set(cluster.scheduler_info["workers"])  # their addresses
     assert _stable(serial) == _stable(pool) == _stable(dask_rows)
+    # every row names the machine that ran it; a Dask row also the worker
+    import socket
+
+    assert {r["host"] for r in serial + pool + dask_rows} == {socket.gethostname()}
+    assert {r["worker"] for r in serial + pool} == {None}
+    assert {r["worker"] for r in dask_rows} == workers
 
 
 @pytest.mark.slow
@@ -365,3 +372,12 @@ def test_worlds_built_in_parallel_give_the_same_queries(tmp_path):
                                     world_cache=str(tmp_path / "worlds"))
     assert len(list((tmp_path / "worlds").iterdir())) == 2 * len(suite.lattices)
     assert json.dumps(serial, sort_keys=True) == json.dumps(parallel, sort_keys=True)
+
+
+def test_rows_name_the_host_that_ran_them(tiny_tasks, tmp_path):
+    import socket
+
+    tasks, _ = tiny_tasks
+    rows = runner.run(tasks[:1], tmp_path / "r.jsonl", progress=False)
+    assert rows and all(r["host"] == socket.gethostname() and r["worker"] is None
+                        for r in rows)
