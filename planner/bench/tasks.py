@@ -65,6 +65,7 @@ def plan_tasks(suite: Suite, log=print, saved: dict | None = None,
     Returns the tasks and, per group, the query record (kept, dropped by reason, queries).
     """
     from planner.bench.rotations import sample_rotations
+    from planner.bench.worlds import cached_world, map_frame
 
     rotated = suite.rotation != "none"
     quats = sample_rotations(suite.rotation, suite.rotations, seed=suite.seed)
@@ -78,12 +79,62 @@ def plan_tasks(suite: Suite, log=print, saved: dict | None = None,
                     for cv in m.cell_volumes for radius in m.radii for ri in range(len(quats))
                     if not _reusable((saved or {}).get(group_name(m, cv, radius, ri)),
                                      n_wanted[m.path]))
-    bar = Progress(to_sample, "worlds", label="sampling queries", enabled=progress)
-    try:
-        _expand(suite, saved, world_cache, jobs, progress, quats, group_name, n_wanted, bar,
-                log, tasks, record)
-    finally:
-        bar.close()
+    with Progress(to_sample, "worlds", label="sampling queries", enabled=progress) as bar:
+        for m in suite.maps:
+            frame = map_frame(m.path) if not m.scenarios else None
+            if world_cache and jobs > 1 and not m.scenarios:
+                specs = [(world_cache, m.path, lat, cv, radius, tuple(q.tolist()))
+                         for cv in m.cell_volumes for radius in m.radii
+                         for ri, q in enumerate(quats)
+                         if (saved or {}).get(group_name(m, cv, radius, ri), {}).get("wanted")
+                         != n_wanted[m.path]
+                         for lat in suite.lattices]
+                if specs:
+                    with bar.paused():
+                        log(f"building {len(specs)} worlds of {Path(m.path).name} in {jobs} "
+                            f"processes ...")
+                        _prebuild(specs, jobs, progress)
+            for cv in m.cell_volumes:
+                for radius in m.radii:
+                    for ri, quat in enumerate(quats):
+                        group = group_name(m, cv, radius, ri)
+                        common = {"suite": suite.name, "map": m.path, "cell_volume": cv,
+                                  "radius": radius, "rotation": ri,
+                                  "quaternion_xyzw": quat.tolist(),
+                                  "rotated": rotated, "world_cache": world_cache}
+                        n = m.queries or suite.queries
+                        old = (saved or {}).get(group)
+                        if _reusable(old, n):
+                            record[group] = old
+                            tasks += _group_tasks(suite, common, old["queries"])
+                            continue
+                        if m.scenarios:
+                            if rotated:
+                                raise PlannerError(f"{m.scenarios}: scenario queries cannot be "
+                                                   f"rotated; use rotation = \"none\"")
+                            s, g, costs = scenario_queries(m.scenarios, n, suite.seed)
+                            dropped = {}
+                        else:
+                            with bar.paused():
+                                log(f"sampling {n} queries for {group} ...")
+                            bar.step(0)
+                            worlds = {}
+                            for lat in suite.lattices:
+                                worlds[lat] = cached_world(world_cache, m.path, lat, cv, radius,
+                                                           tuple(quat.tolist()))
+                                bar.step()
+                            s, g, dropped = sample_queries(worlds, frame.bounds, n, suite.seed,
+                                                           suite.min_distance, free=frame.free)
+                            costs = [None] * len(s)
+                        queries = [{"id": i, "start": s[i].tolist(), "goal": g[i].tolist(),
+                                    "optimal_cost": None if costs[i] is None else float(costs[i])}
+                                   for i in range(len(s))]
+                        record[group] = {"kept": len(s), "wanted": n, "dropped": dropped,
+                                         "frame": "map",
+                                         "queries": queries, "map": m.path, "cell_volume": cv,
+                                         "radius": radius, "rotation": ri,
+                                         "quaternion_xyzw": quat.tolist()}
+                        tasks += _group_tasks(suite, common, queries)
     return tasks, record
 
 
@@ -91,69 +142,6 @@ def _reusable(old: dict | None, n: int) -> bool:
     """A saved group record holds the queries to reuse (same number wanted, current form)."""
     return bool(old and old.get("wanted") == n and "queries" in old
                 and old.get("frame") == "map" and "quaternion_xyzw" in old)
-
-
-def _expand(suite, saved, world_cache, jobs, progress, quats, group_name, n_wanted, bar,
-            log, tasks, record) -> None:
-    """The body of :func:`plan_tasks`: fills ``tasks`` and ``record``."""
-    from planner.bench.worlds import cached_world, map_frame
-
-    rotated = suite.rotation != "none"
-    for m in suite.maps:
-        frame = map_frame(m.path) if not m.scenarios else None
-        if world_cache and jobs > 1 and not m.scenarios:
-            specs = [(world_cache, m.path, lat, cv, radius, tuple(q.tolist()))
-                     for cv in m.cell_volumes for radius in m.radii
-                     for ri, q in enumerate(quats)
-                     if (saved or {}).get(group_name(m, cv, radius, ri), {}).get("wanted")
-                     != n_wanted[m.path]
-                     for lat in suite.lattices]
-            if specs:
-                with bar.paused():
-                    log(f"building {len(specs)} worlds of {Path(m.path).name} in {jobs} "
-                        f"processes ...")
-                    _prebuild(specs, jobs, progress)
-        for cv in m.cell_volumes:
-            for radius in m.radii:
-                for ri, quat in enumerate(quats):
-                    group = group_name(m, cv, radius, ri)
-                    common = {"suite": suite.name, "map": m.path, "cell_volume": cv,
-                              "radius": radius, "rotation": ri,
-                              "quaternion_xyzw": quat.tolist(),
-                              "rotated": rotated, "world_cache": world_cache}
-                    n = m.queries or suite.queries
-                    old = (saved or {}).get(group)
-                    if _reusable(old, n):
-                        record[group] = old
-                        tasks += _group_tasks(suite, common, old["queries"])
-                        continue
-                    if m.scenarios:
-                        if rotated:
-                            raise PlannerError(f"{m.scenarios}: scenario queries cannot be "
-                                               f"rotated; use rotation = \"none\"")
-                        s, g, costs = scenario_queries(m.scenarios, n, suite.seed)
-                        dropped = {}
-                    else:
-                        with bar.paused():
-                            log(f"sampling {n} queries for {group} ...")
-                        bar.step(0)
-                        worlds = {}
-                        for lat in suite.lattices:
-                            worlds[lat] = cached_world(world_cache, m.path, lat, cv, radius,
-                                                       tuple(quat.tolist()))
-                            bar.step()
-                        s, g, dropped = sample_queries(worlds, frame.bounds, n, suite.seed,
-                                                       suite.min_distance, free=frame.free)
-                        costs = [None] * len(s)
-                    queries = [{"id": i, "start": s[i].tolist(), "goal": g[i].tolist(),
-                                "optimal_cost": None if costs[i] is None else float(costs[i])}
-                               for i in range(len(s))]
-                    record[group] = {"kept": len(s), "wanted": n, "dropped": dropped,
-                                     "frame": "map",
-                                     "queries": queries, "map": m.path, "cell_volume": cv,
-                                     "radius": radius, "rotation": ri,
-                                     "quaternion_xyzw": quat.tolist()}
-                    tasks += _group_tasks(suite, common, queries)
 
 
 def _group_tasks(suite: Suite, common: dict, queries: list[dict]) -> list[dict]:
