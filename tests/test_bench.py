@@ -7,7 +7,9 @@ import math
 import numpy as np
 import pytest
 
+from planner.bench import rows as rows_mod
 from planner.bench import runner, summary
+from planner.bench import tasks as tasks_mod
 from planner.bench.metrics import Clearance
 from planner.bench.suite import SuiteError, load_suite
 from planner.maps import map_path
@@ -38,12 +40,12 @@ def tiny_suite(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def tiny_tasks(tiny_suite):
-    return runner.plan_tasks(tiny_suite, log=lambda m: None)
+    return tasks_mod.plan_tasks(tiny_suite, log=lambda m: None)
 
 
 def _stable(rows):
-    """Everything but timings."""
-    drop = {"seconds"}
+    """Everything but timings and the Dask worker's address."""
+    drop = {"seconds", "worker"}
     return sorted(json.dumps({k: v for k, v in r.items() if k not in drop}, sort_keys=True)
                    for r in rows)
 
@@ -68,7 +70,7 @@ def test_a_killed_run_resumes_without_redoing_finished_rows(tiny_tasks, tmp_path
     with open(out, "a") as f:  # a row cut short by a kill
         f.write('{"map": "trunc')
     rows = runner.run(tasks, out, resume=True, progress=False)
-    keys = [runner.row_key(r) for r in rows]
+    keys = [rows_mod.row_key(r) for r in rows]
     assert len(keys) == len(set(keys)) == sum(len(t["queries"]) for t in tasks)
     assert n_first > 0
     for r in rows:
@@ -89,7 +91,14 @@ def test_results_are_identical_in_processes_and_on_a_dask_cluster(tiny_tasks, tm
                                   protocol="tcp", dashboard_address=None) as cluster:
         dask_rows = runner.run(tasks, tmp_path / "c.jsonl", scheduler=cluster.scheduler_address,
                                progress=False)
+        workers = set(cluster.scheduler_info["workers"])  # their addresses
     assert _stable(serial) == _stable(pool) == _stable(dask_rows)
+    # every row names the machine that ran it; a Dask row also the worker
+    import socket
+
+    assert {r["host"] for r in serial + pool + dask_rows} == {socket.gethostname()}
+    assert {r["worker"] for r in serial + pool} == {None}
+    assert {r["worker"] for r in dask_rows} == workers
 
 
 @pytest.mark.slow
@@ -152,27 +161,6 @@ def test_bundled_suites_load():
     assert math.isfinite(load_suite("quick").ompl_time)
 
 
-def test_progress_redraws_only_on_a_terminal():
-    import io
-
-    class Tty(io.StringIO):
-        def isatty(self):
-            return True
-
-    log = io.StringIO()
-    bar = runner._Progress(200, True, stream=log)
-    for _ in range(200):
-        bar.step(1)
-    bar.close()
-    lines = log.getvalue().splitlines()
-    assert "\r" not in log.getvalue() and 9 <= len(lines) <= 11  # a line per ~10%
-    assert lines[-1].startswith("progress 100%")
-    tty = Tty()
-    bar = runner._Progress(5, True, stream=tty)
-    bar.step(5)
-    assert tty.getvalue().startswith("\r[")
-
-
 def test_duplicate_rows_are_counted_once(tiny_tasks, tmp_path):
     tasks, _ = tiny_tasks
     rows = runner.run(tasks[:2], tmp_path / "r.jsonl", progress=False)
@@ -193,9 +181,9 @@ def test_a_report_of_a_partial_run_says_so(tiny_tasks, tiny_suite, tmp_path):
 
 
 def test_saved_queries_are_reused(tiny_suite):
-    _, record = runner.plan_tasks(tiny_suite, log=lambda m: None)
+    _, record = tasks_mod.plan_tasks(tiny_suite, log=lambda m: None)
     sampled = []
-    tasks, again = runner.plan_tasks(tiny_suite, log=sampled.append, saved=record)
+    tasks, again = tasks_mod.plan_tasks(tiny_suite, log=sampled.append, saved=record)
     assert again == record and not sampled
     assert {q["id"] for t in tasks for q in t["queries"]} == {0, 1, 2}
 
@@ -256,7 +244,7 @@ def test_rotated_suites_share_one_rotation_sample_and_record_it(tmp_path):
     p.write_text(ROTATED.format(map=map_path("office").as_posix()))
     suite = load_suite(str(p))
     assert (suite.rotation, suite.rotations) == ("yaw", 2)
-    tasks, record = runner.plan_tasks(suite, log=lambda m: None)
+    tasks, record = tasks_mod.plan_tasks(suite, log=lambda m: None)
     assert len(record) == 2
     quats = {t["rotation"]: tuple(t["quaternion_xyzw"]) for t in tasks}
     assert sorted(quats) == [0, 1] and quats[0] != quats[1]
@@ -272,7 +260,7 @@ def test_rotated_suites_share_one_rotation_sample_and_record_it(tmp_path):
     assert {r["rotation"] for r in rows} == {0, 1}
     assert all(len(r["quaternion_xyzw"]) == 4 for r in rows)
     assert all(r["commit"] for r in rows)  # the code that ran each row
-    assert len({runner.row_key(r) for r in rows}) == len(rows)
+    assert len({rows_mod.row_key(r) for r in rows}) == len(rows)
     for r in rows:
         if r["found"]:
             assert r["collision_free"], r
@@ -379,8 +367,17 @@ def test_worlds_built_in_parallel_give_the_same_queries(tmp_path):
     p = tmp_path / "rot.toml"
     p.write_text(ROTATED.format(map=map_path("office").as_posix()))
     suite = load_suite(str(p))
-    _, serial = runner.plan_tasks(suite, log=lambda m: None)
-    _, parallel = runner.plan_tasks(suite, log=lambda m: None, jobs=2,
+    _, serial = tasks_mod.plan_tasks(suite, log=lambda m: None)
+    _, parallel = tasks_mod.plan_tasks(suite, log=lambda m: None, jobs=2,
                                     world_cache=str(tmp_path / "worlds"))
     assert len(list((tmp_path / "worlds").iterdir())) == 2 * len(suite.lattices)
     assert json.dumps(serial, sort_keys=True) == json.dumps(parallel, sort_keys=True)
+
+
+def test_rows_name_the_host_that_ran_them(tiny_tasks, tmp_path):
+    import socket
+
+    tasks, _ = tiny_tasks
+    rows = runner.run(tasks[:1], tmp_path / "r.jsonl", progress=False)
+    assert rows and all(r["host"] == socket.gethostname() and r["worker"] is None
+                        for r in rows)

@@ -3,7 +3,9 @@ suite's maps and rotations, with the sensor of the ``[explore]`` table."""
 
 import pytest
 
+from planner.bench import rows as rows_mod
 from planner.bench import runner, summary
+from planner.bench import tasks as tasks_mod
 from planner.bench.suite import SuiteError, load_suite
 from planner.maps import map_path
 
@@ -37,7 +39,7 @@ def test_explore_rows_on_every_lattice_and_rotation(tmp_path):
     p.write_text(SUITE.format(map=map_path("office").as_posix()))
     suite = load_suite(str(p))
     assert suite.explore["sensor_range"] == 4.0
-    tasks, record = runner.plan_tasks(suite, log=lambda m: None)
+    tasks, record = tasks_mod.plan_tasks(suite, log=lambda m: None)
     rows = runner.run(tasks, tmp_path / "results.jsonl", progress=False)
     ex = [r for r in rows if r["method"] == "explore"]
     plans = [r for r in rows if r["method"] == "astar"]
@@ -58,7 +60,7 @@ def test_explore_rows_on_every_lattice_and_rotation(tmp_path):
     assert any(r["found"] for r in ex)
     # planning rows are what they were without exploration in the suite
     assert all("distance" not in r and "status" not in r for r in plans)
-    assert len({runner.row_key(r) for r in rows}) == len(rows)
+    assert len({rows_mod.row_key(r) for r in rows}) == len(rows)
     table = summary.format_summary(summary.summarize(rows))
     assert "explore" in table and "astar" in table
 

@@ -143,7 +143,7 @@ def test_ros_map_negate_and_raw_mode(tmp_path):
 
 
 @pytest.mark.parametrize(("edit", "match"), [
-    (("resolution: 0.5", "resolution: fine"), "'resolution' must be a float"),
+    (("resolution: 0.5", "resolution: fine"), "'resolution' must be a number"),
     (("resolution: 0.5", "resolution: 1e300"), "between"),
     (("origin: [-1.0, 2.0, 0.0]", "origin: [1, 2]"), "origin"),
     (("origin: [-1.0, 2.0, 0.0]", "origin: [1, 2, 0.5]"), "rotated"),
@@ -284,3 +284,68 @@ def test_sidecar_not_an_object_or_missing_required(tmp_path, text, match):
 def test_absurd_finite_coordinates_are_refused(tmp_path):
     (tmp_path / "far.xyz").write_text("1 2 3\n1e300 0 0\n")
     _raises(tmp_path / "far.xyz", "1 points have coordinates beyond 1e\\+09 m")
+
+
+# -- map_server descriptions written by PyYAML's own writer ----------------------------------------
+def _description(**extra) -> dict:
+    return {"image": "map.pgm", "resolution": 0.5, "origin": [-1.0, 2.0, 0.0], "negate": 0,
+            "occupied_thresh": 0.65, "free_thresh": 0.196, **extra}
+
+
+@pytest.mark.parametrize("flow", [False, True], ids=["block", "flow"])
+def test_ros_map_described_in_any_yaml_style(tmp_path, flow):
+    import yaml
+
+    pix = np.array([[0, 254, 205], [254, 254, 0]])
+    (tmp_path / "ref").mkdir()
+    reference = load_obstacles(write_rosmap(tmp_path / "ref", pix))  # the hand-written one
+    path = write_rosmap(tmp_path, pix)
+    text = yaml.safe_dump(_description(mode="trinary"), default_flow_style=flow)
+    # block style writes origin as a block list ("origin:\n- -1.0\n..."), flow style the
+    # whole description as one mapping ("{free_thresh: 0.196, image: map.pgm, ...}")
+    assert ("\n- -1.0" in text) != flow and text.startswith("{") == flow
+    path.write_text(text)
+    obst = load_obstacles(path)
+    np.testing.assert_array_equal(obst.bounds, reference.bounds)
+    assert sorted(map(tuple, obst.boxes)) == sorted(map(tuple, reference.boxes))
+    assert sorted(map(tuple, obst.free_boxes)) == sorted(map(tuple, reference.free_boxes))
+
+
+@pytest.mark.parametrize(("negate", "mode", "occupied", "free"), [
+    (True, "trinary", [[-0.25, 2.25]], [[-0.75, 2.25]]),
+    (False, "raw", [[0.25, 2.25]], [[-0.75, 2.25]]),
+    (False, "scale", [[-0.75, 2.25]], [[-0.25, 2.25]]),
+])
+def test_ros_map_modes_and_negate_as_yaml_booleans(tmp_path, negate, mode, occupied, free):
+    import yaml
+
+    # 0 black, 255 white, 100 dark grey: occupancy 1, 0, 0.61 (unknown between the thresholds)
+    path = write_rosmap(tmp_path, np.array([[0, 255, 100]]))
+    path.write_text(yaml.safe_dump(_description(negate=negate, mode=mode)))
+    obst = load_obstacles(path)
+    assert obst.boxes.tolist() == occupied and obst.free_boxes.tolist() == free
+
+
+def test_ros_map_integers_and_exponents_are_numbers(tmp_path):
+    import yaml
+
+    path = write_rosmap(tmp_path, np.array([[0, 254]]))
+    # PyYAML reads 5e-1 as a string (YAML 1.1); map_server reads it as a number
+    path.write_text(yaml.safe_dump(_description(origin=[-1, 2, 0])).replace(
+        "resolution: 0.5", "resolution: 5e-1"))
+    obst = load_obstacles(path)
+    assert obst.resolution == 0.5 and obst.bounds.tolist() == [[-1.0, 2.0], [0.0, 2.5]]
+
+
+@pytest.mark.parametrize(("text", "match"), [
+    ("image: map.pgm\nresolution: [0.5\n", r"map.yaml:\d+: not valid YAML"),
+    ("- image\n- map.pgm\n", "a YAML mapping"),
+    ("image: map.pgm\nresolution: 0.5\norigin: {x: 1}\nnegate: 0\n", "'origin' must be"),
+    ("image: !!python/object:os.system x\n", "not valid YAML"),
+])
+def test_bad_yaml_is_one_line(tmp_path, text, match):
+    path = write_rosmap(tmp_path, np.array([[0, 254]]))
+    path.write_text(text)
+    with pytest.raises(MapError, match=match) as err:
+        load_obstacles(path)
+    assert "\n" not in str(err.value)

@@ -259,3 +259,30 @@ def test_cli_bag_options_reach_the_reader_and_the_path_file_names_the_fixed_fram
     assert main(["plan", str(no_tf), *query]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "no /tf transform" in err and "'lidar'" in err
+
+
+@pytest.mark.parametrize("command", ["compare", "explore"])
+def test_compare_and_explore_take_the_bag_options_of_plan(tmp_path, capsys, command):
+    import json
+
+    from planner.cli import main
+
+    bag = tmp_path / "run.bag"
+    _write_bag(bag, ros1=True, topic="/velodyne_points")
+    query = ["--radius", "0.05", "--cell-volume", "0.001", "--bounds", "-3,-3,-1,3,3,2",
+             "--start", "-2.5,-2.5,1.5", "--goal", "2.5,2.5,1.5", "--json"]
+    extra = (["--lattices", "cubic", "--unknown", "free"] if command == "compare"
+             else ["--lattice", "cubic", "--sensor-range", "1"])
+    assert main([command, str(bag), "--topic", "/nowhere", *query, *extra]) == 2
+    assert "/nowhere" in capsys.readouterr().err
+    blocked = []
+    for clouds in ("1", "3"):
+        assert main([command, str(bag), "--topic", "/velodyne_points", "--fixed-frame",
+                     "odom", "--max-clouds", clouds, *query, *extra]) == 0
+        rows = json.loads(capsys.readouterr().out)
+        if command == "compare":
+            blocked.append(rows[0]["blocked_cells"])
+        else:
+            assert rows[0]["status"] == "reached"
+    # three clouds from three poses block more cells than the first one alone
+    assert command == "explore" or blocked[0] < blocked[1]

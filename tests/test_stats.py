@@ -29,6 +29,40 @@ def test_identical_samples_are_no_difference():
     assert describe(s, "checks").startswith("no significant difference in checks")
 
 
+@pytest.mark.parametrize("x", [[2.0], [2.0, 3.0], [1.5] * 12, [1.0] * 40 + [0.9, 1.2, 1.1]],
+                         ids=["one", "two", "all-equal", "ties"])
+def test_degenerate_samples_give_a_definite_interval_without_warnings(x):
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        s = paired_ratio(np.array(x), np.ones(len(x)))
+    assert s.n == len(x) and math.isfinite(s.low) and math.isfinite(s.high)
+    assert min(x) <= s.low <= s.median <= s.high <= max(x)
+    if len(set(x)) == 1 or len(x) == 43:  # every resample has the same median
+        assert s.low == s.high == s.median
+
+
+def test_the_interval_is_seeded():
+    rng = np.random.default_rng(4)
+    y = rng.uniform(1, 2, size=50)
+    x = y * rng.lognormal(0.0, 0.3, size=50)
+    a, b, c = paired_ratio(x, y, seed=3), paired_ratio(x, y, seed=3), paired_ratio(x, y, seed=4)
+    assert (a.low, a.high) == (b.low, b.high) and (a.low, a.high) != (c.low, c.high)
+
+
+def test_the_95_percent_interval_covers_the_true_median_about_95_percent_of_the_time():
+    rng = np.random.default_rng(11)
+    true = math.exp(-0.5)  # median of the lognormal ratios drawn below
+    covered = 0
+    for trial in range(120):
+        y = rng.uniform(10, 100, size=30)
+        x = y * rng.lognormal(-0.5, 0.4, size=30)
+        s = paired_ratio(x, y, n_boot=1999, seed=trial)
+        covered += s.low <= true <= s.high
+    assert 0.85 <= covered / 120 <= 1.0 and covered < 120
+
+
 def test_noise_around_one_is_not_significant():
     rng = np.random.default_rng(7)
     y = rng.uniform(10, 20, size=30)

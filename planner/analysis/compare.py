@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import sys
 import time
 from pathlib import Path
 
@@ -36,6 +35,7 @@ def compare(
     max_expansions: int | None = None,
     unknown: str | None = None,
     view: str | None = None,
+    source=None,
 ) -> list[dict]:
     """Plan the same queries on every lattice and return one summary row per lattice.
 
@@ -50,7 +50,14 @@ def compare(
     default); each row reports the unknown cells its paths cross.
     ``plot`` / ``view``: a figure / an interactive 3D page (:mod:`planner.view`) of every
     lattice's path of the first query over the last lattice's cells.
+    ``progress``: one line on stderr with the plans done of lattices x queries and an ETA
+    (:class:`planner.progress.Progress`).
+    ``source``: the map already read (:class:`~planner.io.Obstacles`, e.g. a bag read with
+    its topic and frame), built instead of reading ``map_path`` again; ``map_path`` still
+    names the map's sidecar and default queries.
     """
+    from planner.progress import Progress
+
     if not resolve(map_path).exists():
         raise MapError(f"{map_path}: no such file or bundled map")
     side = sidecar(resolve(map_path))
@@ -66,45 +73,25 @@ def compare(
         if not queries:
             raise PlanError(f"{map_path}: no default queries; pass --start and --goal")
     rows, results = [], {}
-    for lat in lattices:
-        name = lat if isinstance(lat, str) else (lat.name or "custom")
-        t0 = time.perf_counter()
-        world = build_world(map_path, lat, cell_volume=cell_volume, radius=radius,
-                                bounds=bounds, format=format, unknown=unknown)
-        build = time.perf_counter() - t0
-        compile_s = warm_up()  # JIT / cache load of the search kernels: not search time
-        per = []
-        try:
-            for i, (s, g) in enumerate(queries):
-                if progress:
-                    print(f"\r{name}: query {i + 1}/{len(queries)}", end="", file=sys.stderr,
-                          flush=True)
+    bar = Progress(len(lattices) * len(queries), "plans", enabled=progress)
+    with bar:
+        for lat in lattices:
+            name = lat if isinstance(lat, str) else (lat.name or "custom")
+            bar.label = name
+            bar.step(0)  # shows the lattice while its world is built
+            t0 = time.perf_counter()
+            world = build_world(map_path if source is None else source, lat,
+                                cell_volume=cell_volume, radius=radius, bounds=bounds,
+                                format=format, unknown=unknown)
+            build = time.perf_counter() - t0
+            compile_s = warm_up()  # JIT / cache load of the search kernels: not search time
+            per = []
+            for s, g in queries:
                 per.append(plan(world, s, g, method=method, neighbors=neighbors,
-                                    max_expansions=max_expansions))
-        finally:  # clear the progress line, also before an error message
-            if progress:
-                print("\r" + " " * 40 + "\r", end="", file=sys.stderr, flush=True)
-        results[name] = per[0]
-        found = [r for r in per if r.found]
-        smoothed = [_smoothed_length(world, r) for r in found]
-        rows.append({
-            "lattice": name,
-            "cell_volume": world.lattice.cell_volume,
-            "neighbors": neighbors,
-            "method": method,
-            "queries": len(per),
-            "found": len(found) == len(per),
-            "n_found": len(found),
-            "length": float(sum(r.length for r in found)) if found else math.inf,
-            "length_smoothed": float(sum(smoothed)) if found else math.inf,
-            "cell_checks": int(sum(r.cell_checks for r in per)),
-            "expansions": int(sum(r.expansions for r in per)),
-            "seconds": float(sum(r.seconds for r in per)),
-            "build_seconds": build,
-            "compile_seconds": compile_s,
-            "blocked_cells": int(world.n_blocked),
-            "unknown_cells": int(sum(r.unknown_cells or 0 for r in found)),
-        })
+                                max_expansions=max_expansions))
+                bar.step()
+            rows.append(_row(world, name, per, build, compile_s, method, neighbors))
+            results[name] = per[0]
     if plot:
         s, g = queries[0]
         plot_paths(plot, world, results,
@@ -119,6 +106,31 @@ def compare(
                    goal=g, title=f"{Path(map_path).name}: query 1 of {len(queries)}, cells of "
                                  f"the {name} lattice")
     return rows
+
+
+def _row(world, name: str, per: list, build: float, compile_s: float, method: str,
+         neighbors: str) -> dict:
+    """One lattice's summary row over its per-query results ``per``."""
+    found = [r for r in per if r.found]
+    smoothed = [_smoothed_length(world, r) for r in found]
+    return {
+        "lattice": name,
+        "cell_volume": world.lattice.cell_volume,
+        "neighbors": neighbors,
+        "method": method,
+        "queries": len(per),
+        "found": len(found) == len(per),
+        "n_found": len(found),
+        "length": float(sum(r.length for r in found)) if found else math.inf,
+        "length_smoothed": float(sum(smoothed)) if found else math.inf,
+        "cell_checks": int(sum(r.cell_checks for r in per)),
+        "expansions": int(sum(r.expansions for r in per)),
+        "seconds": float(sum(r.seconds for r in per)),
+        "build_seconds": build,
+        "compile_seconds": compile_s,
+        "blocked_cells": int(world.n_blocked),
+        "unknown_cells": int(sum(r.unknown_cells or 0 for r in found)),
+    }
 
 
 SCENARIO_QUERIES = 5  # of a MovingAI map's .3dscen file: its first ones, as in the file

@@ -50,6 +50,7 @@ from planner.analysis.style import LATTICE_COLORS
 from planner.errors import PlannerError
 from planner.fsutil import atomic_path, write_text_atomic
 from planner.lattice import Lattice
+from planner.progress import Progress
 
 DATASETS = {
     "octomap_scan": "octomap/scan.dat.bz2",
@@ -154,17 +155,20 @@ def fig3(out: Path, plt) -> list[dict]:
 def fig4(out: Path, plt, n: int, seed: int) -> tuple[list[dict], list[dict]]:
     kinds = ("face", "full", "paper")
     stats, dists = [], {}
-    for name in NAMED:
-        lat = Lattice.named(name, 1.0)
-        dd = distance_distributions(lat, n, seed=seed, kinds=kinds)
-        dists[name] = dd
-        for key, d in dd.items():
-            offs = None if key == "cell" else adjacency_offsets(lat, key)
-            lo, hi = exact_extent(lat, offs)
-            stats.append({"lattice": name, "set": key,
-                          "n_cells": 1 if offs is None else len(offs),
-                          **distribution_stats(d), "exact_min": lo, "exact_max": hi,
-                          "exact_range": hi - lo})
+    with Progress(len(NAMED), "lattices", label="Fig. 4") as bar:
+        for name in NAMED:
+            bar.step(0)
+            lat = Lattice.named(name, 1.0)
+            dd = distance_distributions(lat, n, seed=seed, kinds=kinds)
+            dists[name] = dd
+            for key, d in dd.items():
+                offs = None if key == "cell" else adjacency_offsets(lat, key)
+                lo, hi = exact_extent(lat, offs)
+                stats.append({"lattice": name, "set": key,
+                              "n_cells": 1 if offs is None else len(offs),
+                              **distribution_stats(d), "exact_min": lo, "exact_max": hi,
+                              "exact_range": hi - lo})
+            bar.step()
     write_csv(out / "fig4_distance_stats.csv", stats)
 
     by = {(s["lattice"], s["set"]): s for s in stats}
@@ -246,23 +250,27 @@ def rotation_experiment(out: Path, scans: dict[str, np.ndarray], volumes: Sequen
     rots = random_rotations(k, seed)
     skipped = 0
     t0 = time.perf_counter()
-    for ds, pts in scans.items():
-        for vol in volumes:
-            lats = [Lattice.named(name, vol) for name in NAMED]
-            for i, rot in enumerate(rots):
-                key = (ds, float(vol), i, seed, len(pts))
-                if key in done:
-                    skipped += 1
-                    continue
-                p = pts @ rot.T
-                for lat in lats:
-                    m = quantization_metrics(lat, p)
-                    rows.append({"dataset": ds, "cell_volume": float(vol), "rotation": i,
-                                 "seed": seed, "n_points": len(pts), "lattice": lat.name,
-                                 "distortion": m["distortion"],
-                                 "mse_per_dim": m["mse_per_dim"],
-                                 "voxel_count": m["voxel_count"]})
-                write_csv(path, rows, ROT_FIELDS)
+    todo = sum((ds, float(v), i, seed, len(p)) not in done
+               for ds, p in scans.items() for v in volumes for i in range(len(rots)))
+    with Progress(todo, "rotations", label="Fig. 5") as bar:
+        for ds, pts in scans.items():
+            for vol in volumes:
+                lats = [Lattice.named(name, vol) for name in NAMED]
+                for i, rot in enumerate(rots):
+                    key = (ds, float(vol), i, seed, len(pts))
+                    if key in done:
+                        skipped += 1
+                        continue
+                    p = pts @ rot.T
+                    for lat in lats:
+                        m = quantization_metrics(lat, p)
+                        rows.append({"dataset": ds, "cell_volume": float(vol), "rotation": i,
+                                     "seed": seed, "n_points": len(pts), "lattice": lat.name,
+                                     "distortion": m["distortion"],
+                                     "mse_per_dim": m["mse_per_dim"],
+                                     "voxel_count": m["voxel_count"]})
+                    write_csv(path, rows, ROT_FIELDS)
+                    bar.step()
     if skipped:
         print(f"  resumed: {skipped} (dataset, volume, rotation) runs already in {path.name}")
     print(f"  rotation experiment: {time.perf_counter() - t0:.1f} s")
@@ -305,10 +313,12 @@ def fig5(out: Path, plt, rows: list[dict], scans: dict[str, np.ndarray],
 def table1_protocol(out: Path, scans: dict[str, np.ndarray], cell_volume: float) -> list[dict]:
     """The paper's Table I protocol on every scan: no rotation, one cell volume."""
     rows = []
-    for ds, pts in scans.items():
-        if ds == UNIFORM:
-            continue
-        rows += [{"dataset": ds, **r} for r in table1(pts, cell_volume)]
+    real = [ds for ds in scans if ds != UNIFORM]
+    with Progress(len(real), "scans", label="Table I") as bar:
+        for ds in real:
+            bar.step(0)
+            rows += [{"dataset": ds, **r} for r in table1(scans[ds], cell_volume)]
+            bar.step()
     write_csv(out / "table1.csv", rows)
     write_text_atomic(out / "table1.md", table1_markdown(rows, cell_volume) + "\n")
     return rows

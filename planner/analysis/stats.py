@@ -1,4 +1,5 @@
-"""Paired statistics for "lattice X vs cubic": median ratio, bootstrap interval, Wilcoxon test.
+"""Paired statistics for "lattice X vs cubic": median ratio, BCa bootstrap interval
+(:func:`scipy.stats.bootstrap`), Wilcoxon test.
 
 Every comparison between lattices in the reports and the README goes through
 :func:`paired_ratio`, so that a claim always carries its interval and its test, and
@@ -24,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["PairedRatio", "paired_ratio", "describe", "format_p"]
+__all__ = ["PairedRatio", "paired_ratio", "median_interval", "describe", "format_p"]
 
 
 @dataclass(frozen=True)
@@ -38,7 +39,11 @@ class PairedRatio:
     median : float
         Median of the per-query ratios.
     low, high : float
-        Bootstrap percentile interval of the median (``level``, default 95%).
+        Bootstrap interval of the median (``level``, default 95%): bias-corrected and
+        accelerated (BCa) over resampled queries.  When every ratio is the same, both equal
+        the median; with fewer than 3 pairs they are the smallest and largest ratio (the
+        range every resample's median falls in); when BCa is undefined (the resampled
+        medians barely vary) they are the resamples' percentiles.
     p : float
         Two-sided Wilcoxon signed-rank p-value of ``log(x_i / y_i)`` against 0 (NaN when
         fewer than 2 pairs differ).
@@ -64,7 +69,10 @@ class PairedRatio:
 
 def paired_ratio(x, y, *, n_boot: int = 5000, level: float = 0.95,
                  seed: int = 0) -> PairedRatio:
-    """Median of the paired ratios ``x / y`` with a bootstrap interval and a Wilcoxon test.
+    """Median of the paired ratios ``x / y`` with a BCa bootstrap interval and a Wilcoxon
+    test.
+
+    The pairs stay pairs: the queries are resampled, each with its own ratio.
 
     Parameters
     ----------
@@ -75,7 +83,7 @@ def paired_ratio(x, y, *, n_boot: int = 5000, level: float = 0.95,
     n_boot : int
         Bootstrap resamples of the pairs.
     level : float
-        Confidence level of the percentile interval.
+        Confidence level of the interval.
     seed : int
         Seed of the resampling, so a report is reproducible.
 
@@ -95,16 +103,43 @@ def paired_ratio(x, y, *, n_boot: int = 5000, level: float = 0.95,
     if n == 0:
         return PairedRatio(0, math.nan, math.nan, math.nan, math.nan, level)
     med = float(np.median(r))
-    rng = np.random.default_rng(seed)
-    boots = np.median(r[rng.integers(0, n, size=(n_boot, n))], axis=1)
-    alpha = (1.0 - level) / 2.0
-    low, high = (float(v) for v in np.quantile(boots, [alpha, 1.0 - alpha]))
+    low, high = median_interval(r, n_boot=n_boot, level=level, seed=seed)
     logr = np.log(r)
     if np.count_nonzero(np.abs(logr) > 1e-12) < 2:
         p = math.nan if n < 2 else 1.0
     else:
         p = float(wilcoxon(logr, zero_method="zsplit").pvalue)
     return PairedRatio(n, med, low, high, p, level)
+
+
+def median_interval(r: np.ndarray, *, n_boot: int = 5000, level: float = 0.95,
+                    seed: int = 0) -> tuple[float, float]:
+    """BCa bootstrap interval of the median of ``r`` (shape (N,), N >= 1, finite).
+
+    Degenerate samples get a definite answer, never NaN or a warning: all equal (or N = 1),
+    the median itself; N = 2, the two values; a BCa interval that is undefined because the
+    resampled medians (nearly) never differ from the sample's, their percentile interval.
+    """
+    import warnings
+
+    from scipy.stats import bootstrap
+
+    r = np.asarray(r, dtype=float).ravel()
+    if r.size == 1 or np.all(r == r[0]):
+        return float(r[0]), float(r[0])
+    if r.size < 3:
+        return float(r.min()), float(r.max())
+    with warnings.catch_warnings():  # the degenerate cases are handled below
+        warnings.simplefilter("ignore")
+        res = bootstrap((r,), np.median, n_resamples=n_boot, confidence_level=level,
+                        method="BCa", vectorized=True, axis=-1, batch=1000,
+                        rng=np.random.default_rng(seed))
+    low, high = float(res.confidence_interval.low), float(res.confidence_interval.high)
+    if not (math.isfinite(low) and math.isfinite(high)):
+        alpha = (1.0 - level) / 2.0
+        low, high = (float(v) for v in np.quantile(res.bootstrap_distribution,
+                                                   [alpha, 1.0 - alpha]))
+    return low, high
 
 
 def format_p(p: float) -> str:

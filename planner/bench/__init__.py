@@ -3,8 +3,10 @@
 Modules: ``suite`` (TOML definitions -> runs), ``rotations`` (the random rotations of the
 paper's fairness rule), ``worlds`` (the World of a rotated map, cached for the workers),
 ``queries`` (start/goal pairs valid for every lattice, in observed free space), ``metrics``
-(clearance against the raw obstacles), ``runner`` (local processes or Dask, append-only
-results, resume), ``paired`` (lattice vs cubic per query: intervals, tests, generated
+(clearance against the raw obstacles), ``tasks`` (a suite expanded into batches of
+queries), ``task`` (one batch run in a worker), ``rows`` (the append-only results file),
+``runner`` (local processes or Dask, resume), ``stopping`` (SIGINT / SIGTERM), ``host``
+(the machine a row ran on), ``paired`` (lattice vs cubic per query: intervals, tests, generated
 sentences), ``summary`` (tables, box plots, report), ``figures`` (trade-off curves),
 ``session`` (one ``planner bench`` run).
 """

@@ -30,6 +30,7 @@ import time
 
 import numpy as np
 
+from planner.bench.host import worker_host
 from planner.bench.rotations import IDENTITY_XYZW
 from planner.errors import PlannerError
 
@@ -82,7 +83,7 @@ def explore_rows(task: dict) -> list[dict]:
     for q in task["queries"]:
         base = {k: task[k] for k in ("suite", "map", "cell_volume", "radius", "lattice",
                                      "neighbors", "method", "seed")}
-        base.update(commit=row_commit(), rotation=task.get("rotation", 0),
+        base.update(commit=row_commit(), **worker_host(), rotation=task.get("rotation", 0),
                     quaternion_xyzw=list(task.get("quaternion_xyzw", IDENTITY_XYZW)),
                     query=q["id"], start=q["start"], goal=q["goal"],
                     optimal_cost=q.get("optimal_cost"), length=None, length_smoothed=None,

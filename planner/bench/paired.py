@@ -168,7 +168,7 @@ def headline(rows: list[dict]) -> str:
     return "\n".join([
         f"{n_q} queries over {maps} ({len(rots)} rotation(s) per map). Ratios are medians "
         "of per-query ratios against cubic with the same neighbours and method, on the queries "
-        "both solved, with a bootstrap 95% interval and a Wilcoxon signed-rank p-value; "
+        "both solved, with a BCa bootstrap 95% interval and a Wilcoxon signed-rank p-value; "
         "success compares the queries only one of the two solved (exact binomial test).", "",
         table, "", *prose])
 

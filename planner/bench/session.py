@@ -16,8 +16,11 @@ import sys
 from collections.abc import Iterator
 from pathlib import Path
 
+from planner.bench import rows as rowfile
 from planner.bench import runner, summary
+from planner.bench.stopping import Interrupted
 from planner.bench.suite import Suite, SuiteError, load_suite
+from planner.bench.tasks import plan_tasks
 from planner.errors import PlannerError
 from planner.export.arena import write_arena_db
 from planner.fsutil import write_text_atomic
@@ -110,10 +113,10 @@ def run_suite(name: str, *, out: str | None = None, jobs: int = 1,
             except ValueError:
                 saved = None  # a damaged record: sample again
         try:
-            tasks, record = runner.plan_tasks(suite, log=log, saved=saved,
-                                              world_cache=str(folder / "worlds"),
-                                              jobs=1 if scheduler else jobs)
-        except runner.Interrupted as exc:  # while building worlds: nothing run yet
+            tasks, record = plan_tasks(suite, log=log, saved=saved,
+                                       world_cache=str(folder / "worlds"),
+                                       jobs=1 if scheduler else jobs, progress=progress)
+        except Interrupted as exc:  # while building worlds: nothing run yet
             print(f"\nplanner bench: {exc} while building the worlds; built ones are kept "
                   f"in {folder / 'worlds'} for --resume", file=sys.stderr)
             return exc.exit_code
@@ -121,19 +124,19 @@ def run_suite(name: str, *, out: str | None = None, jobs: int = 1,
         results = folder / "results.jsonl"
         interrupted = None
         if report_only:
-            rows = runner.read_rows(results)
+            rows = rowfile.read_rows(results)
             if not rows:
                 raise PlannerError(f"{results}: no finished runs to report")
         else:
             try:
                 rows = runner.run(tasks, results, jobs=jobs, scheduler=scheduler,
                                   resume=resume, progress=progress)
-            except runner.Interrupted as exc:
+            except Interrupted as exc:
                 interrupted = exc
-                rows = runner.read_rows(results)
-        rows = runner.unique_rows(rows)
-        wanted = {runner.row_key({**t, "query": q["id"]}) for t in tasks for q in t["queries"]}
-        missing = len(wanted - {runner.row_key(r) for r in rows})
+                rows = rowfile.read_rows(results)
+        rows = rowfile.unique_rows(rows)
+        wanted = {rowfile.row_key({**t, "query": q["id"]}) for t in tasks for q in t["queries"]}
+        missing = len(wanted - {rowfile.row_key(r) for r in rows})
         summ = summary.summarize(rows) if rows else []
         summary.write_csv(folder / "summary.csv", summ)
         write_arena_db(folder / "planner_arena.db", rows, suite=suite.name)  # Planner Arena

@@ -14,7 +14,7 @@ import numpy as np
 from planner.analysis.style import LATTICE_COLORS, OTHER_COLOR
 from planner.analysis.tables import format_table
 from planner.bench.paired import wilson_interval
-from planner.bench.runner import unique_rows
+from planner.bench.rows import unique_rows
 from planner.fsutil import atomic_path, write_text_atomic
 from planner.lattice import NAMED_LATTICES
 
@@ -232,7 +232,7 @@ def write_report(out_dir: Path, suite, rows: list[dict], summary: list[dict], re
     lines += [f"Rotations: `{rot}`, {len({r.get('rotation', 0) for r in rows})} per map "
               "(the lattice turned by R^T in the map's frame, i.e. the map by R; the same "
               "sample for every lattice, neighbour set and method).", ""]
-    lines += ["## Lattice vs cubic (paired per query, 95% bootstrap CI, Wilcoxon p)", "",
+    lines += ["## Lattice vs cubic (paired per query, 95% BCa bootstrap CI, Wilcoxon p)", "",
               paired.headline(rows), "",
               "## How much the answer moves with rotation", "",
               paired.rotation_spread(rows), "",

@@ -167,6 +167,7 @@ def explore(
     resolution: float = 3.0,
     neighbors: str = "full",
     max_steps: int = 100_000,
+    progress: bool = False,
 ) -> ExploreResult:
     """Explore from ``start`` to ``goal`` (points, m) in a map the robot does not know.
 
@@ -192,12 +193,17 @@ def explore(
         Move set of both searches.
     max_steps : int
         Give up (status ``"budget"``) after this many moves.
+    progress : bool
+        Show on stderr the moves made of those made plus those left on the current plan,
+        with an ETA (:class:`planner.progress.Progress`; the estimate grows when a replan
+        finds a longer way).
 
     Returns
     -------
     ExploreResult
     """
     from planner import io
+    from planner.progress import Progress
     from planner.search import search
     from planner.search.dstar.lite import DStarLite
     from planner.voxels.from_map import inflated_obstacles
@@ -243,66 +249,71 @@ def explore(
     traj = [cur.copy()]
     status, distance, contacts, mismatches, path, at = "budget", 0.0, 0, 0, None, 0
     sense_secs = 0.0
-    for _step in range(max_steps + 1):
-        t0 = time.perf_counter()
-        new = sensor.scan(cur, _step)
-        changed = np.zeros((0, 3), np.int64)
-        if len(new):
-            seen = io.Obstacles(
-                points=obst.points[new] if len(obst.points) else np.zeros((0, 3)),
-                boxes=obst.boxes[new] if boxes else np.zeros((0, 3)),
-                box_size=obst.box_size, box_sizes=obst.box_sizes[new] if boxes else None,
-                bounds=None, resolution=None, source=obst.source)
-            cells = inflated_obstacles(seen, lat, radius).indices
-            changed = known.set_cells(cells, True)
-        sense_secs += time.perf_counter() - t0
-        if path is None or len(changed):
-            # Whichever search runs first after the map update finds its code and data
-            # out of cache (tens of us): the order alternates, so each pays it on half
-            # the replans.
-            a_first = len(rec["ds"]) % 2 == 1
-            if a_first:
-                a = _scratch_astar(search, known, cur, gcell, neighbors)
+    bar = Progress(1, "moves", label=f"exploring on {lat.name or 'custom'}",
+                   enabled=progress)
+    with bar:  # ends the live line also when a search raises
+        for _step in range(max_steps + 1):
             t0 = time.perf_counter()
-            dl.update(changed, blocked=True)
-            r = dl.plan()
-            rec["dw"].append(time.perf_counter() - t0)
-            d_secs = r.seconds
-            if not a_first:
-                a = _scratch_astar(search, known, cur, gcell, neighbors)
-            rec["changed"].append(len(changed))
-            rec["step"].append(_step)
-            paths.append(lat.to_world(r.cells) if len(r.cells) else np.zeros((0, 3)))
-            rec["ds"].append(d_secs)
-            rec["dc"].append(r.cell_checks)
-            rec["de"].append(r.expansions)
-            rec["dcost"].append(r.cost)
-            for k, v in zip(("as", "aw", "ac", "ae", "acost"), a, strict=True):
-                rec[k].append(v)
-            if not _same(r.cost, a[4]):
-                mismatches += 1
-            if r.status == "blocked":
-                status = "stuck"
+            new = sensor.scan(cur, _step)
+            changed = np.zeros((0, 3), np.int64)
+            if len(new):
+                seen = io.Obstacles(
+                    points=obst.points[new] if len(obst.points) else np.zeros((0, 3)),
+                    boxes=obst.boxes[new] if boxes else np.zeros((0, 3)),
+                    box_size=obst.box_size, box_sizes=obst.box_sizes[new] if boxes else None,
+                    bounds=None, resolution=None, source=obst.source)
+                cells = inflated_obstacles(seen, lat, radius).indices
+                changed = known.set_cells(cells, True)
+            sense_secs += time.perf_counter() - t0
+            if path is None or len(changed):
+                # Whichever search runs first after the map update finds its code and data
+                # out of cache (tens of us): the order alternates, so each pays it on half
+                # the replans.
+                a_first = len(rec["ds"]) % 2 == 1
+                if a_first:
+                    a = _scratch_astar(search, known, cur, gcell, neighbors)
+                t0 = time.perf_counter()
+                dl.update(changed, blocked=True)
+                r = dl.plan()
+                rec["dw"].append(time.perf_counter() - t0)
+                d_secs = r.seconds
+                if not a_first:
+                    a = _scratch_astar(search, known, cur, gcell, neighbors)
+                rec["changed"].append(len(changed))
+                rec["step"].append(_step)
+                paths.append(lat.to_world(r.cells) if len(r.cells) else np.zeros((0, 3)))
+                rec["ds"].append(d_secs)
+                rec["dc"].append(r.cell_checks)
+                rec["de"].append(r.expansions)
+                rec["dcost"].append(r.cost)
+                for k, v in zip(("as", "aw", "ac", "ae", "acost"), a, strict=True):
+                    rec[k].append(v)
+                if not _same(r.cost, a[4]):
+                    mismatches += 1
+                if r.status == "blocked":
+                    status = "stuck"
+                    break
+                if not r.found:
+                    status = "unreachable"
+                    break
+                path, at = r.cells, 0
+                bar.set_total(len(traj) - 1 + len(path) - 1)
+            if np.array_equal(cur, gcell):
+                status = "reached"
                 break
-            if not r.found:
-                status = "unreachable"
+            if _step == max_steps:
                 break
-            path, at = r.cells, 0
-        if np.array_equal(cur, gcell):
-            status = "reached"
-            break
-        if _step == max_steps:
-            break
-        nxt = path[at + 1]
-        a_p, b_p = lat.to_world(np.stack([cur, nxt]))
-        if not known.segment_free(a_p, b_p):  # cannot happen: the plan is on this map
-            raise PlanError(f"internal: planned move {cur} -> {nxt} is blocked")
-        if not truth.segment_free(a_p, b_p):
-            contacts += 1
-        distance += float(np.linalg.norm(b_p - a_p))
-        cur, at = nxt.copy(), at + 1
-        traj.append(cur.copy())
-        dl.move_start(cur)
+            nxt = path[at + 1]
+            a_p, b_p = lat.to_world(np.stack([cur, nxt]))
+            if not known.segment_free(a_p, b_p):  # cannot happen: the plan is on this map
+                raise PlanError(f"internal: planned move {cur} -> {nxt} is blocked")
+            if not truth.segment_free(a_p, b_p):
+                contacts += 1
+            distance += float(np.linalg.norm(b_p - a_p))
+            cur, at = nxt.copy(), at + 1
+            traj.append(cur.copy())
+            dl.move_start(cur)
+            bar.step()
     arr = {k: np.array(v) for k, v in rec.items()}
     return ExploreResult(
         lattice=lat.name or "custom", status=status, distance=distance,

@@ -1,6 +1,7 @@
 """ROS map_server occupancy maps: a ``.yaml`` description and its image (PGM read here).
 
-The YAML keys are ``image``, ``resolution`` (m per pixel), ``origin`` ``[x, y, yaw]`` (the
+The description is any YAML document (read with PyYAML, block or flow style) whose keys are
+``image``, ``resolution`` (m per pixel), ``origin`` ``[x, y, yaw]`` (the
 lower-left pixel's corner, m and rad), ``occupied_thresh``, ``free_thresh``, ``negate`` and
 ``mode`` (``trinary``, ``scale`` or ``raw``).  As in map_server, a pixel's occupancy is
 ``(255 - v) / 255`` (``v / 255`` when negated); above ``occupied_thresh`` it is occupied,
@@ -26,17 +27,17 @@ _MODES = ("trinary", "scale", "raw")
 
 def read_rosmap(p: Path) -> Obstacles:
     """A map_server ``.yaml`` and its image as a 2D :class:`Obstacles` (see module doc)."""
-    meta = parse_flat_yaml(decode_text(read_bytes(p), p.name), p.name)
-    image = _get(meta, "image", str, p.name)
-    res = _get(meta, "resolution", float, p.name)
-    origin = _get(meta, "origin", list, p.name)
-    occ_t = _get(meta, "occupied_thresh", float, p.name, 0.65)
-    free_t = _get(meta, "free_thresh", float, p.name, 0.196)
-    negate = _get(meta, "negate", int, p.name, 0)
-    mode = _get(meta, "mode", str, p.name, "trinary")
+    meta = load_map_yaml(decode_text(read_bytes(p), p.name), p.name)
+    image = _get(meta, "image", "text", p.name)
+    res = _get(meta, "resolution", "number", p.name)
+    origin = _get(meta, "origin", "numbers", p.name)
+    occ_t = _get(meta, "occupied_thresh", "number", p.name, 0.65)
+    free_t = _get(meta, "free_thresh", "number", p.name, 0.196)
+    negate = _get(meta, "negate", "flag", p.name, False)
+    mode = _get(meta, "mode", "text", p.name, "trinary")
     if not (math.isfinite(res) and 1e-6 <= res <= 1e4):
         raise MapError(f"{p.name}: 'resolution' must be between 1e-6 and 1e4 m, got {res}")
-    if len(origin) != 3 or not all(isinstance(v, float) and math.isfinite(v) for v in origin):
+    if len(origin) != 3 or not all(math.isfinite(v) for v in origin):
         raise MapError(f"{p.name}: 'origin' must be three finite numbers [x, y, yaw]")
     if abs(origin[2]) > 1e-9:
         raise MapError(f"{p.name}: rotated maps (origin yaw {origin[2]:g}) are not supported")
@@ -66,50 +67,69 @@ def read_rosmap(p: Path) -> Obstacles:
                      dim=2)
 
 
-def parse_flat_yaml(text: str, name: str) -> dict:
-    """The flat ``key: value`` YAML map_server writes: numbers, strings, ``[a, b]`` lists."""
-    out: dict = {}
-    for lineno, raw in enumerate(text.splitlines(), start=1):
-        line = raw.split("#", 1)[0].strip()
-        if not line:
-            continue
-        key, sep, val = line.partition(":")
-        if not sep or not key.strip():
-            raise MapError(f"{name}:{lineno}: expected 'key: value', got {line[:40]!r}")
-        val = val.strip()
-        if val.startswith("["):
-            if not val.endswith("]"):
-                raise MapError(f"{name}:{lineno}: unterminated list")
-            out[key.strip()] = [_scalar(t.strip()) for t in val[1:-1].split(",") if t.strip()]
-        else:
-            out[key.strip()] = _scalar(val)
-    return out
+def load_map_yaml(text: str, name: str) -> dict:
+    """The map description as a dict: any valid YAML (block or flow style) whose top level
+    is a mapping.
 
+    Raises
+    ------
+    MapError
+        Not YAML, or not a mapping (one line, with the line number when YAML gives one).
+    """
+    import yaml
 
-def _scalar(tok: str):
-    if len(tok) >= 2 and tok[0] == tok[-1] and tok[0] in "'\"":
-        return tok[1:-1]
-    if tok.lower() in ("true", "false"):
-        return int(tok.lower() == "true")
     try:
-        return float(tok)
-    except ValueError:
-        return tok
+        meta = yaml.safe_load(text)
+    except RecursionError:
+        raise MapError(f"{name}: not valid YAML (nested too deeply)") from None
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f"{name}:{mark.line + 1}" if mark is not None else name
+        what = getattr(exc, "problem", None) or type(exc).__name__
+        raise MapError(f"{where}: not valid YAML ({' '.join(str(what).split())})") from None
+    if not isinstance(meta, dict):
+        raise MapError(f"{name}: a map description is a YAML mapping of 'key: value', got "
+                       f"{type(meta).__name__}")
+    return meta
 
 
-def _get(meta: dict, key: str, kind: type, name: str, default=None):
+def _number(val) -> float | None:
+    """A YAML number, or a scalar map_server reads as one (PyYAML's YAML 1.1 keeps ``1e-3``
+    a string; yaml-cpp converts it); None otherwise."""
+    if isinstance(val, bool):
+        return None
+    if isinstance(val, int | float):
+        return float(val)
+    if isinstance(val, str):
+        try:
+            return float(val)
+        except ValueError:
+            return None
+    return None
+
+
+def _get(meta: dict, key: str, kind: str, name: str, default=None):
+    """``meta[key]`` as ``kind``: "text", "number", "numbers" (a list) or "flag" (an integer
+    or true/false, as map_server's ``negate``)."""
     if key not in meta:
         if default is None:
             raise MapError(f"{name}: map description lacks '{key}'")
         return default
     val = meta[key]
-    if kind is int and isinstance(val, float) and val in (0.0, 1.0):
-        return int(val)
-    if kind is float and isinstance(val, float):
+    if kind == "text" and isinstance(val, str):
         return val
-    if not isinstance(val, kind):
-        raise MapError(f"{name}: '{key}' must be a {kind.__name__}, got {val!r:.40}")
-    return val
+    if kind == "number" and (v := _number(val)) is not None:
+        return v
+    if kind == "numbers" and isinstance(val, list):
+        nums = [_number(v) for v in val]
+        if None not in nums:
+            return nums
+        raise MapError(f"{name}: '{key}' must be a list of numbers, got {val!r:.40}")
+    if kind == "flag" and isinstance(val, int):  # bool is an int; non-zero negates
+        return bool(val)
+    wanted = {"text": "string", "number": "number", "numbers": "list of numbers",
+              "flag": "integer or true/false"}[kind]
+    raise MapError(f"{name}: '{key}' must be a {wanted}, got {val!r:.40}")
 
 
 def read_image(p: Path) -> tuple[np.ndarray, int]:

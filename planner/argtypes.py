@@ -1,0 +1,142 @@
+"""Argument types of the ``planner`` command line: each parses one option's text into a value
+or raises :class:`argparse.ArgumentTypeError` with a one-line message."""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+import numpy as np
+
+from planner.errors import PlannerError
+from planner.lattice import NAMED_LATTICES
+from planner.lattice.paper import NAMED_LATTICES_2D
+
+
+def numbers(text: str, n: int, what: str) -> np.ndarray:
+    """``n`` finite comma-separated numbers, shape (n,); ``what`` names them in the error."""
+    try:
+        v = np.array([float(t) for t in text.replace(" ", "").split(",")])
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}") from None
+    if v.shape != (n,) or not np.isfinite(v).all():
+        raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}")
+    return v
+
+
+def vec3(text: str) -> np.ndarray:
+    """A point x,y,z in metres, shape (3,); x,y (shape (2,)) for a 2D map."""
+    if text.count(",") == 1:  # x,y on a 2D map (the world checks the map is 2D)
+        return numbers(text, 2, "three finite numbers x,y,z (x,y on a 2D map)")
+    return numbers(text, 3, "three finite numbers x,y,z")
+
+
+def bounds(text: str) -> np.ndarray:
+    """A box xmin,ymin,zmin,xmax,ymax,zmax in metres, shape (2, 3)."""
+    return numbers(text, 6, "six numbers xmin,ymin,zmin,xmax,ymax,zmax").reshape(2, 3)
+
+
+def positive(text: str) -> float:
+    """A finite number > 0."""
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not v > 0 or v == math.inf:
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
+    return v
+
+
+def nonneg(text: str) -> float:
+    """A finite number >= 0."""
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not v >= 0 or v == math.inf:
+        raise argparse.ArgumentTypeError(f"expected a non-negative number, got {text!r}")
+    return v
+
+
+def int_range(lo: int, hi: int | None = None):
+    """A parser of integers in ``lo..hi`` (``hi`` None: no upper limit)."""
+    def parse(text: str) -> int:
+        try:
+            v = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+        if v < lo or (hi is not None and v > hi):
+            span = f"at least {lo}" if hi is None else f"in {lo}..{hi}"
+            raise argparse.ArgumentTypeError(f"expected an integer {span}, got {text!r}")
+        return v
+    return parse
+
+
+def size(text: str) -> int:
+    """A byte count such as ``4G`` or ``512M``."""
+    from planner.budget import parse_size
+
+    try:
+        return parse_size(text)
+    except PlannerError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def map_file(text: str) -> str:
+    """A map file, or a bundled map by name (``office``) from any folder."""
+    from planner.maps import resolve
+
+    return str(resolve(text))
+
+
+def lattice_list(text: str) -> list[str]:
+    """Comma-separated lattice names."""
+    names = [s.strip().lower() for s in text.split(",") if s.strip()]
+    if not names:
+        raise argparse.ArgumentTypeError(f"expected lattice names from {', '.join(NAMED_LATTICES)}")
+    bad = [n for n in names if n not in NAMED_LATTICES + NAMED_LATTICES_2D]
+    if bad:
+        raise argparse.ArgumentTypeError(
+            f"unknown lattice {bad[0]!r}; expected names from {', '.join(NAMED_LATTICES)}")
+    return names
+
+
+def explore_lattices(text: str) -> list[str]:
+    """Comma-separated lattice names, or ``all``."""
+    return list(NAMED_LATTICES) if text.strip() == "all" else lattice_list(text)
+
+
+def fov(text: str) -> tuple[float, float]:
+    """A field of view ``h,v`` in degrees (0 < h <= 360, 0 <= v <= 90)."""
+    h, v = numbers(text, 2, "field of view")
+    if not (0 < h <= 360 and 0 <= v <= 90):
+        raise argparse.ArgumentTypeError(f"field of view must be 0<h<=360, 0<=v<=90 degrees, "
+                                         f"got {text!r}")
+    return float(h), float(v)
+
+
+def generator(text: str):
+    """A custom lattice: ``"a,b,c;d,e,f;g,h,i"`` (rows of G) or a ``.npy`` file."""
+    from planner.lattice import Lattice
+
+    if text.endswith(".npy"):
+        try:
+            g = np.load(text, allow_pickle=False)
+        except (OSError, ValueError) as exc:
+            raise argparse.ArgumentTypeError(f"{text}: cannot read a matrix: {exc}") from None
+    else:
+        rows = [r for r in text.split(";") if r.strip()]
+        try:
+            g = np.array([[float(t) for t in r.split(",")] for r in rows])
+        except ValueError:
+            raise argparse.ArgumentTypeError(
+                f"expected rows 'a,b,c;d,e,f;g,h,i', got {text!r}") from None
+    try:
+        return Lattice(g, name="custom")
+    except PlannerError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def pose6(text: str) -> np.ndarray:
+    """A pose x,y,z (m),roll,pitch,yaw (degrees), shape (6,)."""
+    return numbers(text, 6, "six numbers x,y,z,roll,pitch,yaw")

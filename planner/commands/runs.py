@@ -1,0 +1,22 @@
+"""``planner match`` (scan matching) and ``planner bench`` (a benchmark suite)."""
+
+from __future__ import annotations
+
+import argparse
+
+
+def match(a: argparse.Namespace) -> int:
+    """Match the source scan to the reference; print the 4x4 transform."""
+    from planner.match.cli_run import run_match
+
+    return run_match(a.source, a.reference, lattice=a.lattice, cell_volume=a.cell_volume,
+                     levels=a.levels, init=a.init, as_json=a.json)
+
+
+def bench(a: argparse.Namespace) -> int:
+    """Run a suite into ``a.out``; 130 / 143 when stopped by SIGINT / SIGTERM."""
+    from planner.bench.session import run_suite
+
+    return run_suite(a.suite, out=a.out, jobs=a.jobs, scheduler=a.scheduler, resume=a.resume,
+                     progress=not a.no_progress, report_only=a.report_only,
+                     force=a.force)

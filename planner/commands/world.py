@@ -1,0 +1,42 @@
+"""``planner world`` (build and save a world) and ``planner view`` (an interactive view)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from planner.commands.worlds import build
+
+
+def world(a: argparse.Namespace) -> int:
+    """Build the world once and write it (.npz), its cells (.ply) or an OctoMap tree (.bt)."""
+    from planner.world.file import save_world
+
+    suffix = Path(a.out).suffix.lower()
+    if suffix == ".bt":  # refused before the (long) build when the lattice cannot be a tree
+        from planner.export.octomap import check_cubic_name
+
+        check_cubic_name(a.generator if a.generator is not None else a.lattice, a.map)
+    w, label = build(a)
+    if suffix == ".npz":
+        save_world(w, a.out)
+    else:
+        from planner.export import write_world_cells
+
+        write_world_cells(a.out, w)
+    print(f"{a.out}: {label} world, {w.n_blocked} blocked and {w.n_unknown} unknown "
+          f"cells, radius {w.radius:g} m, unknown space {w.unknown_policy}, built in "
+          f"{w.build_seconds:.2f} s")
+    return 0
+
+
+def view(a: argparse.Namespace) -> int:
+    """Write one self-contained .html view of the world and the given path files."""
+    from planner.view import read_path_file, write_view
+
+    paths = dict(read_path_file(p) for p in a.path)  # bad files refused before the build
+    w, label = build(a)
+    write_view(a.out, w, paths, max_cells=a.max_cells)
+    print(f"{a.out}: {label} world, {w.n_blocked} blocked and {w.n_unknown} unknown "
+          f"cells, {len(paths)} path(s)")
+    return 0
