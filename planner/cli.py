@@ -173,7 +173,8 @@ _OUTPUTS = {("plan", "out"): (".csv", ".json", ".tum"),
             ("view", "out"): (".html",), ("plan", "view"): (".html",),
             ("compare", "view"): (".html",), ("explore", "view"): (".html",),
             ("plan", "plot"): PLOT_SUFFIXES, ("compare", "plot"): PLOT_SUFFIXES,
-            ("explore", "plot"): (".png",), ("explore", "gif"): (".gif",)}
+            ("explore", "plot"): (".png",),
+            ("match-experiment", "plot"): PLOT_SUFFIXES, ("explore", "gif"): (".gif",)}
 
 
 def _check_output(option: str, text: str, suffixes: tuple[str, ...]) -> None:
@@ -361,6 +362,32 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--init", type=lambda t: _numbers(t, 6, "six numbers x,y,z,roll,pitch,yaw"),
                    default=None, help="initial pose x,y,z (m),roll,pitch,yaw (degrees)")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
+
+    p = sub.add_parser("match-experiment", help="the paper's Fig. 6: scan-matching errors "
+                       "per lattice and the ICP anchor from random initial errors")
+    p.add_argument("--data", default="../shared/data", help="data folder of the sources")
+    p.add_argument("--sources", default="velodyne,geb079,room",
+                   help="comma-separated: velodyne, geb079 (simulated), room (consistency)")
+    p.add_argument("--pair", nargs=3, action="append", metavar=("SOURCE", "REFERENCE", "T"),
+                   help="an extra pair: two point files and the 4x4 source -> reference "
+                        "transform (text); repeatable")
+    p.add_argument("--lattices", default=",".join(NAMED_LATTICES), help="comma-separated")
+    p.add_argument("--trials", type=_int_range(1), default=6,
+                   help="random initial errors (and rotations) per pair")
+    p.add_argument("--simulated-pairs", type=_int_range(1), default=1,
+                   help="simulated geb079 pairs per separation (0.25, 0.5, 1 m)")
+    p.add_argument("--cell-volume", type=_positive, default=0.001, help="finest cell, m^3")
+    p.add_argument("--levels", type=_int_range(1, 12), default=4, help="resolutions")
+    p.add_argument("--max-offset", type=_positive, default=0.5, help="initial error, m")
+    p.add_argument("--max-angle", type=_positive, default=10.0, help="initial error, deg")
+    p.add_argument("--seed", type=_int_range(0), default=0, help="seed of the shared draws")
+    p.add_argument("--out", default="results/fig6", help="output folder")
+    p.add_argument("--plot", default=None, help="box plot (.png, .pdf, .svg; default "
+                                                "OUT/fig6.png)")
+    p.add_argument("--no-icp", action="store_true", help="leave out the ICP anchor")
+    p.add_argument("--resume", action="store_true", help="keep finished rows, run the rest")
+    p.add_argument("--force", action="store_true", help="delete finished rows, start again")
+    p.add_argument("--no-progress", action="store_true", help="no progress on stderr")
 
     p = sub.add_parser("bench", help="run a benchmark suite (which lattice for my map?)")
     p.add_argument("suite", help="bundled suite name (quick, paper, full) or a TOML file")
@@ -621,6 +648,12 @@ def _cmd_match(a) -> int:
                      levels=a.levels, init=a.init, as_json=a.json)
 
 
+def _cmd_match_experiment(a) -> int:
+    from planner.match.cli_run import run_match_experiment
+
+    return run_match_experiment(a)
+
+
 def _cmd_bench(a) -> int:
     from planner.bench.session import run_suite
 
@@ -632,6 +665,7 @@ def _cmd_bench(a) -> int:
 _COMMANDS = {"lattices": _cmd_lattices, "stats": _cmd_stats, "plan": _cmd_plan,
              "compare": _cmd_compare, "world": _cmd_world,
              "explore": _cmd_explore, "match": _cmd_match, "view": _cmd_view,
+             "match-experiment": _cmd_match_experiment,
              "bench": _cmd_bench}
 
 
