@@ -43,7 +43,8 @@ def run_match_experiment(a) -> int:
     names = [s for s in (a.sources or "").split(",") if s]
     trial_methods(a.lattices.split(","), False)  # bad names refused before loading data
     pairs = load_sources(names, a.data, seed=a.seed,
-                         simulated_per_separation=a.simulated_pairs)
+                         simulated_per_separation=a.simulated_pairs,
+                         cell_volume=a.cell_volume, levels=a.levels)
     pairs += [user_pair(*p) for p in a.pair or []]
     if not pairs:
         raise PlannerError("no pairs: name --sources or give --pair SOURCE REFERENCE T.txt")
