@@ -47,6 +47,7 @@ def _run(out, pairs, trials, **kw):
                           max_angle=5.0, progress=False, **kw)
 
 
+@pytest.mark.slow
 def test_every_method_sees_the_same_draws_and_the_report_has_its_tables(tmp_path):
     pairs = [_pair("a", 1), _pair("loop", 3, kind="consistency")]
     rows = _run(tmp_path, pairs, trials=3)
