@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import sys
 
 import numpy as np
 
@@ -36,6 +37,7 @@ def run_match_experiment(a) -> int:
     ``a.pair`` triples, the trials (:func:`planner.match.experiment.run_experiment`), then
     the table and verdict on stdout and the outputs in ``a.out``. Returns 0."""
     from planner.errors import PlannerError
+    from planner.match import anchor
     from planner.match.experiment import run_experiment, trial_methods
     from planner.match.experiment_pairs import load_sources, user_pair
     from planner.match.experiment_report import format_report, write_outputs
@@ -48,6 +50,8 @@ def run_match_experiment(a) -> int:
     pairs += [user_pair(*p) for p in a.pair or []]
     if not pairs:
         raise PlannerError("no pairs: name --sources or give --pair SOURCE REFERENCE T.txt")
+    if not a.no_icp and not anchor.available():
+        print(f"planner: note: ICP left out, {anchor.EXTRA_MESSAGE}", file=sys.stderr)
     rows = run_experiment(pairs, a.out, lattices=a.lattices.split(","),
                           icp=False if a.no_icp else None, trials=a.trials,
                           cell_volume=a.cell_volume, levels=a.levels, seed=a.seed,
