@@ -218,6 +218,32 @@ def build_parser() -> argparse.ArgumentParser:
                    default=None, help="initial pose x,y,z (m),roll,pitch,yaw (degrees)")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
 
+    p = sub.add_parser("match-experiment", help="the paper's Fig. 6: scan-matching errors "
+                       "per lattice and the ICP anchor from random initial errors")
+    p.add_argument("--data", default="../shared/data", help="data folder of the sources")
+    p.add_argument("--sources", default="velodyne,geb079,room",
+                   help="comma-separated: velodyne, geb079 (simulated), room (consistency)")
+    p.add_argument("--pair", nargs=3, action="append", metavar=("SOURCE", "REFERENCE", "T"),
+                   help="an extra pair: two point files and the 4x4 source -> reference "
+                        "transform (text); repeatable")
+    p.add_argument("--lattices", default=",".join(NAMED_LATTICES), help="comma-separated")
+    p.add_argument("--trials", type=T.int_range(1), default=6,
+                   help="random initial errors (and rotations) per pair")
+    p.add_argument("--simulated-pairs", type=T.int_range(1), default=1,
+                   help="simulated geb079 pairs per separation (0.25, 0.5, 1 m)")
+    p.add_argument("--cell-volume", type=T.positive, default=0.001, help="finest cell, m^3")
+    p.add_argument("--levels", type=T.int_range(1, 12), default=4, help="resolutions")
+    p.add_argument("--max-offset", type=T.positive, default=0.5, help="initial error, m")
+    p.add_argument("--max-angle", type=T.positive, default=10.0, help="initial error, deg")
+    p.add_argument("--seed", type=T.int_range(0), default=0, help="seed of the shared draws")
+    p.add_argument("--out", default="results/fig6", help="output folder")
+    p.add_argument("--plot", default=None, help="box plot (.png, .pdf, .svg; default "
+                                                "OUT/fig6.png)")
+    p.add_argument("--no-icp", action="store_true", help="leave out the ICP anchor")
+    p.add_argument("--resume", action="store_true", help="keep finished rows, run the rest")
+    p.add_argument("--force", action="store_true", help="delete finished rows, start again")
+    p.add_argument("--no-progress", action="store_true", help="no progress on stderr")
+
     p = sub.add_parser("bench", help="run a benchmark suite (which lattice for my map?)")
     p.add_argument("suite", help="bundled suite name (quick, paper, full) or a TOML file")
     p.add_argument("--out", default=None, help="output folder (default: results/<suite>)")
@@ -270,7 +296,8 @@ def _hoist_global_options(argv: list[str]) -> list[str]:
 # -- dispatch: command -> "module:function" (imported only when the command runs) ---------
 _COMMANDS = {"lattices": "tables:lattices", "stats": "tables:stats", "plan": "plan:plan",
              "compare": "plan:compare", "world": "world:world", "view": "world:view",
-             "explore": "explore:explore", "match": "runs:match", "bench": "runs:bench"}
+             "explore": "explore:explore", "match": "runs:match",
+             "match-experiment": "runs:match_experiment", "bench": "runs:bench"}
 
 
 def _command(name: str):

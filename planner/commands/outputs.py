@@ -16,7 +16,8 @@ OUTPUTS = {("plan", "out"): (".csv", ".json", ".tum"),
            ("view", "out"): (".html",), ("plan", "view"): (".html",),
            ("compare", "view"): (".html",), ("explore", "view"): (".html",),
            ("plan", "plot"): PLOT_SUFFIXES, ("compare", "plot"): PLOT_SUFFIXES,
-           ("explore", "plot"): (".png",), ("explore", "gif"): (".gif",)}
+           ("explore", "plot"): (".png",), ("explore", "gif"): (".gif",),
+           ("match-experiment", "plot"): PLOT_SUFFIXES}
 
 
 def check_output(option: str, text: str, suffixes: tuple[str, ...]) -> None:

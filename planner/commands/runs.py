@@ -1,4 +1,4 @@
-"""``planner match`` (scan matching) and ``planner bench`` (a benchmark suite)."""
+"""``planner match``, ``planner match-experiment`` (scan matching), ``planner bench``."""
 
 from __future__ import annotations
 
@@ -11,6 +11,13 @@ def match(a: argparse.Namespace) -> int:
 
     return run_match(a.source, a.reference, lattice=a.lattice, cell_volume=a.cell_volume,
                      levels=a.levels, init=a.init, as_json=a.json)
+
+
+def match_experiment(a: argparse.Namespace) -> int:
+    """The paper's Fig. 6 (:mod:`planner.match.experiment`) into ``a.out``."""
+    from planner.match.cli_run import run_match_experiment
+
+    return run_match_experiment(a)
 
 
 def bench(a: argparse.Namespace) -> int:

@@ -208,34 +208,50 @@ def quantize_generic(x, b, binv, cand, cand_z, counts, t, out):  # pragma: no co
             out[i, m] = np.int64(np.rint(acc))
 
 
-@njit_cached(nogil=True)
-def quantize_generic3(x, b, binv, cand, cand_z, counts, t, out):  # pragma: no cover - compiled
-    """:func:`quantize_generic` unrolled for d = 3 (the hot case: MCC, user lattices)."""
+@njit_cached(inline="always")
+def candidate_norms3(cand):  # pragma: no cover - compiled
+    """(8, k) squared lengths of the candidate offsets ``cand`` (8, k, 3) of a 3D quantizer."""
     k = cand.shape[1]
     cn = np.empty((8, k), dtype=np.float64)
     for o in range(8):
         for j in range(k):
             cn[o, j] = cand[o, j, 0] ** 2 + cand[o, j, 1] ** 2 + cand[o, j, 2] ** 2
+    return cn
+
+
+@njit_cached(inline="always")
+def closest_point3(x0, x1, x2, b, binv, cand, cand_z, counts, t, cn):  # pragma: no cover
+    """Indices (three int64, in the user's generator) of the lattice point closest to
+    ``(x0, x1, x2)`` (metres): the body of :func:`quantize_generic3`, inlined into every
+    compiled caller; ``cn`` from :func:`candidate_norms3`."""
+    y0 = binv[0, 0] * x0 + binv[0, 1] * x1 + binv[0, 2] * x2
+    y1 = binv[1, 0] * x0 + binv[1, 1] * x1 + binv[1, 2] * x2
+    y2 = binv[2, 0] * x0 + binv[2, 1] * x1 + binv[2, 2] * x2
+    z0, z1, z2 = np.rint(y0), np.rint(y1), np.rint(y2)
+    o = (1 if y0 > z0 else 0) | (2 if y1 > z1 else 0) | (4 if y2 > z2 else 0)
+    r0 = 2.0 * (x0 - b[0, 0] * z0 - b[0, 1] * z1 - b[0, 2] * z2)
+    r1 = 2.0 * (x1 - b[1, 0] * z0 - b[1, 1] * z1 - b[1, 2] * z2)
+    r2 = 2.0 * (x2 - b[2, 0] * z0 - b[2, 1] * z1 - b[2, 2] * z2)
+    # |r - c|^2 = |r|^2 - 2 r.c + |c|^2: minimise the last two terms.
+    best = 0
+    best_v = np.inf
+    for j in range(counts[o]):
+        s = cn[o, j] - r0 * cand[o, j, 0] - r1 * cand[o, j, 1] - r2 * cand[o, j, 2]
+        if s < best_v:
+            best_v = s
+            best = j
+    w0 = z0 + cand_z[o, best, 0]
+    w1 = z1 + cand_z[o, best, 1]
+    w2 = z2 + cand_z[o, best, 2]
+    return (np.int64(np.rint(t[0, 0] * w0 + t[0, 1] * w1 + t[0, 2] * w2)),
+            np.int64(np.rint(t[1, 0] * w0 + t[1, 1] * w1 + t[1, 2] * w2)),
+            np.int64(np.rint(t[2, 0] * w0 + t[2, 1] * w1 + t[2, 2] * w2)))
+
+
+@njit_cached(nogil=True)
+def quantize_generic3(x, b, binv, cand, cand_z, counts, t, out):  # pragma: no cover - compiled
+    """:func:`quantize_generic` unrolled for d = 3 (the hot case: MCC, user lattices)."""
+    cn = candidate_norms3(cand)
     for i in range(x.shape[0]):
-        x0, x1, x2 = x[i, 0], x[i, 1], x[i, 2]
-        y0 = binv[0, 0] * x0 + binv[0, 1] * x1 + binv[0, 2] * x2
-        y1 = binv[1, 0] * x0 + binv[1, 1] * x1 + binv[1, 2] * x2
-        y2 = binv[2, 0] * x0 + binv[2, 1] * x1 + binv[2, 2] * x2
-        z0, z1, z2 = np.rint(y0), np.rint(y1), np.rint(y2)
-        o = (1 if y0 > z0 else 0) | (2 if y1 > z1 else 0) | (4 if y2 > z2 else 0)
-        r0 = 2.0 * (x0 - b[0, 0] * z0 - b[0, 1] * z1 - b[0, 2] * z2)
-        r1 = 2.0 * (x1 - b[1, 0] * z0 - b[1, 1] * z1 - b[1, 2] * z2)
-        r2 = 2.0 * (x2 - b[2, 0] * z0 - b[2, 1] * z1 - b[2, 2] * z2)
-        best = 0
-        best_v = np.inf
-        for j in range(counts[o]):
-            s = cn[o, j] - r0 * cand[o, j, 0] - r1 * cand[o, j, 1] - r2 * cand[o, j, 2]
-            if s < best_v:
-                best_v = s
-                best = j
-        w0 = z0 + cand_z[o, best, 0]
-        w1 = z1 + cand_z[o, best, 1]
-        w2 = z2 + cand_z[o, best, 2]
-        out[i, 0] = np.int64(np.rint(t[0, 0] * w0 + t[0, 1] * w1 + t[0, 2] * w2))
-        out[i, 1] = np.int64(np.rint(t[1, 0] * w0 + t[1, 1] * w1 + t[1, 2] * w2))
-        out[i, 2] = np.int64(np.rint(t[2, 0] * w0 + t[2, 1] * w1 + t[2, 2] * w2))
+        out[i, 0], out[i, 1], out[i, 2] = closest_point3(x[i, 0], x[i, 1], x[i, 2], b, binv,
+                                                         cand, cand_z, counts, t, cn)

@@ -2,20 +2,24 @@
 transform-quantize-lookup score of many poses, and ray casting through a voxel grid.
 
 The quantizer is the project's exact generic one (the tables of
-:meth:`planner.Lattice.quantizer`, the candidate test of ``quantize_generic3``), fused with
-the rigid transform and the lookup so that no (N, 3) temporary is made per pose, and the
-same code path serves every lattice (their match times compare on equal terms).
+:meth:`planner.Lattice.quantizer` and the inline kernel
+:func:`planner.lattice.quantize.closest_point3` that ``quantize_generic3`` runs per point),
+fused with the rigid transform and the lookup so that no (N, 3) temporary is made per
+pose, and the same code path serves every lattice (their match times compare on equal
+terms).
 """
 
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
 from planner._numba import njit_cached
+from planner.lattice.quantize import candidate_norms3, closest_point3
 from planner.occupancy.keys import in_key_set, pack3
 
 _LIM = 1 << 20  # packable index range [-_LIM, _LIM) per axis (planner.keys, 3D)
+
+
 @njit_cached(nogil=True)
 def contains_keys(table, bits, keys):  # pragma: no cover - compiled
     """(N,) bool: which of ``keys`` are in ``table`` (a key set of 2**bits slots)."""
@@ -26,31 +30,6 @@ def contains_keys(table, bits, keys):  # pragma: no cover - compiled
     return out
 
 
-@njit(inline="always")
-def _quantize(x0, x1, x2, b, binv, cand, cand_z, counts, t, cn):  # pragma: no cover
-    y0 = binv[0, 0] * x0 + binv[0, 1] * x1 + binv[0, 2] * x2
-    y1 = binv[1, 0] * x0 + binv[1, 1] * x1 + binv[1, 2] * x2
-    y2 = binv[2, 0] * x0 + binv[2, 1] * x1 + binv[2, 2] * x2
-    z0, z1, z2 = np.rint(y0), np.rint(y1), np.rint(y2)
-    o = (1 if y0 > z0 else 0) | (2 if y1 > z1 else 0) | (4 if y2 > z2 else 0)
-    r0 = 2.0 * (x0 - b[0, 0] * z0 - b[0, 1] * z1 - b[0, 2] * z2)
-    r1 = 2.0 * (x1 - b[1, 0] * z0 - b[1, 1] * z1 - b[1, 2] * z2)
-    r2 = 2.0 * (x2 - b[2, 0] * z0 - b[2, 1] * z1 - b[2, 2] * z2)
-    best = 0
-    best_v = np.inf
-    for j in range(counts[o]):
-        s = cn[o, j] - r0 * cand[o, j, 0] - r1 * cand[o, j, 1] - r2 * cand[o, j, 2]
-        if s < best_v:
-            best_v = s
-            best = j
-    w0 = z0 + cand_z[o, best, 0]
-    w1 = z1 + cand_z[o, best, 1]
-    w2 = z2 + cand_z[o, best, 2]
-    return (np.int64(np.rint(t[0, 0] * w0 + t[0, 1] * w1 + t[0, 2] * w2)),
-            np.int64(np.rint(t[1, 0] * w0 + t[1, 1] * w1 + t[1, 2] * w2)),
-            np.int64(np.rint(t[2, 0] * w0 + t[2, 1] * w1 + t[2, 2] * w2)))
-
-
 @njit_cached(nogil=True)
 def score_poses(pts, wts, rots, trans, b, binv, cand, cand_z, counts, t, table, bits,
                 out):  # pragma: no cover - compiled
@@ -59,11 +38,7 @@ def score_poses(pts, wts, rots, trans, b, binv, cand, cand_z, counts, t, table, 
     pts (N, 3), wts (N,), rots (M, 3, 3), trans (M, 3), out (M,); the quantizer tables as
     in :class:`planner.lattice.Quantizer`.
     """
-    k = cand.shape[1]
-    cn = np.empty((8, k), dtype=np.float64)
-    for o in range(8):
-        for j in range(k):
-            cn[o, j] = cand[o, j, 0] ** 2 + cand[o, j, 1] ** 2 + cand[o, j, 2] ** 2
+    cn = candidate_norms3(cand)
     mask = (1 << bits) - 1
     for p in range(rots.shape[0]):
         r = rots[p]
@@ -74,7 +49,7 @@ def score_poses(pts, wts, rots, trans, b, binv, cand, cand_z, counts, t, table, 
             x0 = r[0, 0] * a0 + r[0, 1] * a1 + r[0, 2] * a2 + tx
             x1 = r[1, 0] * a0 + r[1, 1] * a1 + r[1, 2] * a2 + ty
             x2 = r[2, 0] * a0 + r[2, 1] * a1 + r[2, 2] * a2 + tz
-            w0, w1, w2 = _quantize(x0, x1, x2, b, binv, cand, cand_z, counts, t, cn)
+            w0, w1, w2 = closest_point3(x0, x1, x2, b, binv, cand, cand_z, counts, t, cn)
             if (w0 < -_LIM or w0 >= _LIM or w1 < -_LIM or w1 >= _LIM
                     or w2 < -_LIM or w2 >= _LIM):
                 continue  # beyond the packable range: no stored cell is there

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import sys
 
 import numpy as np
 
@@ -28,4 +29,37 @@ def run_match(source: str, reference: str, *, lattice: str = "fcc", cell_volume:
             print(" ".join(f"{v: .6f}" for v in row))
     print(f"score {res.score} of {len(src)} source points ({res.fraction:.3f}); "
           f"levels {res.levels}; iterations {res.iterations}; {res.seconds:.3f} s")
+    return 0
+
+
+def run_match_experiment(a) -> int:
+    """``planner match-experiment``: the pairs from ``a.sources`` (in ``a.data``) and
+    ``a.pair`` triples, the trials (:func:`planner.match.experiment.run_experiment`), then
+    the table and verdict on stdout and the outputs in ``a.out``. Returns 0."""
+    from planner.errors import PlannerError
+    from planner.match import anchor
+    from planner.match.experiment import run_experiment, trial_methods
+    from planner.match.experiment_pairs import load_sources, user_pair
+    from planner.match.experiment_report import format_report, write_outputs
+
+    names = [s for s in (a.sources or "").split(",") if s]
+    trial_methods(a.lattices.split(","), False)  # bad names refused before loading data
+    pairs = load_sources(names, a.data, seed=a.seed,
+                         simulated_per_separation=a.simulated_pairs,
+                         cell_volume=a.cell_volume, levels=a.levels)
+    pairs += [user_pair(*p) for p in a.pair or []]
+    if not pairs:
+        raise PlannerError("no pairs: name --sources or give --pair SOURCE REFERENCE T.txt")
+    if not a.no_icp and not anchor.available():
+        print(f"planner: note: ICP left out, {anchor.EXTRA_MESSAGE}", file=sys.stderr)
+    rows = run_experiment(pairs, a.out, lattices=a.lattices.split(","),
+                          icp=False if a.no_icp else None, trials=a.trials,
+                          cell_volume=a.cell_volume, levels=a.levels, seed=a.seed,
+                          max_offset=a.max_offset, max_angle=a.max_angle, resume=a.resume,
+                          force=a.force, progress=not a.no_progress)
+    methods = trial_methods(a.lattices.split(","), any(r["method"] == "icp" for r in rows))
+    summary = write_outputs(rows, methods, a.out, a.plot)
+    print(format_report(summary), end="")
+    print(f"{len(rows)} rows in {a.out}/trials.jsonl; table.md, summary.json, trials.csv "
+          f"and {a.plot or str(a.out) + '/fig6.png'} written")
     return 0
