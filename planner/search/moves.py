@@ -34,11 +34,11 @@ from planner._numba import njit_cached
 from planner.lattice import Lattice
 from planner.occupancy.grid import Occupancy
 from planner.occupancy.walk import segment_walk, walk_of
+from planner.search.heuristic import H_GAUGE
 
 __all__ = ["MoveSet", "move_allowed", "move_set", "move_stencils", "move_heuristic",
            "carries_guarantee"]
 
-H_ZERO, H_GAUGE, H_EUCLID = 0, 1, 2
 
 
 class MoveSet(NamedTuple):

@@ -1,6 +1,13 @@
 """The search kernel (numba): A* / Dijkstra over lattice cells, with the any-angle parent
-rules of :mod:`planner.search.astar.theta` for Theta* and Lazy Theta*. Resumable: the driver
-(:mod:`planner.search.astar.driver`) grows the arrays when the kernel asks.
+rules of Theta* and Lazy Theta*. Resumable: the driver (:mod:`planner.search.astar.driver`)
+grows the arrays when the kernel asks.
+
+Theta* (``anyangle`` 1) checks line of sight from the expanded node's parent to each
+neighbour when it is generated and links the neighbour to that parent when it can see it
+(skipped when neither that parent nor the lattice move would improve the neighbour's g).
+Lazy Theta* (``anyangle`` 2) assumes the sight line and verifies it once, when the node is
+expanded, falling back to its best closed lattice neighbour (SetVertex). Both use the
+Euclidean heuristic and the exact walk of :mod:`planner.search._los`.
 """
 
 from __future__ import annotations
@@ -14,65 +21,60 @@ from planner.occupancy.grid import cell_free
 from planner.occupancy.keys import mix64, pack3, unpack3
 from planner.search import _heap
 from planner.search._los import cubic_walk, is_cubic, sight
-from planner.search._nodes import (
-    PAGE,
-    ST_EXP,
-    ST_GOAL,
-    ST_HN,
-    ST_LOOK,
-    ST_N,
-    ST_NP,
-    ST_WGEN,
-    block_key,
-    dense_index,
-    find_slot,
-    local,
-    new_page,
-)
-from planner.search.astar.theta import LAZY_THETA, THETA, euclid
-from planner.search.moves import H_EUCLID, H_GAUGE, MAX_BITS, move_allowed
+from planner.search._nodes import PAGE, block_key, dense_index, local, new_page
+from planner.search.heuristic import estimate, euclid
+from planner.search.moves import MAX_BITS, move_allowed
+from planner.search.result import RUN_BUDGET, RUN_EXHAUSTED, RUN_FOUND, RUN_GROW, RUN_LIMIT
 
 _EMPTY = -1
-RUN_EXHAUSTED, RUN_FOUND, RUN_LIMIT, RUN_GROW, RUN_BUDGET = 0, 1, 2, 3, 4
+THETA, LAZY_THETA = 1, 2  # SearchParams.anyangle
 
 
 class SearchParams(NamedTuple):
     """Scalar settings of one search."""
 
-    anyangle: int  # 0 lattice A* / Dijkstra, 1 Theta*, 2 Lazy Theta*
+    anyangle: int  # 0 lattice A* / Dijkstra, THETA, LAZY_THETA
     max_nodes: int  # stop (RUN_LIMIT) once this many nodes exist; <= 0 no limit
     max_expansions: int  # stop (RUN_BUDGET) after this many expansions; <= 0 no limit
 
 
-_R3M2 = np.sqrt(3.0) - np.sqrt(2.0)
-_R2M1 = np.sqrt(2.0) - 1.0
+@njit_cached(inline="always")
+def move_ok(bits, need, blocked, ufree, ptr, idx, m):  # pragma: no cover - compiled
+    """Does move ``m`` pass the safe rule at the expanded cell? With ``bits`` one mask test
+    (``blocked``: bit j set when union cell j is blocked), else its CSR list of ``ufree``."""
+    if bits:
+        return need[m] & blocked == 0
+    return move_allowed(ufree, ptr, idx, m)
 
 
 @njit_cached(inline="always")
-def octile(s, e0, e1, e2):  # pragma: no cover - compiled
-    """Octile distance of index difference e on the cubic lattice of cell size s (m): the
-    cubic-26 gauge in closed form (sqrt 3 per diagonal, sqrt 2 per face diagonal)."""
-    a, b, c = abs(e0), abs(e1), abs(e2)
-    lo = min(a, min(b, c))
-    hi = max(a, max(b, c))
-    return s * (_R3M2 * lo + _R2M1 * (a + b + c - lo - hi) + hi)
+def slot_of(slots, st, dense, loc, v0, v1, v2, last_bk, last_pg, create):
+    # pragma: no cover - compiled
+    """Node slot of cell v (-1 none) and where the slot map keeps it.
 
-
-@njit_cached(inline="always")
-def heuristic(ms, g, e0, e1, e2):  # pragma: no cover - compiled
-    """h of the index difference e = goal - w (module docstring of ``stencils``)."""
-    hv = 0.0
-    if ms.octile > 0.0:
-        hv = octile(ms.octile, e0, e1, e2)
-    elif ms.hkind == H_GAUGE:
-        hmat = ms.hmat
-        for f in range(hmat.shape[0]):
-            x = hmat[f, 0] * e0 + hmat[f, 1] * e1 + hmat[f, 2] * e2
-            if x > hv:
-                hv = x
-    elif ms.hkind == H_EUCLID:
-        hv = euclid(g, 0, 0, 0, e0, e1, e2)
-    return hv
+    Dense map: ``loc`` is v's index in it. Paged map: the block's page, found through the
+    block table unless it is ``last_bk``'s (``last_pg``); a missing page is opened when
+    ``create``, else the slot is -1. Returns ``(slot, loc, last_bk, last_pg)``."""
+    if dense:
+        return np.int64(slots.dense[loc]) - 1, loc, last_bk, last_pg  # stored as slot + 1
+    bk = block_key(v0, v1, v2)
+    if bk != last_bk:
+        btab, bkeys = slots.btab, slots.bkeys
+        bmask = btab.shape[0] - 1
+        p = mix64(bk) & bmask
+        while True:
+            q = btab[p]
+            if q == _EMPTY or bkeys[q] == bk:
+                break
+            p = (p + 1) & bmask
+        if q == _EMPTY:
+            if not create:
+                return np.int64(_EMPTY), loc, last_bk, last_pg
+            q = new_page(slots, st, bk, p)
+        last_bk = bk
+        last_pg = q
+    loc = last_pg * PAGE + local(v0, v1, v2)
+    return np.int64(slots.pages[loc]), loc, last_bk, last_pg
 
 
 @njit_cached
@@ -81,22 +83,22 @@ def search_init(start, goal, ms, g, nodes, heap, slots, st):  # pragma: no cover
     bmask = slots.btab.shape[0] - 1
     nodes.key[0] = pack3(start[0], start[1], start[2])
     nodes.g[0] = 0.0
-    nodes.h[0] = heuristic(ms, g, goal[0] - start[0], goal[1] - start[1], goal[2] - start[2])
+    nodes.h[0] = estimate(ms, g, goal[0] - start[0], goal[1] - start[1], goal[2] - start[2])
     nodes.f[0] = nodes.h[0]
     nodes.par[0] = 0
-    st[ST_NP] = 0
-    st[ST_HN] = _heap.push(heap, nodes.pos, 0, 0, nodes.f[0], 0.0)
+    st.pages = 0
+    st.queued = _heap.push(heap, nodes.pos, 0, 0, nodes.f[0], 0.0)
     if slots.dense.shape[0] > 1:
         slots.dense[dense_index(slots, start[0], start[1], start[2])] = 1  # slot 0, + 1
     else:
         bk = block_key(start[0], start[1], start[2])
         q = new_page(slots, st, bk, mix64(bk) & bmask)
         slots.pages[q * PAGE + local(start[0], start[1], start[2])] = 0
-    st[ST_N] = 1
+    st.nodes = 1
 
 
 @njit_cached(nogil=True)  # threads search in parallel (search_many)
-def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st):
+def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state):
     # pragma: no cover - compiled
     """A* / Dijkstra / Theta* / Lazy Theta* over lattice cells, resumable.
 
@@ -120,39 +122,34 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st):
         Scratch for the union stencil lookups of one expansion.
     params : SearchParams
     ends : (2, 3) int64
-        Start and goal cells. The first call (``st[ST_N] == 0``) puts the start in the
+        Start and goal cells. The first call (``nodes == 0``) puts the start in the
         empty structs (:func:`search_init`): one kernel call per search instead of two.
-    st : (ST_SIZE,) int64
-        State (``planner.search._nodes.ST_*``): node count, heap size, expansions, lookups,
-        goal slot, page count, walk generation.
+    state : (1,) ``planner.search._nodes.ASTAR_STATE``
+        The search's counters (:mod:`planner.search._state`); the code returned is also
+        left in ``status``.
 
     Returns
     -------
     int
         RUN_FOUND, RUN_EXHAUSTED, RUN_LIMIT, RUN_BUDGET or RUN_GROW.
     """
+    st = state[0]
     goal = ends[1]
-    if st[ST_N] == 0:
+    if st.nodes == 0:
         search_init(ends[0], goal, ms, walk.g, nodes, heap, slots, st)
     mode, grid, lo, dims, otable, otmask, gg, blo, bhi = occ
     lo0, lo1, lo2 = lo[0], lo[1], lo[2]
     d0, d1, d2 = dims[0], dims[1], dims[2]
-    moves, mcost, ust, mptr, midx, hmat, hkind, need, oct_s = ms
+    moves, mcost, ust, mptr, midx, need = ms.moves, ms.cost, ms.union, ms.ptr, ms.idx, ms.need
     nkey, ng, nf, nh, npar, npos = nodes
-    pages, btab, bkeys, dsl, _, _ = slots
-    dense = dsl.shape[0] > 1 and mode == 0  # the dense slot box is the grid's box
+    dense = slots.dense.shape[0] > 1 and mode == 0  # the dense slot box is the grid's box
     anyangle, max_nodes, max_exp = params
     g = walk.g
     cubic = is_cubic(g)
     gl0, gl1, gl2 = goal[0], goal[1], goal[2]
-    g00, g01, g02 = g[0, 0], g[0, 1], g[0, 2]
-    g10, g11, g12 = g[1, 0], g[1, 1], g[1, 2]
-    g20, g21, g22 = g[2, 0], g[2, 1], g[2, 2]
-    nfac = hmat.shape[0]
     cap = nkey.shape[0]
-    pcap = bkeys.shape[0]
-    bsize = btab.shape[0]
-    bmask = bsize - 1
+    pcap = slots.bkeys.shape[0]
+    bsize = slots.btab.shape[0]
     last_bk = np.int64(-1)
     last_pg = np.int64(0)
     nu = ust.shape[0]
@@ -173,13 +170,13 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st):
     base = np.int64(0)
     fq = 1e-9 * mcost.min()
     fq_inv = 1.0 / fq
-    n = st[ST_N]
-    hn = st[ST_HN]
-    expansions = st[ST_EXP]
-    lookups = st[ST_LOOK]
+    n = st.nodes
+    hn = st.queued
+    expansions = st.expansions
+    lookups = st.lookups
     status = RUN_EXHAUSTED
     while hn > 0:
-        if n + nm > cap or st[ST_NP] + nm > pcap or 2 * (st[ST_NP] + nm) > bsize:
+        if n + nm > cap or st.pages + nm > pcap or 2 * (st.pages + nm) > bsize:
             status = RUN_GROW
             break
         if max_exp > 0 and expansions >= max_exp:
@@ -222,28 +219,20 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st):
             if cubic:
                 ok, c = cubic_walk(occ, u0, u1, u2, p0, p1, p2)
             else:
-                ok, c = sight(occ, walk, sc, st, ST_WGEN, u0, u1, u2, p0, p1, p2)
+                ok, c = sight(occ, walk, sc, st, u0, u1, u2, p0, p1, p2)
             lookups += c
             if not ok:
                 # SetVertex: the best closed neighbour that an allowed move reaches (one
-                # exists: the node that generated s). Written out: a call taking the
-                # structs pays reference counting on every failed sight line, and Lazy
-                # Theta* has many of those.
+                # exists: the node that generated s).
                 best = np.inf
                 bp = np.int64(-1)
                 for m in range(nm):
-                    if bits:
-                        if need[m] & blocked:
-                            continue
-                    elif not move_allowed(ufree, mptr, midx, m):
+                    if not move_ok(bits, need, blocked, ufree, mptr, midx, m):
                         continue
-                    v0 = u0 + moves[m, 0]
-                    v1 = u1 + moves[m, 1]
-                    v2 = u2 + moves[m, 2]
-                    if dense:  # an allowed move's target is free, hence inside the box
-                        t = np.int64(dsl[base + moff[m]]) - 1
-                    else:
-                        t = find_slot(slots, v0, v1, v2)
+                    # an allowed move's target is free, hence inside the dense box
+                    t, _, last_bk, last_pg = slot_of(
+                        slots, st, dense, base + moff[m], u0 + moves[m, 0],
+                        u1 + moves[m, 1], u2 + moves[m, 2], last_bk, last_pg, False)
                     if t == _EMPTY or npos[t] != -1:
                         continue
                     gv = ng[t] + mcost[m]
@@ -254,7 +243,7 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st):
                 ng[s] = best
         if nkey[s] == gk:
             status = RUN_FOUND
-            st[ST_GOAL] = s
+            st.goal = s
             break
         if max_nodes > 0 and n >= max_nodes:
             status = RUN_LIMIT
@@ -270,72 +259,29 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st):
             v2 = u2 + moves[m, 2]
             # Safe rule first: with the bitmask it is one test, and an allowed move's target
             # is free, hence inside the dense box.
-            if bits:
-                if need[m] & blocked:
-                    continue
-            elif not move_allowed(ufree, mptr, midx, m):
+            if not move_ok(bits, need, blocked, ufree, mptr, midx, m):
                 continue
-            if dense:
-                loc = base + moff[m]
-                t = np.int64(dsl[loc]) - 1  # stored as slot + 1, 0 none
-            else:
-                bk = block_key(v0, v1, v2)
-                if bk != last_bk:
-                    p = mix64(bk) & bmask
-                    while True:
-                        q = btab[p]
-                        if q == _EMPTY or bkeys[q] == bk:
-                            break
-                        p = (p + 1) & bmask
-                    if q == _EMPTY:
-                        q = new_page(slots, st, bk, p)
-                    last_bk = bk
-                    last_pg = q
-                loc = last_pg * PAGE + local(v0, v1, v2)
-                t = np.int64(pages[loc])
+            t, loc, last_bk, last_pg = slot_of(slots, st, dense, base + moff[m], v0, v1, v2,
+                                               last_bk, last_pg, True)
             if t != _EMPTY and npos[t] == -1:
                 continue  # closed: a consistent heuristic never improves it
             if t == _EMPTY:
                 t = n
                 n += 1
                 if dense:
-                    dsl[loc] = t + 1
+                    slots.dense[loc] = t + 1
                 else:
-                    pages[loc] = t
+                    slots.pages[loc] = t
                 nkey[t] = pack3(v0, v1, v2)
                 ng[t] = np.inf
-                e0 = gl0 - v0
-                e1 = gl1 - v1
-                e2 = gl2 - v2
-                hv = 0.0
-                if oct_s > 0.0:
-                    hv = octile(oct_s, e0, e1, e2)
-                elif hkind == H_GAUGE:  # written out for the same reason as the lookups
-                    for f in range(nfac):
-                        x = hmat[f, 0] * e0 + hmat[f, 1] * e1 + hmat[f, 2] * e2
-                        if x > hv:
-                            hv = x
-                elif hkind == H_EUCLID:
-                    x = g00 * e0 + g01 * e1 + g02 * e2
-                    y = g10 * e0 + g11 * e1 + g12 * e2
-                    z = g20 * e0 + g21 * e1 + g22 * e2
-                    hv = np.sqrt(x * x + y * y + z * z)
-                nh[t] = hv
+                nh[t] = estimate(ms, g, gl0 - v0, gl1 - v1, gl2 - v2)
                 npos[t] = -2
             if anyangle == 0:
                 gt = ng[s] + mcost[m]
                 par = s
             else:
-                # Any-angle g through s's parent, written out: numba did not inline a helper
-                # here, and the call's reference counting (once per move) outweighed the
-                # whole A* expansion.
-                e0 = v0 - p0
-                e1 = v1 - p1
-                e2 = v2 - p2
-                x = g00 * e0 + g01 * e1 + g02 * e2
-                y = g10 * e0 + g11 * e1 + g12 * e2
-                z = g20 * e0 + g21 * e1 + g22 * e2
-                gt = ng[ps] + np.sqrt(x * x + y * y + z * z)
+                # any-angle g through s's parent
+                gt = ng[ps] + euclid(g, v0 - p0, v1 - p1, v2 - p2)
                 par = ps
                 if anyangle == THETA and ps != s:
                     g1 = ng[s] + mcost[m]
@@ -344,7 +290,7 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st):
                     if cubic:
                         ok, c = cubic_walk(occ, v0, v1, v2, p0, p1, p2)
                     else:
-                        ok, c = sight(occ, walk, sc, st, ST_WGEN, p0, p1, p2, v0, v1, v2)
+                        ok, c = sight(occ, walk, sc, st, p0, p1, p2, v0, v1, v2)
                     lookups += c
                     if not ok:
                         gt = g1
@@ -359,8 +305,9 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st):
                     hn = _heap.push(heap, npos, hn, t, nf[t], gt)
                 else:
                     _heap.decrease_key(heap, npos, t, nf[t], gt)
-    st[ST_N] = n
-    st[ST_HN] = hn
-    st[ST_EXP] = expansions
-    st[ST_LOOK] = lookups
+    st.nodes = n
+    st.queued = hn
+    st.expansions = expansions
+    st.lookups = lookups
+    st.status = status
     return status
