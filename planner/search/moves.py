@@ -195,10 +195,21 @@ def _move_set_cached(gen: bytes, neighbors: str, corner_cutting: bool, hkind: in
                    octile)
 
 
+_BY_ID: dict[tuple, tuple[Lattice, MoveSet]] = {}  # lattice identity -> (lattice, move set)
+
+
 def move_set(lattice: Lattice, neighbors: str, corner_cutting: bool, hkind: int) -> MoveSet:
     """The kernel's :class:`MoveSet` (cached per lattice, neighbour set, rule, heuristic)."""
-    return _move_set_cached(lattice.generator.tobytes(), neighbors, bool(corner_cutting),
-                            int(hkind), lattice)
+    key = (id(lattice), neighbors, bool(corner_cutting), int(hkind))
+    hit = _BY_ID.get(key)
+    if hit is not None and hit[0] is lattice:  # a search's common case, without hashing
+        return hit[1]
+    ms = _move_set_cached(lattice.generator.tobytes(), neighbors, bool(corner_cutting),
+                          int(hkind), lattice)
+    if len(_BY_ID) >= 256:
+        _BY_ID.clear()
+    _BY_ID[key] = (lattice, ms)
+    return ms
 
 
 def carries_guarantee(lattice: Lattice, neighbors: str, corner_cutting: bool) -> bool:

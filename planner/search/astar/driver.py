@@ -12,6 +12,7 @@ import numpy as np
 
 from planner.lattice import Lattice
 from planner.occupancy.walk import walk_of
+from planner.search._entry import entry_point, struct_key
 from planner.search._grow import grown
 from planner.search._heap import Heap, new_heap
 from planner.search._los import new_scratch
@@ -138,13 +139,14 @@ def run(occ, walk, ms, start, goal, params, span: float, cap: int = 4096, *,
     first = params
     if keep_going is not None and pause_at > 0 and not 0 < params.max_expansions <= pause_at:
         first = params._replace(max_expansions=pause_at)
-    parts = _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, first, ends, state, cap,
-                  pcap)
+    kernel = _kernel(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state)
+    parts = _loop(kernel, occ, walk, ms, nodes, heap, slots, sc, ufree, first, ends, state,
+                  cap, pcap)
     nodes, heap, slots, status = parts
     if first is not params and status == RUN_BUDGET:
         if keep_going():
-            parts = _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state,
-                          len(nodes.key), len(slots.bkeys))
+            parts = _loop(kernel, occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends,
+                          state, len(nodes.key), len(slots.bkeys))
             nodes, heap, slots, status = parts
         else:
             status = RUN_STOPPED
@@ -154,9 +156,10 @@ def run(occ, walk, ms, start, goal, params, span: float, cap: int = 4096, *,
     path = None
     if status == RUN_FOUND:
         gs = int(st["goal"])
-        path, cost = trace_path(nodes, gs), float(nodes.g[gs])
+        path, cost = _helper(trace_path, nodes, gs)(nodes, gs), float(nodes.g[gs])
     if dense is not None:  # every touched cell holds a node: clear those, reuse the array
-        clear_dense(slots, nodes.key, int(st["nodes"]))
+        n = int(st["nodes"])
+        _helper(clear_dense, slots, nodes.key, n)(slots, nodes.key, n)
         _give_dense(occ, dense)
     if path is None:
         return status, None, math.inf, st, peak
@@ -170,13 +173,46 @@ def _nbytes(struct) -> int:
     return n
 
 
-def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state, cap, pcap):
+# Compiled entry points (planner.search._entry): the kernel's per world struct types, and
+# the helpers, whose arguments the driver alone builds.
+_KERNELS: dict[tuple, object] = {}
+_HELPERS: dict[object, object] = {}
+
+
+_LAST: list = [(lambda: None, None, None)]  # (grid ref, walk, kernel) of the last search
+
+
+def _kernel(occ, walk, *args):
+    """The compiled search kernel for these arguments. The driver builds all but the
+    world's structs ``occ`` and ``walk`` (and ``params``, of Python ints), always of the same
+    types; the last world's are remembered by identity (its occupancy grid by a weak
+    reference: a dropped world is not kept alive)."""
+    grid, w, k = _LAST[0]  # one tuple, replaced whole: threads never see a mixed one
+    if grid() is occ.grid and w is walk:
+        return k
+    key = (struct_key(occ), struct_key(walk), struct_key(args[-3]))
+    k = _KERNELS.get(key)
+    if k is None:
+        k = _KERNELS[key] = entry_point(_astar.search_run, (occ, walk, *args))
+    _LAST[0] = (weakref.ref(occ.grid), walk, k)
+    return k
+
+
+def _helper(disp, *args):
+    """The compiled ``disp`` (trace_path, clear_dense) for the driver's argument types."""
+    k = _HELPERS.get(disp)
+    if k is None:
+        k = _HELPERS[disp] = entry_point(disp, args)
+    return k
+
+
+def _loop(kernel, occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state, cap,
+          pcap):
     """Call the kernel until it stops asking for room; returns the final structs and
     status."""
     nm = len(ms.moves)
     while True:
-        status = _astar.search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends,
-                                   state)
+        status = kernel(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state)
         if status != RUN_GROW:
             break
         n, npg = int(state[0]["nodes"]), int(state[0]["pages"])

@@ -38,6 +38,7 @@ import numpy as np
 from planner.errors import PlanError
 from planner.occupancy.keys import unpack
 from planner.occupancy.walk import as_cells
+from planner.search._entry import entry_point
 from planner.search._grow import grown
 from planner.search._heap import Heap, new_heap
 from planner.search._state import new_state
@@ -299,15 +300,16 @@ class DStarLite:
         ``a`` is a :class:`dr.ReplanState` of them (one object to unbox instead of ~45
         arrays), made again when one was replaced (the planner's grew: ``_room`` clears
         it; or the world's occupancy struct or ``start`` is another object); ``f`` the
-        compiled entry point of its signature (numba's dispatcher would type the
-        arguments on every call; here they are fixed: :meth:`plan` passes C-contiguous
-        (K, 3) int64 cells and (K,) bool states)."""
+        compiled entry point of its signature (:mod:`planner.search._entry`: numba's
+        dispatcher would type the arguments on every call; here they are fixed:
+        :meth:`plan` passes C-contiguous (K, 3) int64 cells and (K,) bool states)."""
         occ = self.world.occupancy
         if self._state is not None and self._state[0] is occ and self._state[3] is self.start:
             return self._state[2], self._state[1]
         state = dr.new_state(occ, self._ms, self._bx, self._nd, self._heap, self._sc,
                              self._state_array, self._fs, self.start)
-        self._state = (occ, state, _entry_point(dr.replan_state, state), self.start)
+        call = entry_point(dr.replan_state, (state, _NONE, _NONE_B))
+        self._state = (occ, state, call, self.start)
         return self._state[2], state
 
     def _result(self, cells, cost, why, code) -> SearchResult:
@@ -325,17 +327,3 @@ class DStarLite:
 _NONE = np.zeros((0, 3), np.int64)
 _COMPACT_MIN = 1 << 14  # nodes: below this the node table fits in cache anyway
 _NONE_B = np.zeros(0, np.bool_)
-
-
-def _entry_point(disp, state):
-    """The compiled function of ``disp`` (a numba dispatcher) for ``(state, cells, blocked)``
-    with :meth:`DStarLite.plan`'s argument types, compiled if needed.
-
-    Calling it skips the dispatcher's typing of the arguments on every call, which costs
-    about as much as a replan that reuses its path. numba has no public API for this: it
-    reads ``disp.overloads[sig].entry_point``, the one place the planner relies on numba
-    internals."""
-    sig = tuple(disp.typeof_pyval(a) for a in (state, _NONE, _NONE_B))
-    if sig not in disp.overloads:
-        disp.compile(sig)
-    return disp.overloads[sig].entry_point
