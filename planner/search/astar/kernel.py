@@ -8,6 +8,11 @@ neighbour when it is generated and links the neighbour to that parent when it ca
 Lazy Theta* (``anyangle`` 2) assumes the sight line and verifies it once, when the node is
 expanded, falling back to its best closed lattice neighbour (SetVertex). Both use the
 Euclidean heuristic and the exact walk of :mod:`planner.search._los`.
+
+The expansion loop writes out its hot parts (the dense lookups, the safe-rule test, the
+slot lookup, the heuristic of a new node, the any-angle g) instead of calling the shared
+inline helpers (:mod:`planner.search.heuristic`, ...): with them the loop compiled to a
+markedly slower one on cubic-26 (``benchmarks/search_speed.py``).
 """
 
 from __future__ import annotations
@@ -21,8 +26,8 @@ from planner.occupancy.grid import cell_free
 from planner.occupancy.keys import mix64, pack3, unpack3
 from planner.search import _heap
 from planner.search._los import cubic_walk, is_cubic, sight
-from planner.search._nodes import PAGE, block_key, dense_index, local, new_page
-from planner.search.heuristic import estimate, euclid
+from planner.search._nodes import PAGE, block_key, dense_index, find_slot, local, new_page
+from planner.search.heuristic import H_EUCLID, H_GAUGE, estimate, octile
 from planner.search.moves import MAX_BITS, move_allowed
 from planner.search.result import RUN_BUDGET, RUN_EXHAUSTED, RUN_FOUND, RUN_GROW, RUN_LIMIT
 
@@ -36,45 +41,6 @@ class SearchParams(NamedTuple):
     anyangle: int  # 0 lattice A* / Dijkstra, THETA, LAZY_THETA
     max_nodes: int  # stop (RUN_LIMIT) once this many nodes exist; <= 0 no limit
     max_expansions: int  # stop (RUN_BUDGET) after this many expansions; <= 0 no limit
-
-
-@njit_cached(inline="always")
-def move_ok(bits, need, blocked, ufree, ptr, idx, m):  # pragma: no cover - compiled
-    """Does move ``m`` pass the safe rule at the expanded cell? With ``bits`` one mask test
-    (``blocked``: bit j set when union cell j is blocked), else its CSR list of ``ufree``."""
-    if bits:
-        return need[m] & blocked == 0
-    return move_allowed(ufree, ptr, idx, m)
-
-
-@njit_cached(inline="always")
-def slot_of(slots, st, dense, loc, v0, v1, v2, last_bk, last_pg, create):
-    # pragma: no cover - compiled
-    """Node slot of cell v (-1 none) and where the slot map keeps it.
-
-    Dense map: ``loc`` is v's index in it. Paged map: the block's page, found through the
-    block table unless it is ``last_bk``'s (``last_pg``); a missing page is opened when
-    ``create``, else the slot is -1. Returns ``(slot, loc, last_bk, last_pg)``."""
-    if dense:
-        return np.int64(slots.dense[loc]) - 1, loc, last_bk, last_pg  # stored as slot + 1
-    bk = block_key(v0, v1, v2)
-    if bk != last_bk:
-        btab, bkeys = slots.btab, slots.bkeys
-        bmask = btab.shape[0] - 1
-        p = mix64(bk) & bmask
-        while True:
-            q = btab[p]
-            if q == _EMPTY or bkeys[q] == bk:
-                break
-            p = (p + 1) & bmask
-        if q == _EMPTY:
-            if not create:
-                return np.int64(_EMPTY), loc, last_bk, last_pg
-            q = new_page(slots, st, bk, p)
-        last_bk = bk
-        last_pg = q
-    loc = last_pg * PAGE + local(v0, v1, v2)
-    return np.int64(slots.pages[loc]), loc, last_bk, last_pg
 
 
 @njit_cached
@@ -140,16 +106,22 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state
     mode, grid, lo, dims, otable, otmask, gg, blo, bhi = occ
     lo0, lo1, lo2 = lo[0], lo[1], lo[2]
     d0, d1, d2 = dims[0], dims[1], dims[2]
-    moves, mcost, ust, mptr, midx, need = ms.moves, ms.cost, ms.union, ms.ptr, ms.idx, ms.need
+    moves, mcost, ust, mptr, midx, hmat, hkind, need, oct_s = ms
     nkey, ng, nf, nh, npar, npos = nodes
-    dense = slots.dense.shape[0] > 1 and mode == 0  # the dense slot box is the grid's box
+    pages, btab, bkeys, dsl, _, _ = slots
+    dense = dsl.shape[0] > 1 and mode == 0  # the dense slot box is the grid's box
     anyangle, max_nodes, max_exp = params
     g = walk.g
     cubic = is_cubic(g)
     gl0, gl1, gl2 = goal[0], goal[1], goal[2]
+    g00, g01, g02 = g[0, 0], g[0, 1], g[0, 2]
+    g10, g11, g12 = g[1, 0], g[1, 1], g[1, 2]
+    g20, g21, g22 = g[2, 0], g[2, 1], g[2, 2]
+    nfac = hmat.shape[0]
     cap = nkey.shape[0]
-    pcap = slots.bkeys.shape[0]
-    bsize = slots.btab.shape[0]
+    pcap = bkeys.shape[0]
+    bsize = btab.shape[0]
+    bmask = bsize - 1
     last_bk = np.int64(-1)
     last_pg = np.int64(0)
     nu = ust.shape[0]
@@ -223,16 +195,24 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state
             lookups += c
             if not ok:
                 # SetVertex: the best closed neighbour that an allowed move reaches (one
-                # exists: the node that generated s).
+                # exists: the node that generated s). Written out: a call taking the
+                # structs pays reference counting on every failed sight line, and Lazy
+                # Theta* has many of those.
                 best = np.inf
                 bp = np.int64(-1)
                 for m in range(nm):
-                    if not move_ok(bits, need, blocked, ufree, mptr, midx, m):
+                    if bits:
+                        if need[m] & blocked:
+                            continue
+                    elif not move_allowed(ufree, mptr, midx, m):
                         continue
-                    # an allowed move's target is free, hence inside the dense box
-                    t, _, last_bk, last_pg = slot_of(
-                        slots, st, dense, base + moff[m], u0 + moves[m, 0],
-                        u1 + moves[m, 1], u2 + moves[m, 2], last_bk, last_pg, False)
+                    v0 = u0 + moves[m, 0]
+                    v1 = u1 + moves[m, 1]
+                    v2 = u2 + moves[m, 2]
+                    if dense:  # an allowed move's target is free, hence inside the box
+                        t = np.int64(dsl[base + moff[m]]) - 1
+                    else:
+                        t = find_slot(slots, v0, v1, v2)
                     if t == _EMPTY or npos[t] != -1:
                         continue
                     gv = ng[t] + mcost[m]
@@ -259,29 +239,72 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state
             v2 = u2 + moves[m, 2]
             # Safe rule first: with the bitmask it is one test, and an allowed move's target
             # is free, hence inside the dense box.
-            if not move_ok(bits, need, blocked, ufree, mptr, midx, m):
+            if bits:
+                if need[m] & blocked:
+                    continue
+            elif not move_allowed(ufree, mptr, midx, m):
                 continue
-            t, loc, last_bk, last_pg = slot_of(slots, st, dense, base + moff[m], v0, v1, v2,
-                                               last_bk, last_pg, True)
+            if dense:
+                loc = base + moff[m]
+                t = np.int64(dsl[loc]) - 1  # stored as slot + 1, 0 none
+            else:
+                bk = block_key(v0, v1, v2)
+                if bk != last_bk:
+                    p = mix64(bk) & bmask
+                    while True:
+                        q = btab[p]
+                        if q == _EMPTY or bkeys[q] == bk:
+                            break
+                        p = (p + 1) & bmask
+                    if q == _EMPTY:
+                        q = new_page(slots, st, bk, p)
+                    last_bk = bk
+                    last_pg = q
+                loc = last_pg * PAGE + local(v0, v1, v2)
+                t = np.int64(pages[loc])
             if t != _EMPTY and npos[t] == -1:
                 continue  # closed: a consistent heuristic never improves it
             if t == _EMPTY:
                 t = n
                 n += 1
                 if dense:
-                    slots.dense[loc] = t + 1
+                    dsl[loc] = t + 1
                 else:
-                    slots.pages[loc] = t
+                    pages[loc] = t
                 nkey[t] = pack3(v0, v1, v2)
                 ng[t] = np.inf
-                nh[t] = estimate(ms, g, gl0 - v0, gl1 - v1, gl2 - v2)
+                e0 = gl0 - v0
+                e1 = gl1 - v1
+                e2 = gl2 - v2
+                hv = 0.0
+                if oct_s > 0.0:
+                    hv = octile(oct_s, e0, e1, e2)
+                elif hkind == H_GAUGE:  # written out for the same reason as the lookups
+                    for f in range(nfac):
+                        x = hmat[f, 0] * e0 + hmat[f, 1] * e1 + hmat[f, 2] * e2
+                        if x > hv:
+                            hv = x
+                elif hkind == H_EUCLID:
+                    x = g00 * e0 + g01 * e1 + g02 * e2
+                    y = g10 * e0 + g11 * e1 + g12 * e2
+                    z = g20 * e0 + g21 * e1 + g22 * e2
+                    hv = np.sqrt(x * x + y * y + z * z)
+                nh[t] = hv
                 npos[t] = -2
             if anyangle == 0:
                 gt = ng[s] + mcost[m]
                 par = s
             else:
-                # any-angle g through s's parent
-                gt = ng[ps] + euclid(g, v0 - p0, v1 - p1, v2 - p2)
+                # Any-angle g through s's parent, written out: numba did not inline a helper
+                # here, and the call's reference counting (once per move) outweighed the
+                # whole A* expansion.
+                e0 = v0 - p0
+                e1 = v1 - p1
+                e2 = v2 - p2
+                x = g00 * e0 + g01 * e1 + g02 * e2
+                y = g10 * e0 + g11 * e1 + g12 * e2
+                z = g20 * e0 + g21 * e1 + g22 * e2
+                gt = ng[ps] + np.sqrt(x * x + y * y + z * z)
                 par = ps
                 if anyangle == THETA and ps != s:
                     g1 = ng[s] + mcost[m]
