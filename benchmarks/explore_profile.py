@@ -20,7 +20,6 @@ import numpy as np
 import planner.explore as ex
 from planner.maps import load_map_info, map_path
 from planner.search import search
-from planner.search.dstar import kernel as dk
 from planner.search.dstar.lite import DStarLite
 
 
@@ -31,7 +30,7 @@ def profile(name: str, lattice: str, query: int) -> dict:
 
     def counted_plan(self):
         r = plan(self)
-        n = int(self._st[dk.S_NC])
+        n = int(self._st["collected"])
         dead = int((self._nd.mask[self._sc.ss[:n]] == 0).sum()) if n else 0
         rows.append((n, dead))
         return r

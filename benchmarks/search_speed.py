@@ -362,6 +362,9 @@ def main(argv: list[str] | None = None) -> int:
     cold, warm = cold_warm()
     print(f"first call in a fresh process (import + cached-kernel load + tiny search): "
           f"{cold:.2f} s; second call {warm * 1e3:.2f} ms")
+    import fixed_cost  # the sibling script
+
+    print(fixed_cost.line())
 
     print("\nA*, cubic-26, safe rule (= MovingAI no corner cutting), ours vs the C++ anchor "
           "(benchmarks/cpp_anchor.py, g++ -O3) on the same queries; kernel time only.\n"

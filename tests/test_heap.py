@@ -89,3 +89,61 @@ def test_matches_heapq_on_random_sequences(seed):
         assert n == len(key)
     assert got == want
     assert len(got) > 500
+
+
+def test_remove_and_key_change_keep_positions_exact():
+    h, pos = _heap()
+    n = 0
+    for slot in range(12):
+        n = H.push(h, pos, n, slot, float(slot), 0.0)
+    n = H.remove(h, pos, n, 0)  # the first entry
+    n = H.remove(h, pos, n, 11)  # the last entry
+    n = H.remove(h, pos, n, 5)
+    H.change_key(h, pos, n, 3, 20.0, 0.0)  # up: to the back
+    H.change_key(h, pos, n, 9, -1.0, 0.0)  # down: to the front
+    assert pos[0] == pos[11] == pos[5] == -1
+    for i in range(n):
+        assert pos[h.slot[i]] == i
+    assert _drain(h, pos, n) == [9, 1, 2, 4, 6, 7, 8, 10, 3]
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_remove_and_key_change_match_a_reference_on_random_sequences(seed):
+    """Random push / pop / remove / key change (up and down) with many ties: every pop
+    gives the key a sorted reference holds first, (f, -g) ascending."""
+    rng = np.random.default_rng(100 + seed)
+    cap = 1500
+    h, pos = _heap(cap)
+    n = 0
+    key: dict[int, tuple[float, float]] = {}
+    nxt = 0
+    pops = removes = changes = 0
+    for _ in range(3000):
+        op = rng.random()
+        if (op < 0.4 or not key) and nxt < cap:
+            f, g = float(rng.integers(0, 20)), float(rng.integers(0, 4))
+            n = H.push(h, pos, n, nxt, f, g)
+            key[nxt] = (f, g)
+            nxt += 1
+        elif op < 0.6 and key:
+            want = min((f, -g) for f, g in key.values())
+            s, n = H.pop(h, pos, n)
+            pos[s] = -1
+            f, g = key.pop(int(s))
+            assert (f, -g) == want
+            pops += 1
+        elif op < 0.8 and key:
+            x = int(rng.choice(list(key)))
+            n = H.remove(h, pos, n, x)
+            del key[x]
+            assert pos[x] == -1
+            removes += 1
+        elif key:
+            x = int(rng.choice(list(key)))
+            f, g = float(rng.integers(0, 20)), float(rng.integers(0, 4))
+            H.change_key(h, pos, n, x, f, g)
+            key[x] = (f, g)
+            changes += 1
+        assert n == len(key)
+        assert sorted(int(s) for s in h.slot[:n]) == sorted(key)
+    assert pops > 300 and removes > 300 and changes > 300

@@ -257,6 +257,26 @@ def test_heuristic_admissible_and_tight_on_moves(name, nb):
     assert np.isclose(h[0], cost[0])
 
 
+@pytest.mark.parametrize("name", NAMED_LATTICES)
+def test_compiled_and_numpy_heuristics_agree(name):
+    """Every engine's heuristic (gauge / octile for A* and D* Lite, Euclidean for the
+    any-angle methods, zero for Dijkstra) gives the same value compiled and in numpy."""
+    from planner.search import heuristic as H
+    from planner.search.moves import move_set
+
+    lat = Lattice.named(name, 2.0)
+    g = np.ascontiguousarray(lat.generator, dtype=np.float64)
+    d = np.random.default_rng(5).integers(-40, 40, (200, 3))
+    for hkind in (H.H_ZERO, H.H_GAUGE, H.H_EUCLID):
+        ms = move_set(lat, "full", False, hkind)
+        want = H.estimate_np(ms, g, d)
+        got = [H.estimate(ms, g, int(a), int(b), int(c)) for a, b, c in d]
+        np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12)
+        if hkind == H.H_GAUGE:  # the closed form on cubic-26 is the facet maximum too
+            np.testing.assert_allclose(want, H.gauge_np(ms.hmat, d), rtol=1e-12, atol=1e-12)
+    assert np.all(H.estimate_np(move_set(lat, "full", False, H.H_ZERO), g, d) == 0.0)
+
+
 # -- search ------------------------------------------------------------------------------
 def _random_world(name, seed, n=5, frac=0.25):
     rng = np.random.default_rng(seed)

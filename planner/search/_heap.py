@@ -1,4 +1,5 @@
-"""Indexed binary min-heap kernels (numba) for the search: push, pop, decrease-key.
+"""Indexed binary min-heap kernels (numba) for every engine: push, pop, decrease-key, key
+change and removal.
 
 The heap holds node slots; ``pos[slot]`` is the slot's index in the heap (the caller marks
 closed / unseen slots with negative values, the heap only writes positions of entries it
@@ -8,7 +9,8 @@ node table (a cache miss per level).
 
 Order: lower ``f`` first; among equal ``f`` the larger ``g`` first (deeper nodes: fewer
 expansions on the many equal-cost paths of a lattice). Entries equal in both come out in an
-unspecified order.
+unspecified order. A* keys its entries (f, g); D* Lite (k1, tie-break) with the same rule
+(:mod:`planner.search.dstar.kernel`).
 
 All functions are ``inline="always"``: a non-inlined call with array arguments pays
 reference counting on every call inside the search loop.
@@ -22,7 +24,8 @@ import numpy as np
 
 from planner._numba import njit_cached
 
-__all__ = ["Heap", "new_heap", "push", "pop", "decrease_key", "sift_up", "sift_down"]
+__all__ = ["Heap", "new_heap", "push", "pop", "decrease_key", "change_key", "remove",
+           "sift_up", "sift_down"]
 
 
 class Heap(NamedTuple):
@@ -110,3 +113,27 @@ def decrease_key(h, pos, x, xf, xg):  # pragma: no cover - compiled
     h.f[i] = xf
     h.g[i] = xg
     sift_up(h, pos, i)
+
+
+@njit_cached(inline="always")
+def change_key(h, pos, n, x, xf, xg):  # pragma: no cover - compiled
+    """Set the key of slot ``x`` (in a heap of ``n``) to ``xf`` / ``xg``, up or down."""
+    i = pos[x]
+    h.f[i] = xf
+    h.g[i] = xg
+    sift_up(h, pos, i)
+    sift_down(h, pos, pos[x], n)
+
+
+@njit_cached(inline="always")
+def remove(h, pos, n, x):  # pragma: no cover - compiled
+    """Take slot ``x`` out of a heap of ``n``; returns n - 1 and sets ``pos[x] = -1``."""
+    i = pos[x]
+    pos[x] = -1
+    n -= 1
+    if i < n:
+        y = h.slot[n]
+        _put(h, pos, i, y, h.f[n], h.g[n])
+        sift_up(h, pos, i)
+        sift_down(h, pos, pos[y], n)
+    return n

@@ -242,9 +242,9 @@ def los(occ, walk, p, q, sc, gen):  # pragma: no cover - compiled
 
 
 @njit_cached(inline="always")
-def sight(occ, walk, sc, st, wslot, p0, p1, p2, q0, q1, q2):  # pragma: no cover - compiled
+def sight(occ, walk, sc, st, p0, p1, p2, q0, q1, q2):  # pragma: no cover - compiled
     """:func:`los` between cells p and q given by components, inside a search: the
-    generation counter lives in ``st[wslot]``."""
+    generation counter is the search state's ``stamp`` (:mod:`planner.search._state`)."""
     if is_cubic(walk.g):
         return cubic_walk(occ, p0, p1, p2, q0, q1, q2)
     sc.p[0] = p0
@@ -253,8 +253,8 @@ def sight(occ, walk, sc, st, wslot, p0, p1, p2, q0, q1, q2):  # pragma: no cover
     sc.q[0] = q0
     sc.q[1] = q1
     sc.q[2] = q2
-    st[wslot] += 1
-    return los(occ, walk, sc.p, sc.q, sc, st[wslot])
+    st.stamp += 1
+    return los(occ, walk, sc.p, sc.q, sc, st.stamp)
 
 
 @njit_cached

@@ -23,12 +23,13 @@ import numpy as np
 
 from planner._numba import njit_cached
 from planner.occupancy.keys import mix64, pack3, unpack3
+from planner.search._state import state_dtype
 
 _EMPTY = -1
 
-# Slots of the int64 state vector shared by the resumable kernel and its driver.
-ST_N, ST_HN, ST_EXP, ST_LOOK, ST_GOAL, ST_NP, ST_WGEN = 0, 1, 2, 3, 4, 5, 6
-ST_SIZE = 7
+#: the A* family's kernel state (:mod:`planner.search._state`): the common counters and the
+#: pages of the paged slot map in use
+ASTAR_STATE = state_dtype("pages")
 
 PB_SHIFT = 2
 PB_MASK = (1 << PB_SHIFT) - 1
@@ -133,8 +134,8 @@ def find_slot(sm, v0, v1, v2):  # pragma: no cover - compiled
 @njit_cached
 def new_page(sm, st, bk, p):  # pragma: no cover - compiled
     """Open a page for block ``bk`` at free table position ``p``; returns its number."""
-    q = st[ST_NP]
-    st[ST_NP] = q + 1
+    q = st.pages
+    st.pages = q + 1
     sm.btab[p] = q
     sm.bkeys[q] = bk
     for i in range(q * PAGE, (q + 1) * PAGE):

@@ -34,11 +34,11 @@ from planner._numba import njit_cached
 from planner.lattice import Lattice
 from planner.occupancy.grid import Occupancy
 from planner.occupancy.walk import segment_walk, walk_of
+from planner.search.heuristic import H_GAUGE
 
 __all__ = ["MoveSet", "move_allowed", "move_set", "move_stencils", "move_heuristic",
            "carries_guarantee"]
 
-H_ZERO, H_GAUGE, H_EUCLID = 0, 1, 2
 
 
 class MoveSet(NamedTuple):
@@ -195,10 +195,21 @@ def _move_set_cached(gen: bytes, neighbors: str, corner_cutting: bool, hkind: in
                    octile)
 
 
+_BY_ID: dict[tuple, tuple[Lattice, MoveSet]] = {}  # lattice identity -> (lattice, move set)
+
+
 def move_set(lattice: Lattice, neighbors: str, corner_cutting: bool, hkind: int) -> MoveSet:
     """The kernel's :class:`MoveSet` (cached per lattice, neighbour set, rule, heuristic)."""
-    return _move_set_cached(lattice.generator.tobytes(), neighbors, bool(corner_cutting),
-                            int(hkind), lattice)
+    key = (id(lattice), neighbors, bool(corner_cutting), int(hkind))
+    hit = _BY_ID.get(key)
+    if hit is not None and hit[0] is lattice:  # a search's common case, without hashing
+        return hit[1]
+    ms = _move_set_cached(lattice.generator.tobytes(), neighbors, bool(corner_cutting),
+                          int(hkind), lattice)
+    if len(_BY_ID) >= 256:
+        _BY_ID.clear()
+    _BY_ID[key] = (lattice, ms)
+    return ms
 
 
 def carries_guarantee(lattice: Lattice, neighbors: str, corner_cutting: bool) -> bool:

@@ -20,6 +20,7 @@ def search_networkx(world, s: np.ndarray, gl: np.ndarray, ms, cap: int | None = 
     BFS over the start's free component (at most ``cap`` cells, default 1,000,000)."""
     import networkx as nx
 
+    from planner.search.heuristic import estimate_np
     from planner.search.result import SearchResult
 
     cap = cap or NX_NODE_CAP
@@ -48,10 +49,10 @@ def search_networkx(world, s: np.ndarray, gl: np.ndarray, ms, cap: int | None = 
                 queue.append(v)
     checks = world.cell_checks - before + 2
 
+    gen = world.lattice.generator
+
     def h(a, b):
-        if ms.hkind == 0:
-            return 0.0
-        return max(0.0, float((ms.hmat @ np.subtract(b, a)).max()))
+        return float(estimate_np(ms, gen, np.subtract(b, a)))
 
     n = graph.number_of_nodes()
     if goal not in graph:

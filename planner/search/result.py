@@ -1,5 +1,10 @@
-"""The outcome of one search (every engine: A*, Dijkstra, Theta*, Lazy Theta*, D* Lite) and
-the one list of its statuses."""
+"""The outcome of one search (every engine: A*, Dijkstra, Theta*, Lazy Theta*, D* Lite), the
+one list of its statuses, and the engines' kernel return codes with the status each maps to.
+
+Kernel codes (``RUN_*``) are what the compiled searches return; :data:`STATUS_OF_RUN` names
+the :attr:`SearchResult.status` of each final one. ``RUN_GROW`` is never final: the driver
+makes room and calls the kernel again.
+"""
 
 from __future__ import annotations
 
@@ -7,9 +12,22 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["STATUSES", "SearchResult"]
+__all__ = ["STATUSES", "STATUS_OF_RUN", "SearchResult", "RUN_EXHAUSTED", "RUN_FOUND",
+           "RUN_LIMIT", "RUN_GROW", "RUN_BUDGET", "RUN_STOPPED", "RUN_BLOCKED"]
 
 STATUSES = ("found", "unreachable", "budget", "blocked")  # described on SearchResult.status
+
+RUN_EXHAUSTED = 0  # the open list ran empty (D* Lite: no path from the start)
+RUN_FOUND = 1  # a path was found (D* Lite's ComputeShortestPath: settled)
+RUN_LIMIT = 2  # the node limit was reached
+RUN_GROW = 3  # the kernel needs bigger arrays; call again after growing them
+RUN_BUDGET = 4  # the expansion budget was spent
+RUN_STOPPED = 5  # stopped at a pause: the goal is sealed in a small pocket (A* driver)
+RUN_BLOCKED = 6  # D* Lite: the start's own cell is blocked
+
+#: the :attr:`SearchResult.status` of each final kernel code
+STATUS_OF_RUN = {RUN_EXHAUSTED: "unreachable", RUN_FOUND: "found", RUN_LIMIT: "budget",
+                 RUN_BUDGET: "budget", RUN_STOPPED: "unreachable", RUN_BLOCKED: "blocked"}
 
 
 @dataclass

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import math
 import time
+from typing import NamedTuple
 
 import numpy as np
 
@@ -36,20 +37,25 @@ from planner import budget as _budget
 from planner.errors import PlanError
 from planner.occupancy.walk import as_cells
 from planner.search._los import new_scratch, shortcut_kernel
-from planner.search._nodes import BYTES_PER_NODE, ST_EXP, ST_LOOK, ST_N
+from planner.search._nodes import BYTES_PER_NODE
 from planner.search.astar import driver as _driver
-from planner.search.astar import kernel as _astar
-from planner.search.astar.kernel import SearchParams
+from planner.search.astar.kernel import LAZY_THETA, THETA, SearchParams
+from planner.search.heuristic import H_EUCLID, H_GAUGE, H_ZERO
 from planner.search.moves import (
-    H_EUCLID,
-    H_GAUGE,
-    H_ZERO,
+    MoveSet,
     carries_guarantee,
     move_heuristic,
     move_set,
     move_stencils,
 )
-from planner.search.result import SearchResult
+from planner.search.result import (
+    RUN_EXHAUSTED,
+    RUN_FOUND,
+    RUN_LIMIT,
+    RUN_STOPPED,
+    STATUS_OF_RUN,
+    SearchResult,
+)
 from planner.world.world import World
 
 __all__ = ["SearchResult", "search", "search_many", "shortcut", "warm_up", "move_stencils",
@@ -57,7 +63,7 @@ __all__ = ["SearchResult", "search", "search_many", "shortcut", "warm_up", "move
            "default_max_expansions"]
 
 METHODS = ("astar", "dijkstra", "theta", "lazy-theta")
-_ANYANGLE = {"astar": 0, "dijkstra": 0, "theta": 1, "lazy-theta": 2}
+_ANYANGLE = {"astar": 0, "dijkstra": 0, "theta": THETA, "lazy-theta": LAZY_THETA}
 _HKIND = {"astar": H_GAUGE, "dijkstra": H_ZERO, "theta": H_EUCLID, "lazy-theta": H_EUCLID}
 MEMORY_SHARE = _budget.MEMORY_SHARE  # of physical memory, the default memory budget
 
@@ -158,33 +164,52 @@ def search(
     SearchResult
         Lookups are also added to ``world.cell_checks``.
     """
-    if method not in METHODS:
-        raise PlanError(f"unknown method {method!r}; expected one of {', '.join(METHODS)}")
     if backend not in ("numba", "networkx"):
         raise PlanError(f"unknown backend {backend!r}; expected numba or networkx")
-    compile_s = warm_up()
-    max_nodes = _limit(max_nodes, "max_nodes")
-    budget_nodes = default_max_expansions(_limit(memory_budget, "memory_budget") or None)
-    max_exp = _limit(max_expansions, "max_expansions") or budget_nodes
+    job = _prepare(world, method, neighbors, corner_cutting, max_nodes, max_expansions,
+                   memory_budget, 1)
     s = world.endpoint_cell(start_cell, "start")
     gl = world.endpoint_cell(goal_cell, "goal")
-    lat = world.lattice
-    guarantee = carries_guarantee(lat, neighbors, corner_cutting)
-    ms = move_set(lat, neighbors, corner_cutting, _HKIND[method])
-    anyangle = _ANYANGLE[method]
     if backend == "networkx":
-        if anyangle:
+        if job.params.anyangle:
             raise PlanError("the networkx backend supports astar and dijkstra only")
-        from planner.search.reference import search_networkx
+        from planner.search.reference import search_networkx  # networkx: only when asked
 
-        res = search_networkx(world, s, gl, ms, max_nodes or None)
-        res.guarantee = guarantee
+        res = search_networkx(world, s, gl, job.ms, job.max_nodes or None)
+        res.guarantee = job.guarantee
         return res
-    node_cap = min(max_nodes, budget_nodes) if max_nodes else budget_nodes
-    res, look = _run(world, s, gl, ms, SearchParams(anyangle, node_cap, max_exp), max_nodes)
+    res, look = _run(world, s, gl, job.ms, job.params, job.max_nodes)
     world.cell_checks += look
-    res.guarantee, res.compile_seconds = guarantee, compile_s
+    res.guarantee, res.compile_seconds = job.guarantee, job.compile_seconds
     return res
+
+
+class _Job(NamedTuple):
+    """What :func:`search` and :func:`search_many` pass every kernel search of one call."""
+
+    ms: MoveSet
+    params: SearchParams
+    max_nodes: int  # the caller's node limit (0 none), for the result's reason
+    guarantee: bool
+    compile_seconds: float
+
+
+def _prepare(world: World, method: str, neighbors: str, corner_cutting: bool, max_nodes,
+             max_expansions, memory_budget, workers: int) -> _Job:
+    """Check the arguments shared by :func:`search` and :func:`search_many` and derive the
+    move set and kernel settings; ``workers`` concurrent searches share the memory budget."""
+    if method not in METHODS:
+        raise PlanError(f"unknown method {method!r}; expected one of {', '.join(METHODS)}")
+    compile_s = warm_up()
+    max_nodes = _limit(max_nodes, "max_nodes")
+    budget = _limit(memory_budget, "memory_budget") or default_memory_budget()
+    budget_nodes = default_max_expansions(max(1, budget // workers))
+    max_exp = _limit(max_expansions, "max_expansions") or budget_nodes
+    lat = world.lattice
+    ms = move_set(lat, neighbors, corner_cutting, _HKIND[method])
+    node_cap = min(max_nodes, budget_nodes) if max_nodes else budget_nodes
+    return _Job(ms, SearchParams(_ANYANGLE[method], node_cap, max_exp), max_nodes,
+                carries_guarantee(lat, neighbors, corner_cutting), compile_s)
 
 
 def _run(world: World, s: np.ndarray, gl: np.ndarray, ms, params: SearchParams,
@@ -205,24 +230,24 @@ def _run(world: World, s: np.ndarray, gl: np.ndarray, ms, params: SearchParams,
                                                _span(world) if params.anyangle else 0.0,
                                                pause_at=PROBE_AFTER, keep_going=goal_open)
     secs = time.perf_counter() - t0
-    exp, gen, look = int(st[ST_EXP]), int(st[ST_N]), int(st[ST_LOOK])
+    exp, gen, look = int(st["expansions"]), int(st["nodes"]), int(st["lookups"])
     checks = look + 2  # and the two endpoint checks
     none = np.zeros((0, 3), np.int64)
-    if status == _astar.RUN_FOUND:
+    if status == RUN_FOUND:
         return SearchResult(True, cells, cost, checks, exp, gen, secs, peak), look
-    if status == _driver.RUN_STOPPED:  # the goal is sealed in a small pocket
+    if status == RUN_STOPPED:  # the goal is sealed in a small pocket
         n, probe_look = pocket[0]
         return SearchResult(False, none, math.inf, checks + probe_look, exp, gen, secs, peak,
                             f"goal unreachable: its free space is {n} cells, closed off "
-                            "from the start", status="unreachable"), look + probe_look
-    if status == _astar.RUN_EXHAUSTED:
-        why, kind = f"goal unreachable: explored {gen} cells", "unreachable"
-    elif status == _astar.RUN_LIMIT and max_nodes and gen >= max_nodes:
-        why, kind = f"node limit {max_nodes} reached after {exp} expansions", "budget"
+                            "from the start", status=STATUS_OF_RUN[status]), look + probe_look
+    if status == RUN_EXHAUSTED:
+        why = f"goal unreachable: explored {gen} cells"
+    elif status == RUN_LIMIT and max_nodes and gen >= max_nodes:
+        why = f"node limit {max_nodes} reached after {exp} expansions"
     else:
-        why, kind = f"search budget exhausted after {exp} expansions ({peak} bytes)", "budget"
+        why = f"search budget exhausted after {exp} expansions ({peak} bytes)"
     return SearchResult(False, none, math.inf, checks, exp, gen, secs, peak, why,
-                        status=kind), look
+                        status=STATUS_OF_RUN[status]), look
 
 
 def search_many(
@@ -262,11 +287,9 @@ def search_many(
     list of SearchResult, length Q, in query order
         Their lookups are also added to ``world.cell_checks``.
     """
-    import os
+    import os  # local: only search_many runs threads
     from concurrent.futures import ThreadPoolExecutor
 
-    if method not in METHODS:
-        raise PlanError(f"unknown method {method!r}; expected one of {', '.join(METHODS)}")
     a, b = as_cells(start_cells), as_cells(goal_cells)
     if a.shape != b.shape:
         raise PlanError(f"start_cells and goal_cells must have the same shape (Q, 3), got "
@@ -275,21 +298,14 @@ def search_many(
         cpus = os.sched_getaffinity(0) if hasattr(os, "sched_getaffinity") else None
         workers = len(cpus) if cpus else (os.cpu_count() or 1)
     workers = max(1, min(_limit(workers, "workers"), len(a)))
-    compile_s = warm_up()
-    max_nodes = _limit(max_nodes, "max_nodes")
-    budget = _limit(memory_budget, "memory_budget") or default_memory_budget()
-    budget_nodes = default_max_expansions(max(1, budget // workers))
-    max_exp = _limit(max_expansions, "max_expansions") or budget_nodes
+    job = _prepare(world, method, neighbors, corner_cutting, max_nodes, max_expansions,
+                   memory_budget, workers)
     for i in range(len(a)):
         world.endpoint_cell(a[i], f"query {i}: start")
         world.endpoint_cell(b[i], f"query {i}: goal")
-    guarantee = carries_guarantee(world.lattice, neighbors, corner_cutting)
-    ms = move_set(world.lattice, neighbors, corner_cutting, _HKIND[method])
-    node_cap = min(max_nodes, budget_nodes) if max_nodes else budget_nodes
-    params = SearchParams(_ANYANGLE[method], node_cap, max_exp)
 
     def one(i: int) -> tuple[SearchResult, int]:
-        return _run(world, a[i], b[i], ms, params, max_nodes)
+        return _run(world, a[i], b[i], job.ms, job.params, job.max_nodes)
 
     if workers == 1:
         done = [one(i) for i in range(len(a))]
@@ -299,8 +315,8 @@ def search_many(
     out = []
     for i, (res, look) in enumerate(done):
         world.cell_checks += look
-        res.guarantee = guarantee
-        res.compile_seconds = compile_s if i == 0 else 0.0
+        res.guarantee = job.guarantee
+        res.compile_seconds = job.compile_seconds if i == 0 else 0.0
         out.append(res)
     return out
 
@@ -321,9 +337,9 @@ def _goal_pocket(world: World, ms, start, goal) -> tuple[int, int] | None:
     chk = world.checker
     status, _, _, st, _ = _driver.run(chk.occupancy, chk.walk, ms, goal, start,
                                       SearchParams(0, 0, GOAL_PROBE), 0.0, dense=False)
-    if status != _astar.RUN_EXHAUSTED:
+    if status != RUN_EXHAUSTED:
         return None
-    return int(st[ST_N]), int(st[ST_LOOK])
+    return int(st["nodes"]), int(st["lookups"])
 
 
 def _span(world: World) -> float:

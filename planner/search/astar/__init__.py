@@ -1,2 +1,2 @@
-"""A*, Dijkstra, Theta* and Lazy Theta*: the resumable kernel (:mod:`~.kernel`), its any-angle
-rules (:mod:`~.theta`) and the Python driver that sizes its arrays (:mod:`~.driver`)."""
+"""A*, Dijkstra, Theta* and Lazy Theta*: the resumable kernel with its any-angle rules
+(:mod:`~.kernel`) and the Python driver that sizes its arrays (:mod:`~.driver`)."""

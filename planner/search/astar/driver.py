@@ -12,15 +12,13 @@ import numpy as np
 
 from planner.lattice import Lattice
 from planner.occupancy.walk import walk_of
+from planner.search._entry import entry_point, struct_key
+from planner.search._grow import grown
 from planner.search._heap import Heap, new_heap
 from planner.search._los import new_scratch
 from planner.search._nodes import (
+    ASTAR_STATE,
     PAGE,
-    ST_EXP,
-    ST_GOAL,
-    ST_N,
-    ST_NP,
-    ST_SIZE,
     NodeTable,
     SlotMap,
     clear_dense,
@@ -29,14 +27,9 @@ from planner.search._nodes import (
     rehash,
     trace_path,
 )
+from planner.search._state import new_state
 from planner.search.astar import kernel as _astar
-
-
-def _grown(a: np.ndarray, size: int, keep: int) -> np.ndarray:
-    b = np.empty(size, a.dtype)
-    b[:keep] = a[:keep]
-    return b
-
+from planner.search.result import RUN_BUDGET, RUN_FOUND, RUN_GROW, RUN_STOPPED
 
 #: largest dense cell -> slot array (bytes, int32 per grid cell); bigger grids use pages.
 DENSE_SLOT_BUDGET = 512 * 2**20
@@ -105,10 +98,6 @@ def _give_dense(occ, a: np.ndarray) -> None:
         weakref.finalize(occ.grid, _forget, key)
 
 
-#: status of a search that ``keep_going`` stopped at its pause (not an ``_astar`` status)
-RUN_STOPPED = 5
-
-
 def run(occ, walk, ms, start, goal, params, span: float, cap: int = 4096, *,
         dense: bool = True, pause_at: int = 0, keep_going=None):
     """Run one search to completion. ``span``: longest sight line (m) the any-angle scratch
@@ -123,11 +112,12 @@ def run(occ, walk, ms, start, goal, params, span: float, cap: int = 4096, *,
     Returns
     -------
     status : int
-        ``_astar.RUN_*`` (never RUN_GROW), or :data:`RUN_STOPPED`.
+        A ``RUN_*`` code of :mod:`planner.search.result` (never RUN_GROW; RUN_STOPPED
+        when ``keep_going`` said stop).
     cells : ndarray (K, 3) int64 or None
         Path cells from start to goal when found.
     cost : float
-    st : ndarray (ST_SIZE,) int64
+    st : numpy record (``planner.search._nodes.ASTAR_STATE``)
         Final kernel state (counts).
     peak : int
         Bytes of the search's own arrays at the end (their peak: they only grow).
@@ -137,7 +127,7 @@ def run(occ, walk, ms, start, goal, params, span: float, cap: int = 4096, *,
     pcap = 64  # pages of the cell -> node slot map
     dense = _take_dense(occ) if dense else None
     slots = new_slots(pcap) if dense is None else new_slots(pcap, dense, occ.lo, occ.dims)
-    st = np.zeros(ST_SIZE, np.int64)
+    state = new_state(ASTAR_STATE)
     # The walk scratch serves the generic line of sight; cubic sight lines need none.
     if span > 0 and not np.array_equal(walk.g, walk.g[0, 0] * np.eye(3)):
         sc = new_scratch(span, walk)
@@ -149,23 +139,27 @@ def run(occ, walk, ms, start, goal, params, span: float, cap: int = 4096, *,
     first = params
     if keep_going is not None and pause_at > 0 and not 0 < params.max_expansions <= pause_at:
         first = params._replace(max_expansions=pause_at)
-    parts = _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, first, ends, st, cap, pcap)
+    kernel = _kernel(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state)
+    parts = _loop(kernel, occ, walk, ms, nodes, heap, slots, sc, ufree, first, ends, state,
+                  cap, pcap)
     nodes, heap, slots, status = parts
-    if first is not params and status == _astar.RUN_BUDGET:
+    if first is not params and status == RUN_BUDGET:
         if keep_going():
-            parts = _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st,
-                          len(nodes.key), len(slots.bkeys))
+            parts = _loop(kernel, occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends,
+                          state, len(nodes.key), len(slots.bkeys))
             nodes, heap, slots, status = parts
         else:
             status = RUN_STOPPED
     peak = _nbytes(nodes) + _nbytes(heap) + _nbytes(slots) + _nbytes(sc) + ufree.nbytes
-    peak += st.nbytes
+    peak += state.nbytes
+    st = state[0]
     path = None
-    if status == _astar.RUN_FOUND:
-        gs = int(st[ST_GOAL])
-        path, cost = trace_path(nodes, gs), float(nodes.g[gs])
+    if status == RUN_FOUND:
+        gs = int(st["goal"])
+        path, cost = _helper(trace_path, nodes, gs)(nodes, gs), float(nodes.g[gs])
     if dense is not None:  # every touched cell holds a node: clear those, reuse the array
-        clear_dense(slots, nodes.key, int(st[ST_N]))
+        n = int(st["nodes"])
+        _helper(clear_dense, slots, nodes.key, n)(slots, nodes.key, n)
         _give_dense(occ, dense)
     if path is None:
         return status, None, math.inf, st, peak
@@ -179,27 +173,60 @@ def _nbytes(struct) -> int:
     return n
 
 
-def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st, cap, pcap):
+# Compiled entry points (planner.search._entry): the kernel's per world struct types, and
+# the helpers, whose arguments the driver alone builds.
+_KERNELS: dict[tuple, object] = {}
+_HELPERS: dict[object, object] = {}
+
+
+_LAST: list = [(lambda: None, None, None)]  # (grid ref, walk, kernel) of the last search
+
+
+def _kernel(occ, walk, *args):
+    """The compiled search kernel for these arguments. The driver builds all but the
+    world's structs ``occ`` and ``walk`` (and ``params``, of Python ints), always of the same
+    types; the last world's are remembered by identity (its occupancy grid by a weak
+    reference: a dropped world is not kept alive)."""
+    grid, w, k = _LAST[0]  # one tuple, replaced whole: threads never see a mixed one
+    if grid() is occ.grid and w is walk:
+        return k
+    key = (struct_key(occ), struct_key(walk), struct_key(args[-3]))
+    k = _KERNELS.get(key)
+    if k is None:
+        k = _KERNELS[key] = entry_point(_astar.search_run, (occ, walk, *args))
+    _LAST[0] = (weakref.ref(occ.grid), walk, k)
+    return k
+
+
+def _helper(disp, *args):
+    """The compiled ``disp`` (trace_path, clear_dense) for the driver's argument types."""
+    k = _HELPERS.get(disp)
+    if k is None:
+        k = _HELPERS[disp] = entry_point(disp, args)
+    return k
+
+
+def _loop(kernel, occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state, cap,
+          pcap):
     """Call the kernel until it stops asking for room; returns the final structs and
     status."""
     nm = len(ms.moves)
     while True:
-        status = _astar.search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends,
-                                   st)
-        if status != _astar.RUN_GROW:
+        status = kernel(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state)
+        if status != RUN_GROW:
             break
-        n, npg = int(st[ST_N]), int(st[ST_NP])
+        n, npg = int(state[0]["nodes"]), int(state[0]["pages"])
         if n + nm > cap:
             cap *= 2
-            nodes = NodeTable(*(_grown(a, cap, n) for a in nodes))
-            heap = Heap(*(_grown(a, cap, n) for a in heap))
+            nodes = NodeTable(*(grown(a, cap, n) for a in nodes))
+            heap = Heap(*(grown(a, cap, n) for a in heap))
         if npg + nm > pcap or 2 * (npg + nm) > len(slots.btab):
             pcap *= 2
-            slots = SlotMap(_grown(slots.pages, pcap * PAGE, npg * PAGE),
-                            np.full(2 * pcap, -1, np.int64), _grown(slots.bkeys, pcap, npg),
+            slots = SlotMap(grown(slots.pages, pcap * PAGE, npg * PAGE),
+                            np.full(2 * pcap, -1, np.int64), grown(slots.bkeys, pcap, npg),
                             *slots[3:])
             rehash(slots, npg)
     return nodes, heap, slots, status
 
 
-__all__ = ["run", "ST_EXP", "RUN_STOPPED"]
+__all__ = ["run", "DENSE_SLOT_BUDGET"]

@@ -1,6 +1,18 @@
 """The search kernel (numba): A* / Dijkstra over lattice cells, with the any-angle parent
-rules of :mod:`planner.search.astar.theta` for Theta* and Lazy Theta*. Resumable: the driver
-(:mod:`planner.search.astar.driver`) grows the arrays when the kernel asks.
+rules of Theta* and Lazy Theta*. Resumable: the driver (:mod:`planner.search.astar.driver`)
+grows the arrays when the kernel asks.
+
+Theta* (``anyangle`` 1) checks line of sight from the expanded node's parent to each
+neighbour when it is generated and links the neighbour to that parent when it can see it
+(skipped when neither that parent nor the lattice move would improve the neighbour's g).
+Lazy Theta* (``anyangle`` 2) assumes the sight line and verifies it once, when the node is
+expanded, falling back to its best closed lattice neighbour (SetVertex). Both use the
+Euclidean heuristic and the exact walk of :mod:`planner.search._los`.
+
+The expansion loop writes out its hot parts (the dense lookups, the safe-rule test, the
+slot lookup, the heuristic of a new node, the any-angle g) instead of calling the shared
+inline helpers (:mod:`planner.search.heuristic`, ...): with them the loop compiled to a
+markedly slower one on cubic-26 (``benchmarks/search_speed.py``).
 """
 
 from __future__ import annotations
@@ -14,65 +26,21 @@ from planner.occupancy.grid import cell_free
 from planner.occupancy.keys import mix64, pack3, unpack3
 from planner.search import _heap
 from planner.search._los import cubic_walk, is_cubic, sight
-from planner.search._nodes import (
-    PAGE,
-    ST_EXP,
-    ST_GOAL,
-    ST_HN,
-    ST_LOOK,
-    ST_N,
-    ST_NP,
-    ST_WGEN,
-    block_key,
-    dense_index,
-    find_slot,
-    local,
-    new_page,
-)
-from planner.search.astar.theta import LAZY_THETA, THETA, euclid
-from planner.search.moves import H_EUCLID, H_GAUGE, MAX_BITS, move_allowed
+from planner.search._nodes import PAGE, block_key, dense_index, find_slot, local, new_page
+from planner.search.heuristic import H_EUCLID, H_GAUGE, estimate, octile
+from planner.search.moves import MAX_BITS, move_allowed
+from planner.search.result import RUN_BUDGET, RUN_EXHAUSTED, RUN_FOUND, RUN_GROW, RUN_LIMIT
 
 _EMPTY = -1
-RUN_EXHAUSTED, RUN_FOUND, RUN_LIMIT, RUN_GROW, RUN_BUDGET = 0, 1, 2, 3, 4
+THETA, LAZY_THETA = 1, 2  # SearchParams.anyangle
 
 
 class SearchParams(NamedTuple):
     """Scalar settings of one search."""
 
-    anyangle: int  # 0 lattice A* / Dijkstra, 1 Theta*, 2 Lazy Theta*
+    anyangle: int  # 0 lattice A* / Dijkstra, THETA, LAZY_THETA
     max_nodes: int  # stop (RUN_LIMIT) once this many nodes exist; <= 0 no limit
     max_expansions: int  # stop (RUN_BUDGET) after this many expansions; <= 0 no limit
-
-
-_R3M2 = np.sqrt(3.0) - np.sqrt(2.0)
-_R2M1 = np.sqrt(2.0) - 1.0
-
-
-@njit_cached(inline="always")
-def octile(s, e0, e1, e2):  # pragma: no cover - compiled
-    """Octile distance of index difference e on the cubic lattice of cell size s (m): the
-    cubic-26 gauge in closed form (sqrt 3 per diagonal, sqrt 2 per face diagonal)."""
-    a, b, c = abs(e0), abs(e1), abs(e2)
-    lo = min(a, min(b, c))
-    hi = max(a, max(b, c))
-    return s * (_R3M2 * lo + _R2M1 * (a + b + c - lo - hi) + hi)
-
-
-@njit_cached(inline="always")
-def heuristic(ms, g, e0, e1, e2):  # pragma: no cover - compiled
-    """h of the index difference e = goal - w (module docstring of ``stencils``)."""
-    hv = 0.0
-    if ms.octile > 0.0:
-        hv = octile(ms.octile, e0, e1, e2)
-    elif ms.hkind == H_GAUGE:
-        hmat = ms.hmat
-        for f in range(hmat.shape[0]):
-            x = hmat[f, 0] * e0 + hmat[f, 1] * e1 + hmat[f, 2] * e2
-            if x > hv:
-                hv = x
-    elif ms.hkind == H_EUCLID:
-        hv = euclid(g, 0, 0, 0, e0, e1, e2)
-    return hv
 
 
 @njit_cached
@@ -81,22 +49,22 @@ def search_init(start, goal, ms, g, nodes, heap, slots, st):  # pragma: no cover
     bmask = slots.btab.shape[0] - 1
     nodes.key[0] = pack3(start[0], start[1], start[2])
     nodes.g[0] = 0.0
-    nodes.h[0] = heuristic(ms, g, goal[0] - start[0], goal[1] - start[1], goal[2] - start[2])
+    nodes.h[0] = estimate(ms, g, goal[0] - start[0], goal[1] - start[1], goal[2] - start[2])
     nodes.f[0] = nodes.h[0]
     nodes.par[0] = 0
-    st[ST_NP] = 0
-    st[ST_HN] = _heap.push(heap, nodes.pos, 0, 0, nodes.f[0], 0.0)
+    st.pages = 0
+    st.queued = _heap.push(heap, nodes.pos, 0, 0, nodes.f[0], 0.0)
     if slots.dense.shape[0] > 1:
         slots.dense[dense_index(slots, start[0], start[1], start[2])] = 1  # slot 0, + 1
     else:
         bk = block_key(start[0], start[1], start[2])
         q = new_page(slots, st, bk, mix64(bk) & bmask)
         slots.pages[q * PAGE + local(start[0], start[1], start[2])] = 0
-    st[ST_N] = 1
+    st.nodes = 1
 
 
 @njit_cached(nogil=True)  # threads search in parallel (search_many)
-def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st):
+def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state):
     # pragma: no cover - compiled
     """A* / Dijkstra / Theta* / Lazy Theta* over lattice cells, resumable.
 
@@ -120,19 +88,20 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st):
         Scratch for the union stencil lookups of one expansion.
     params : SearchParams
     ends : (2, 3) int64
-        Start and goal cells. The first call (``st[ST_N] == 0``) puts the start in the
+        Start and goal cells. The first call (``nodes == 0``) puts the start in the
         empty structs (:func:`search_init`): one kernel call per search instead of two.
-    st : (ST_SIZE,) int64
-        State (``planner.search._nodes.ST_*``): node count, heap size, expansions, lookups,
-        goal slot, page count, walk generation.
+    state : (1,) ``planner.search._nodes.ASTAR_STATE``
+        The search's counters (:mod:`planner.search._state`); the code returned is also
+        left in ``status``.
 
     Returns
     -------
     int
         RUN_FOUND, RUN_EXHAUSTED, RUN_LIMIT, RUN_BUDGET or RUN_GROW.
     """
+    st = state[0]
     goal = ends[1]
-    if st[ST_N] == 0:
+    if st.nodes == 0:
         search_init(ends[0], goal, ms, walk.g, nodes, heap, slots, st)
     mode, grid, lo, dims, otable, otmask, gg, blo, bhi = occ
     lo0, lo1, lo2 = lo[0], lo[1], lo[2]
@@ -173,13 +142,13 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st):
     base = np.int64(0)
     fq = 1e-9 * mcost.min()
     fq_inv = 1.0 / fq
-    n = st[ST_N]
-    hn = st[ST_HN]
-    expansions = st[ST_EXP]
-    lookups = st[ST_LOOK]
+    n = st.nodes
+    hn = st.queued
+    expansions = st.expansions
+    lookups = st.lookups
     status = RUN_EXHAUSTED
     while hn > 0:
-        if n + nm > cap or st[ST_NP] + nm > pcap or 2 * (st[ST_NP] + nm) > bsize:
+        if n + nm > cap or st.pages + nm > pcap or 2 * (st.pages + nm) > bsize:
             status = RUN_GROW
             break
         if max_exp > 0 and expansions >= max_exp:
@@ -222,7 +191,7 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st):
             if cubic:
                 ok, c = cubic_walk(occ, u0, u1, u2, p0, p1, p2)
             else:
-                ok, c = sight(occ, walk, sc, st, ST_WGEN, u0, u1, u2, p0, p1, p2)
+                ok, c = sight(occ, walk, sc, st, u0, u1, u2, p0, p1, p2)
             lookups += c
             if not ok:
                 # SetVertex: the best closed neighbour that an allowed move reaches (one
@@ -254,7 +223,7 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st):
                 ng[s] = best
         if nkey[s] == gk:
             status = RUN_FOUND
-            st[ST_GOAL] = s
+            st.goal = s
             break
         if max_nodes > 0 and n >= max_nodes:
             status = RUN_LIMIT
@@ -344,7 +313,7 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st):
                     if cubic:
                         ok, c = cubic_walk(occ, v0, v1, v2, p0, p1, p2)
                     else:
-                        ok, c = sight(occ, walk, sc, st, ST_WGEN, p0, p1, p2, v0, v1, v2)
+                        ok, c = sight(occ, walk, sc, st, p0, p1, p2, v0, v1, v2)
                     lookups += c
                     if not ok:
                         gt = g1
@@ -359,8 +328,9 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st):
                     hn = _heap.push(heap, npos, hn, t, nf[t], gt)
                 else:
                     _heap.decrease_key(heap, npos, t, nf[t], gt)
-    st[ST_N] = n
-    st[ST_HN] = hn
-    st[ST_EXP] = expansions
-    st[ST_LOOK] = lookups
+    st.nodes = n
+    st.queued = hn
+    st.expansions = expansions
+    st.lookups = lookups
+    st.status = status
     return status

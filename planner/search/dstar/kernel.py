@@ -21,7 +21,7 @@ other way, by the smaller k2; that expands every node of the equal-cost region b
 and start, which on a lattice is most of it).
 Nodes live in a table in creation order, found through a dense slot map over the world's
 index box. The kernels never grow arrays: :class:`planner.search.dstar.lite.DStarLite`
-makes room before each call (``GROW`` asks for more). Repair after changed cells, path
+makes room before each call (``RUN_GROW`` asks for more). Repair after changed cells, path
 extraction and the one call per replan: :mod:`planner.search.dstar.replan`.
 """
 
@@ -34,19 +34,20 @@ import numpy as np
 from planner._numba import njit_cached
 from planner.occupancy.grid import occ_free
 from planner.occupancy.keys import pack3, unpack3
-from planner.search._heap import push, sift_down, sift_up
+from planner.search import _heap
+from planner.search._state import state_dtype
+from planner.search.heuristic import gauge
 from planner.search.moves import move_allowed
+from planner.search.result import RUN_BLOCKED, RUN_FOUND, RUN_GROW
 
-# int64 state vector: node count, heap size, expansions, lookups, update stamp, goal slot;
-# the stored path (:mod:`planner.search.dstar.replan`): its id, whether it is still valid, its
-# length and the start's index in it; the replan's phase, collected nodes, room it needs
-# (nodes, repair scratch) and whether the start's own cell is still to be checked.
-S_N, S_HN, S_EXP, S_LOOK, S_STAMP, S_GOAL = 0, 1, 2, 3, 4, 5
-S_PID, S_PVALID, S_PLEN, S_PAT = 6, 7, 8, 9
-S_PHASE, S_NC, S_NEED, S_NEEDT, S_CHK = 10, 11, 12, 13, 14
-S_PJ, S_PK = 15, 16  # the replan's path: rows [S_PJ, S_PK) of the path buffer
-S_SIZE = 17
-DONE, GROW, BLOCKED = 0, 1, 2
+#: the kernel state (:mod:`planner.search._state`): the common counters, then the stored
+#: path (:mod:`planner.search.dstar.replan`: its id, whether it is still valid, its length,
+#: the start's row in it), the replan's phase, its collected nodes, the room it asks for
+#: (nodes, repair scratch), whether the start's own cell is still to be checked, and the
+#: replan's path: rows [path_from, path_to) of the path buffer
+REPLAN_STATE = state_dtype("path_id", "path_valid", "path_len", "path_at", "phase",
+                           "collected", "need_nodes", "need_scratch", "check_start",
+                           "path_from", "path_to")
 _TOL = 1e-9  # relative: "rhs(s) = c + g_old" tested with slack (a spare recompute is safe)
 _BIAS = 4 * _TOL  # relative: an underconsistent node's key ahead of the ties (_key1)
 
@@ -133,8 +134,8 @@ def node(bx, nd, st, v0, v1, v2, create):  # pragma: no cover - compiled
     s = np.int64(bx.slot[b])
     if s >= 0 or not create:
         return s
-    s = st[S_N]
-    st[S_N] = s + 1
+    s = st.nodes
+    st.nodes = s + 1
     bx.slot[b] = s
     nd.key[s] = pack3(v0, v1, v2)
     nd.g[s] = np.inf
@@ -151,7 +152,7 @@ def node(bx, nd, st, v0, v1, v2, create):  # pragma: no cover - compiled
 @njit_cached(inline="always")
 def _near_path(nd, st, u):  # pragma: no cover - compiled
     """The stored path's extraction read ``u`` (on the path or next to it)."""
-    return nd.near[u] == st[S_PID] or nd.near[u] == -st[S_PID]
+    return nd.near[u] == st.path_id or nd.near[u] == -st.path_id
 
 
 @njit_cached
@@ -160,7 +161,7 @@ def edges(occ, ms, ufree, bx, nd, st, s):  # pragma: no cover - compiled
     if nd.mask[s] >= 0:
         return nd.mask[s]
     u0, u1, u2 = unpack3(nd.key[s])
-    st[S_LOOK] += 1
+    st.lookups += 1
     m = np.int64(0)
     reach = bx.reach
     b = _box(bx, u0, u1, u2)
@@ -174,7 +175,7 @@ def edges(occ, ms, ufree, bx, nd, st, s):  # pragma: no cover - compiled
             b = _box(bx, v0, v1, v2)
             if b >= 0:
                 reach[b >> 3] |= np.uint8(1 << (b & 7))
-        st[S_LOOK] += nu
+        st.lookups += nu
         for k in range(ms.moves.shape[0]):
             if move_allowed(ufree, ms.ptr, ms.idx, k):
                 m |= np.int64(1) << np.int64(k)
@@ -184,17 +185,8 @@ def edges(occ, ms, ufree, bx, nd, st, s):  # pragma: no cover - compiled
 
 @njit_cached(inline="always")
 def _h(ms, start, v0, v1, v2):  # pragma: no cover - compiled
-    """Gauge heuristic between the start and a cell (symmetric: the move set is)."""
-    hm = ms.hmat
-    e0 = v0 - start[0]
-    e1 = v1 - start[1]
-    e2 = v2 - start[2]
-    hv = 0.0
-    for f in range(hm.shape[0]):
-        x = hm[f, 0] * e0 + hm[f, 1] * e1 + hm[f, 2] * e2
-        if x > hv:
-            hv = x
-    return hv
+    """Heuristic between the start and a cell (symmetric: the move set is)."""
+    return gauge(ms.hmat, v0 - start[0], v1 - start[1], v2 - start[2])
 
 
 @njit_cached(inline="always")
@@ -220,20 +212,9 @@ def _k1(ms, x):  # pragma: no cover - compiled
     return np.floor(x / q + 0.5) * q
 
 
-@njit_cached
+@njit_cached(inline="always")
 def _remove(heap, pos, st, s):  # pragma: no cover - compiled
-    i = pos[s]
-    pos[s] = -1
-    hn = st[S_HN] - 1
-    st[S_HN] = hn
-    if i < hn:
-        x = heap.slot[hn]
-        heap.slot[i] = x
-        heap.f[i] = heap.f[hn]
-        heap.g[i] = heap.g[hn]
-        pos[x] = i
-        sift_up(heap, pos, i)
-        sift_down(heap, pos, pos[x], hn)
+    st.queued = _heap.remove(heap, pos, st.queued, s)
 
 
 @njit_cached
@@ -259,13 +240,9 @@ def update_vertex(ms, nd, heap, st, km, start, s):  # pragma: no cover - compile
         k1 = _key1(ms, g, rhs, _h(ms, start, u0, u1, u2), km, under)
         tb = np.inf if under else gm
         if pos[s] >= 0:
-            i = pos[s]
-            heap.f[i] = k1
-            heap.g[i] = tb
-            sift_up(heap, pos, i)
-            sift_down(heap, pos, pos[s], st[S_HN])
+            _heap.change_key(heap, pos, st.queued, s, k1, tb)
         else:
-            st[S_HN] = push(heap, pos, st[S_HN], s, k1, tb)
+            st.queued = _heap.push(heap, pos, st.queued, s, k1, tb)
     elif pos[s] >= 0:
         _remove(heap, pos, st, s)
 
@@ -306,24 +283,24 @@ def recompute_rhs(occ, ms, ufree, bx, nd, st, s):  # pragma: no cover - compiled
 def compute_path(occ, ms, ufree, bx, nd, heap, st, km, start, check_start):
     # pragma: no cover - compiled
     """ComputeShortestPath: expand until the start is consistent and no queued key is
-    smaller than its key (ties, up to float noise, are expanded too). Returns DONE, GROW
-    when a new node might not fit, or BLOCKED when ``check_start`` and the start's own
-    cell is blocked (one lookup, as A*'s endpoint check)."""
+    smaller than its key (ties, up to float noise, are expanded too). Returns RUN_FOUND
+    (settled), RUN_GROW when a new node might not fit, or RUN_BLOCKED when ``check_start``
+    and the start's own cell is blocked (one lookup, as A*'s endpoint check)."""
     if check_start:
-        st[S_LOOK] += 1
+        st.lookups += 1
         if not occ_free(occ, start[0], start[1], start[2]):
-            return BLOCKED
+            return RUN_BLOCKED
     cap = nd.key.shape[0]
     nm = ms.moves.shape[0]
-    goal = st[S_GOAL]
+    goal = st.goal
     heap_f, heap_g, heap_s = heap.f, heap.g, heap.slot
     ss = node(bx, nd, st, start[0], start[1], start[2], False)
     if ss >= 0 and ss != goal and (nd.mask[ss] < 0 or nd.lazy[ss]):  # rhs may be low
         recompute_rhs(occ, ms, ufree, bx, nd, st, ss)
         update_vertex(ms, nd, heap, st, km, start, ss)
-    while st[S_HN] > 0:
-        if st[S_N] + nm > cap:
-            return GROW
+    while st.queued > 0:
+        if st.nodes + nm > cap:
+            return RUN_GROW
         ss = node(bx, nd, st, start[0], start[1], start[2], False)
         if ss >= 0:
             sg, srhs = nd.g[ss], nd.rhs[ss]
@@ -346,7 +323,7 @@ def compute_path(occ, ms, ufree, bx, nd, heap, st, km, start, check_start):
         if not (srhs > sg or k1o < ks1 - e1 or (k1o <= ks1 + e1 and tbo == np.inf)):
             break
         u = heap_s[0]
-        st[S_EXP] += 1
+        st.expansions += 1
         u0, u1, u2 = unpack3(nd.key[u])
         k1n = _key1(ms, nd.g[u], nd.rhs[u], _h(ms, start, u0, u1, u2), km,
                     nd.g[u] < nd.rhs[u] or nd.lazy[u] != 0)
@@ -362,7 +339,7 @@ def compute_path(occ, ms, ufree, bx, nd, heap, st, km, start, check_start):
             continue
         mk = edges(occ, ms, ufree, bx, nd, st, u)
         if _near_path(nd, st, u):  # its g changes: the stored path may not hold
-            st[S_PVALID] = 0
+            st.path_valid = 0
         if nd.g[u] > nd.rhs[u]:
             gu = nd.rhs[u]
             nd.g[u] = gu
@@ -371,8 +348,8 @@ def compute_path(occ, ms, ufree, bx, nd, heap, st, km, start, check_start):
                 if (mk >> np.int64(m)) & 1:
                     s = node(bx, nd, st, u0 + ms.moves[m, 0], u1 + ms.moves[m, 1],
                              u2 + ms.moves[m, 2], True)
-                    if nd.near[s] == -st[S_PID]:  # u (maybe new) is next to the path
-                        st[S_PVALID] = 0
+                    if nd.near[s] == -st.path_id:  # u (maybe new) is next to the path
+                        st.path_valid = 0
                     c = ms.cost[m] + gu
                     if s != goal and c < nd.rhs[s]:
                         nd.rhs[s] = c
@@ -392,4 +369,4 @@ def compute_path(occ, ms, ufree, bx, nd, heap, st, km, start, check_start):
                         recompute_rhs(occ, ms, ufree, bx, nd, st, s)
                         update_vertex(ms, nd, heap, st, km, start, s)
             update_vertex(ms, nd, heap, st, km, start, u)
-    return DONE
+    return RUN_FOUND

@@ -38,11 +38,15 @@ import numpy as np
 from planner.errors import PlanError
 from planner.occupancy.keys import unpack
 from planner.occupancy.walk import as_cells
+from planner.search._entry import entry_point
+from planner.search._grow import grown
 from planner.search._heap import Heap, new_heap
+from planner.search._state import new_state
 from planner.search.dstar import kernel as dk
 from planner.search.dstar import replan as dr
-from planner.search.moves import H_GAUGE, carries_guarantee, move_set
-from planner.search.result import SearchResult
+from planner.search.heuristic import H_GAUGE, gauge_np
+from planner.search.moves import carries_guarantee, move_set
+from planner.search.result import RUN_FOUND, RUN_GROW, STATUS_OF_RUN, SearchResult
 from planner.world.world import World
 
 __all__ = ["DStarLite"]
@@ -100,11 +104,12 @@ class DStarLite:
                                np.empty(1024, i8), np.empty(1024, i8),
                                np.empty(1024, np.bool_), np.empty(1024, i8),
                                np.empty((4097, 3), i8), np.empty(4097, np.float64))
-        self._st = np.zeros(dk.S_SIZE, np.int64)
+        self._state_array = new_state(dk.REPLAN_STATE)  # (1,): what the compiled call takes
+        self._st = self._state_array[0]  # its record: a view, read and written from here
         self._fs = np.zeros(2)  # km, the last path's cost
         self._last = self.start.copy()
         g = dk.node(self._bx, self._nd, self._st, *(int(x) for x in self.goal), True)
-        self._st[dk.S_GOAL] = g
+        self._st["goal"] = g
         self._nd.rhs[g] = 0.0
         dk.update_vertex(self._ms, self._nd, self._heap, self._st, 0.0, self.start, g)
         self._mark = (0, 0)  # lookups, expansions at the last plan
@@ -119,20 +124,20 @@ class DStarLite:
     # -- storage -----------------------------------------------------------------------
     def _room(self, extra: int) -> None:
         """Room for ``extra`` more nodes, a path through every node, and the repair
-        scratch the kernel asked for (``S_NEEDT``)."""
-        n = int(self._st[dk.S_N])
+        scratch the kernel asked for (``need_scratch``)."""
+        n = int(self._st["nodes"])
         cap = len(self._nd.key)
         if n + extra > cap:
             while cap < n + extra:
                 cap *= 2
             self._nd = dk.new_nodes(cap, self._nd, n)
-            self._heap = Heap(*(_grown(a, cap, int(self._st[dk.S_HN])) for a in self._heap))
+            self._heap = Heap(*(grown(a, cap, int(self._st["queued"])) for a in self._heap))
         sc = self._sc
         if len(sc.path) < n + 1:  # keeps the stored path
-            k = int(self._st[dk.S_PLEN])
-            sc = sc._replace(path=_grown(sc.path, 2 * n + 1, k),
-                             step=_grown(sc.step, 2 * n + 1, k))
-        need = int(self._st[dk.S_NEEDT])
+            k = int(self._st["path_len"])
+            sc = sc._replace(path=grown(sc.path, 2 * n + 1, k),
+                             step=grown(sc.step, 2 * n + 1, k))
+        need = int(self._st["need_scratch"])
         if len(sc.touched) < need:
             sc = sc._replace(touched=np.empty(max(need, 2 * len(sc.touched)), np.int64))
         self._sc = sc
@@ -152,7 +157,7 @@ class DStarLite:
     @property
     def nodes(self) -> int:
         """Nodes created so far."""
-        return int(self._st[dk.S_N])
+        return int(self._st["nodes"])
 
     @property
     def peak_bytes(self) -> int:
@@ -176,7 +181,7 @@ class DStarLite:
         least doubled the node count (the first one mostly): O(n log n) numpy, counted
         in that plan's time."""
         st, nd, bx = self._st, self._nd, self._bx
-        n = int(st[dk.S_N])
+        n = int(st["nodes"])
         d = bx.dims
         a = unpack(nd.key[:n], 3) - bx.lo
         b = (a[:, 0] * d[1] + a[:, 1]) * d[2] + a[:, 2]
@@ -189,11 +194,11 @@ class DStarLite:
         table = dk.new_nodes(len(nd.key))
         for dst, src in zip(table, nd, strict=True):
             dst[:m] = src[old]
-        hn = int(st[dk.S_HN])
+        hn = int(st["queued"])
         self._heap.slot[:hn] = new_id[self._heap.slot[:hn]]
         bx.slot[b[old]] = np.arange(m, dtype=np.int32)
-        st[dk.S_GOAL] = new_id[st[dk.S_GOAL]]
-        st[dk.S_N] = m
+        st["goal"] = new_id[st["goal"]]
+        st["nodes"] = m
         self._nd = table
         self._ordered = m
         self._sized()
@@ -202,7 +207,7 @@ class DStarLite:
     def move_start(self, cell) -> None:
         """The robot moved to ``cell`` ((3,) int): keys stay valid through ``km``."""
         c = as_cells(cell)[0]
-        self._fs[0] += float(_gauge(self._ms.hmat, c - self._last))
+        self._fs[0] += float(gauge_np(self._ms.hmat, c - self._last))
         self._last = c.copy()
         self.start[:] = c  # in place: the replan's entry point is keyed on this array
 
@@ -229,7 +234,7 @@ class DStarLite:
             t0 = time.perf_counter()
             state = ~self.world.checker.cells_free(c)
             self._seconds += time.perf_counter() - t0
-            self._st[dk.S_LOOK] += len(c)
+            self._st["lookups"] += len(c)
         else:
             state = bool(blocked)  # made an array in plan()
         self._pending.append((c, state))
@@ -260,29 +265,27 @@ class DStarLite:
         self._pending = []
         if len(cells):
             self._collect_room(len(cells))
-            st[dk.S_PHASE] = dr.PH_COLLECT
+            st["phase"] = dr.PH_COLLECT
         else:
-            st[dk.S_PHASE] = dr.PH_SEARCH
-        st[dk.S_CHK] = 1  # the start's own cell: one lookup, as A*'s endpoint check
+            st["phase"] = dr.PH_SEARCH
+        st["check_start"] = 1  # the start's own cell: one lookup, as A*'s endpoint check
         call, arg = self._call()
         t0 = time.perf_counter()
         while True:
             done = call(arg, cells, state)
-            if done != dk.GROW:
+            if done != RUN_GROW:
                 break
-            self._room(int(st[dk.S_NEED]))
+            self._room(int(st["need_nodes"]))
             call, arg = self._call()
-        if int(st[dk.S_N]) >= max(_COMPACT_MIN, 2 * self._ordered):
+        if int(st["nodes"]) >= max(_COMPACT_MIN, 2 * self._ordered):
             self._compact()
         self._seconds += time.perf_counter() - t0
-        if done == dk.BLOCKED:
-            return self._result(None, math.inf, "start cell is blocked", "blocked")
-        j, k = int(st[dk.S_PJ]), int(st[dk.S_PK])
-        if k == j:
-            return self._result(None, math.inf,
-                                f"goal unreachable: explored {self.nodes} cells",
-                                "unreachable")
-        return self._result(self._sc.path[j:k].copy(), float(self._fs[1]), "", "found")
+        if done == RUN_FOUND:
+            j, k = int(st["path_from"]), int(st["path_to"])
+            return self._result(self._sc.path[j:k].copy(), float(self._fs[1]), "", done)
+        why = ("start cell is blocked" if STATUS_OF_RUN[done] == "blocked"
+               else f"goal unreachable: explored {self.nodes} cells")
+        return self._result(None, math.inf, why, done)
 
     def _flags(self, k: int, value: bool) -> np.ndarray:
         """``np.full(k, value)`` as a view of an array kept for the purpose."""
@@ -297,26 +300,20 @@ class DStarLite:
         ``a`` is a :class:`dr.ReplanState` of them (one object to unbox instead of ~45
         arrays), made again when one was replaced (the planner's grew: ``_room`` clears
         it; or the world's occupancy struct or ``start`` is another object); ``f`` the
-        compiled entry point of its signature (numba's dispatcher would type the
-        arguments on every call; here they are fixed: :meth:`plan` passes C-contiguous
-        (K, 3) int64 cells and (K,) bool states)."""
+        compiled entry point of its signature (:mod:`planner.search._entry`: numba's
+        dispatcher would type the arguments on every call; here they are fixed:
+        :meth:`plan` passes C-contiguous (K, 3) int64 cells and (K,) bool states)."""
         occ = self.world.occupancy
         if self._state is not None and self._state[0] is occ and self._state[3] is self.start:
             return self._state[2], self._state[1]
-        arrays = (occ, self._ms, self._bx, self._nd, self._heap, self._sc, self._st,
-                  self._fs, self.start)
-        if not hasattr(dr.replan, "overloads"):  # not a numba dispatcher (NUMBA_DISABLE_JIT)
-            return (lambda a, c, b: dr.replan(*a, c, b)), arrays
-        state = dr.new_state(*arrays)
-        disp = dr.replan_state
-        sig = tuple(disp.typeof_pyval(a) for a in (state, _NONE, _NONE_B))
-        if sig not in disp.overloads:
-            disp.compile(sig)
-        self._state = (occ, state, disp.overloads[sig].entry_point, self.start)
+        state = dr.new_state(occ, self._ms, self._bx, self._nd, self._heap, self._sc,
+                             self._state_array, self._fs, self.start)
+        call = entry_point(dr.replan_state, (state, _NONE, _NONE_B))
+        self._state = (occ, state, call, self.start)
         return self._state[2], state
 
-    def _result(self, cells, cost, why, status) -> SearchResult:
-        look, exp = int(self._st[dk.S_LOOK]), int(self._st[dk.S_EXP])
+    def _result(self, cells, cost, why, code) -> SearchResult:
+        look, exp = int(self._st["lookups"]), int(self._st["expansions"])
         checks, expansions = look - self._mark[0], exp - self._mark[1]
         self._mark = (look, exp)
         self.world.cell_checks += checks
@@ -324,20 +321,9 @@ class DStarLite:
         found = cells is not None
         return SearchResult(found, cells if found else np.zeros((0, 3), np.int64), cost,
                             checks, expansions, self.nodes, secs, self.peak_bytes, why,
-                            status=status, guarantee=self.guarantee)
+                            status=STATUS_OF_RUN[code], guarantee=self.guarantee)
 
 
 _NONE = np.zeros((0, 3), np.int64)
 _COMPACT_MIN = 1 << 14  # nodes: below this the node table fits in cache anyway
 _NONE_B = np.zeros(0, np.bool_)
-
-
-def _gauge(hmat: np.ndarray, e: np.ndarray) -> float:
-    return max(0.0, float((hmat @ e.astype(float)).max()))
-
-
-def _grown(a: np.ndarray, size: int, keep: int) -> np.ndarray:
-    """``a`` with room for ``size`` rows, its first ``keep`` rows kept."""
-    b = np.empty((size, *a.shape[1:]), a.dtype)
-    b[:keep] = a[:keep]
-    return b

@@ -4,7 +4,7 @@ numba's argument checks, and a replan that reuses its path does little else).
 
 Stored path: the last extraction's cells stay in the path buffer. Extraction reads only the
 edge masks of the path's nodes and the g of their neighbours, so until one of those
-changes (the kernels clear ``S_PVALID`` when they write such a mask or g, ``near`` marks
+changes (the kernels clear ``path_valid`` when they write such a mask or g, ``near`` marks
 the nodes) the path from a later start on it is the stored one from that start on: the
 greedy descent would repeat it step for step.
 """
@@ -20,23 +20,6 @@ from numba.experimental import structref
 from planner._numba import njit_cached
 from planner.occupancy.keys import unpack3
 from planner.search.dstar.kernel import (
-    BLOCKED,
-    DONE,
-    GROW,
-    S_CHK,
-    S_GOAL,
-    S_N,
-    S_NC,
-    S_NEED,
-    S_NEEDT,
-    S_PAT,
-    S_PHASE,
-    S_PID,
-    S_PJ,
-    S_PK,
-    S_PLEN,
-    S_PVALID,
-    S_STAMP,
     _box,
     _near_path,
     _remove,
@@ -45,6 +28,7 @@ from planner.search.dstar.kernel import (
     node,
     update_vertex,
 )
+from planner.search.result import RUN_BLOCKED, RUN_EXHAUSTED, RUN_FOUND, RUN_GROW
 
 PH_COLLECT, PH_APPLY, PH_SEARCH, PH_PATH = 0, 1, 2, 3
 
@@ -77,8 +61,8 @@ class ReplanState(structref.StructRefProxy):
     (cached compilation); remade when an array is replaced."""
 
 
-# "counts" is the state vector ``st`` (a field named "st" would clash with the local the
-# generated constructor gives its struct)
+# "counts" is the (1,) state array (:data:`planner.search.dstar.kernel.REPLAN_STATE`; a field
+# named "st" would clash with the local the generated constructor gives its struct)
 structref.define_proxy(ReplanState, _StateType,
                        ["occ", "ms", "bx", "nd", "heap", "sc", "counts", "fs", "start"])
 
@@ -93,7 +77,7 @@ def new_state(occ, ms, bx, nd, heap, sc, st, fs, start):  # pragma: no cover - c
 def replan_state(state, cells, blocked):  # pragma: no cover - compiled
     """:func:`replan` with the planner's arrays from ``state`` (:class:`ReplanState`)."""
     return replan(state.occ, state.ms, state.bx, state.nd, state.heap, state.sc,
-                  state.counts, state.fs, state.start, cells, blocked)
+                  state.counts[0], state.fs, state.start, cells, blocked)
 
 
 @njit_cached
@@ -101,42 +85,52 @@ def replan(occ, ms, bx, nd, heap, sc, st, fs, start, cells, blocked):
     # pragma: no cover - compiled
     """One replan, resumable: collect the changed cells' nodes (``cells`` (K, 3),
     ``blocked`` (K,) what each became), repair their edges, ComputeShortestPath, extract
-    the path. ``fs``: [km, path cost]. The caller sets ``st[S_PHASE]`` (PH_COLLECT, or
-    PH_SEARCH without changes) and ``st[S_CHK]``; on GROW it makes room for
-    ``st[S_NEED]`` nodes, ``st[S_NEEDT]`` repair scratch and a path of every node, and
-    calls again. DONE: the path is ``sc.path[st[S_PJ]:st[S_PK]]`` (none when equal)."""
+    the path. ``st``: the planner's state record
+    (:data:`~planner.search.dstar.kernel.REPLAN_STATE`); ``fs``: [km, path cost]. The caller
+    sets ``st.phase`` (PH_COLLECT, or PH_SEARCH without changes) and ``st.check_start``; on
+    RUN_GROW it makes room for ``st.need_nodes`` nodes, ``st.need_scratch`` repair scratch
+    and a path of every node, and calls again.
+    RUN_FOUND: the path is ``sc.path[st.path_from:st.path_to]``; RUN_EXHAUSTED: no path;
+    RUN_BLOCKED: the start's own cell is blocked. The code is also left in ``st.status``."""
+    st.status = _replan(occ, ms, bx, nd, heap, sc, st, fs, start, cells, blocked)
+    return st.status
+
+
+@njit_cached(inline="always")
+def _replan(occ, ms, bx, nd, heap, sc, st, fs, start, cells, blocked):
+    # pragma: no cover - compiled
     nm = ms.moves.shape[0]
-    st[S_NEED] = 0
-    st[S_NEEDT] = 0
-    if st[S_PHASE] == PH_COLLECT:
-        st[S_NC] = collect(occ, ms, sc.affect, bx, nd, st, cells, blocked, sc.ss, sc.old,
+    st.need_nodes = 0
+    st.need_scratch = 0
+    if st.phase == PH_COLLECT:
+        st.collected = collect(occ, ms, sc.affect, bx, nd, st, cells, blocked, sc.ss, sc.old,
                            sc.redo)
-        st[S_PHASE] = PH_APPLY
-    if st[S_PHASE] == PH_APPLY:
-        n = st[S_NC]
-        if st[S_N] + n * nm + 1 > nd.key.shape[0] or sc.touched.shape[0] < 2 * n * nm + 1:
-            st[S_NEED] = n * nm + 1
-            st[S_NEEDT] = 2 * n * nm + 1
-            return GROW
+        st.phase = PH_APPLY
+    if st.phase == PH_APPLY:
+        n = st.collected
+        if st.nodes + n * nm + 1 > nd.key.shape[0] or sc.touched.shape[0] < 2 * n * nm + 1:
+            st.need_nodes = n * nm + 1
+            st.need_scratch = 2 * n * nm + 1
+            return RUN_GROW
         apply_changes(occ, ms, sc.ufree, bx, nd, heap, st, fs[0], start, sc.ss, sc.old,
                       sc.redo, n, sc.touched)
-        st[S_PHASE] = PH_SEARCH
-    if st[S_PHASE] == PH_SEARCH:
-        r = compute_path(occ, ms, sc.ufree, bx, nd, heap, st, fs[0], start, st[S_CHK] == 1)
-        st[S_CHK] = 0
-        if r == GROW:
-            st[S_NEED] = nm + 1
-            return GROW
-        if r == BLOCKED:
-            return BLOCKED
-        st[S_PHASE] = PH_PATH
-    if sc.path.shape[0] < st[S_N] + 1:
-        return GROW
+        st.phase = PH_SEARCH
+    if st.phase == PH_SEARCH:
+        r = compute_path(occ, ms, sc.ufree, bx, nd, heap, st, fs[0], start, st.check_start == 1)
+        st.check_start = 0
+        if r == RUN_GROW:
+            st.need_nodes = nm + 1
+            return RUN_GROW
+        if r == RUN_BLOCKED:
+            return RUN_BLOCKED
+        st.phase = PH_PATH
+    if sc.path.shape[0] < st.nodes + 1:
+        return RUN_GROW
     j, k, cost = extract(occ, ms, sc.ufree, bx, nd, st, start, sc.path, sc.step)
-    st[S_PJ] = j
-    st[S_PK] = k
+    st.path_from = j
+    st.path_to = k
     fs[1] = cost
-    return DONE
+    return RUN_FOUND if k > j else RUN_EXHAUSTED
 
 
 @njit_cached
@@ -146,22 +140,22 @@ def extract(occ, ms, ufree, bx, nd, st, start, out, step):  # pragma: no cover -
     ``(j, k, cost)``: the path is ``out[j:k]`` (none when ``j == k``: unreachable, or the
     descent does not reach the goal within ``len(out)`` steps); ``step[i]`` is the cost of
     the move into ``out[i]``."""
-    if st[S_PVALID] == 1:
-        k = st[S_PLEN]
-        for j in range(st[S_PAT], k):
+    if st.path_valid == 1:
+        k = st.path_len
+        for j in range(st.path_at, k):
             if out[j, 0] == start[0] and out[j, 1] == start[1] and out[j, 2] == start[2]:
-                st[S_PAT] = j
+                st.path_at = j
                 cost = 0.0
                 for i in range(j + 1, k):
                     cost += step[i]
                 return j, k, cost
-    st[S_PID] += 1  # a new path: marks of older ones no longer count
-    pid = st[S_PID]
-    st[S_PVALID] = 0
+    st.path_id += 1  # a new path: marks of older ones no longer count
+    pid = st.path_id
+    st.path_valid = 0
     s = node(bx, nd, st, start[0], start[1], start[2], False)
     if s < 0 or nd.rhs[s] == np.inf:  # the start may stay overconsistent (fig. 4)
         return 0, 0, np.inf
-    goal = st[S_GOAL]
+    goal = st.goal
     cost = 0.0
     out[0, 0], out[0, 1], out[0, 2] = start[0], start[1], start[2]
     step[0] = 0.0
@@ -179,9 +173,9 @@ def extract(occ, ms, ufree, bx, nd, st, start, out, step):  # pragma: no cover -
         nd.near[v] = -pid
         k += 1
         s = v
-    st[S_PVALID] = 1
-    st[S_PLEN] = k
-    st[S_PAT] = 0
+    st.path_valid = 1
+    st.path_len = k
+    st.path_at = 0
     return 0, k, cost
 
 
@@ -224,11 +218,11 @@ def collect(occ, ms, affect, bx, nd, st, cells, blocked, out_s, out_old, out_red
     (blocked in this batch: its own cell's visit kills it; earlier: it died then), so
     away from the box faces one byte of the dense occupancy grid (``occ``, the node
     map's box) skips it without touching its row."""
-    st[S_STAMP] += 1
-    stamp = st[S_STAMP]
+    st.stamp += 1
+    stamp = st.stamp
     ust = ms.union
     nu = ust.shape[0]
-    pid = st[S_PID]
+    pid = st.path_id
     lo0, lo1, lo2 = bx.lo[0], bx.lo[1], bx.lo[2]
     d0, d1, d2 = bx.dims[0], bx.dims[1], bx.dims[2]
     e0, e1, e2 = bx.ext[0], bx.ext[1], bx.ext[2]
@@ -266,7 +260,7 @@ def collect(occ, ms, affect, bx, nd, st, cells, blocked, out_s, out_old, out_red
                 # Never looked up (g = inf): nothing reads its rhs until it is expanded,
                 # but that rhs may rest on an edge this cell blocks; flagged, it is
                 # recomputed when popped (compute_path), as a lazy node.
-                if (blocked[i] and nd.rhs[s] < np.inf and s != st[S_GOAL]
+                if (blocked[i] and nd.rhs[s] < np.inf and s != st.goal
                         and (j < 0 or nd.sup[s] < 0 or (affect[j] >> nd.sup[s]) & 1)):
                     nd.lazy[s] = 1
                 continue
@@ -280,12 +274,12 @@ def collect(occ, ms, affect, bx, nd, st, cells, blocked, out_s, out_old, out_red
             if blocked[i]:
                 mk = 0 if j < 0 else nd.mask[s] & ~affect[j]
                 if mk != nd.mask[s] and nd.near[s] == -pid:
-                    st[S_PVALID] = 0  # a node on the stored path lost a move
+                    st.path_valid = 0  # a node on the stored path lost a move
                 nd.mask[s] = mk
             else:
                 out_redo[nd.batch[s]] = True
                 if nd.near[s] == -pid:
-                    st[S_PVALID] = 0
+                    st.path_valid = 0
     return n
 
 
@@ -326,9 +320,9 @@ def apply_changes(occ, ms, ufree, bx, nd, heap, st, km, start, ss, old, redo, n,
     # turns lazy: queued with its old, lower, key until the search pops it and
     # recomputes (the other end of a lost edge, when it has a cached mask, is collected
     # too and checks its own support; a dead one has nothing to repair).
-    st[S_STAMP] += 1
-    stamp = st[S_STAMP]
-    goal = st[S_GOAL]
+    st.stamp += 1
+    stamp = st.stamp
+    goal = st.goal
     nt = 0
     for i in range(n):
         x = ss[i]
@@ -387,7 +381,7 @@ def _settle(bx, nd, heap, st, u):  # pragma: no cover - compiled
     without queueing it, and it leaves the node map (later changes near it need not
     visit it; a cell freed again gets a fresh node when a search reaches it)."""
     if nd.g[u] < np.inf and _near_path(nd, st, u):
-        st[S_PVALID] = 0
+        st.path_valid = 0
     nd.g[u] = np.inf
     nd.rhs[u] = np.inf
     nd.lazy[u] = 0

@@ -1,0 +1,38 @@
+"""Calling a compiled search kernel without numba's per-call argument typing.
+
+numba's dispatcher types every argument of every call to pick the compiled version. For a
+kernel taking several ``NamedTuple`` structs that typing (done in Python for named tuples)
+costs more than a short search itself; the engines call the compiled function directly
+instead. numba has no public API for it: :func:`entry_point` reads
+``dispatcher.overloads[signature].entry_point``, the one place the package relies on numba
+internals. A compiled entry point does not check its arguments, so it must only get
+arguments of the types it was looked up with: :func:`struct_key` names those types for the
+structs a caller does not build itself, and a caller keeps one entry point per key.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+
+import numpy as np
+
+__all__ = ["entry_point", "struct_key"]
+
+
+def entry_point(disp, args: Sequence) -> Callable:
+    """The compiled function of numba dispatcher ``disp`` for the types of ``args``
+    (compiled, or loaded from the cache, if needed). Without numba compilation
+    (``NUMBA_DISABLE_JIT``) the plain Python function."""
+    if not hasattr(disp, "overloads"):
+        return disp
+    sig = tuple(disp.typeof_pyval(a) for a in args)
+    if sig not in disp.overloads:
+        disp.compile(sig)
+    return disp.overloads[sig].entry_point
+
+
+def struct_key(struct: tuple) -> tuple:
+    """What numba's type of a ``NamedTuple`` of arrays and scalars depends on: its class and,
+    per field, the array's dtype, dimensions and layout or the scalar's Python type."""
+    return (type(struct), *((a.dtype.str, a.ndim, a.flags.c_contiguous, a.flags.writeable)
+                            if isinstance(a, np.ndarray) else type(a) for a in struct))

@@ -1,0 +1,101 @@
+"""The search heuristic, once for every engine: numba kernels and their numpy forms side by side.
+
+Every engine (A*, Theta*, Lazy Theta*, D* Lite and the networkx reference) estimates the cost
+between two cells from their index difference ``e = b - a`` ((3,) int) alone:
+
+- ``H_GAUGE`` (A*, D* Lite): the move-set gauge ``max(0, max_f hmat[f] . e)`` (m), the exact
+  obstacle-free path length with the lattice moves (:mod:`planner.search.moves`). On the
+  cubic lattice with 26 neighbours it equals the octile distance, evaluated in closed form
+  (:func:`octile`) when ``MoveSet.octile`` holds the cell size.
+- ``H_EUCLID`` (any-angle): the straight-line distance ``|G e|`` (m), ``G`` the lattice
+  generator (3, 3).
+- ``H_ZERO`` (Dijkstra): 0.
+
+The numba functions are ``inline="always"`` (the A* kernel calls them once per generated
+node; a real call there pays reference counting on the array arguments). The numpy forms
+take (..., 3) arrays of index differences and serve the Python side (D* Lite's key offset
+``km``, the networkx reference); ``tests/test_search.py`` checks the two agree.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from planner._numba import njit_cached
+
+__all__ = ["H_ZERO", "H_GAUGE", "H_EUCLID", "octile", "gauge", "euclid", "estimate",
+           "octile_np", "gauge_np", "euclid_np", "estimate_np"]
+
+H_ZERO, H_GAUGE, H_EUCLID = 0, 1, 2
+
+_R3M2 = np.sqrt(3.0) - np.sqrt(2.0)
+_R2M1 = np.sqrt(2.0) - 1.0
+
+
+@njit_cached(inline="always")
+def octile(s, e0, e1, e2):  # pragma: no cover - compiled
+    """Octile distance (m) of index difference e on the cubic lattice of cell size s (m):
+    sqrt 3 per full diagonal, sqrt 2 per face diagonal, 1 per face step, times s."""
+    a, b, c = abs(e0), abs(e1), abs(e2)
+    lo = min(a, min(b, c))
+    hi = max(a, max(b, c))
+    return s * (_R3M2 * lo + _R2M1 * (a + b + c - lo - hi) + hi)
+
+
+@njit_cached(inline="always")
+def gauge(hmat, e0, e1, e2):  # pragma: no cover - compiled
+    """Move-set gauge (m) of index difference e: ``max(0, max_f hmat[f] . e)``, hmat (F, 3)."""
+    hv = 0.0
+    for f in range(hmat.shape[0]):
+        x = hmat[f, 0] * e0 + hmat[f, 1] * e1 + hmat[f, 2] * e2
+        if x > hv:
+            hv = x
+    return hv
+
+
+@njit_cached(inline="always")
+def euclid(g, e0, e1, e2):  # pragma: no cover - compiled
+    """Straight-line length |G e| (m) of index difference e, g the (3, 3) generator."""
+    x = g[0, 0] * e0 + g[0, 1] * e1 + g[0, 2] * e2
+    y = g[1, 0] * e0 + g[1, 1] * e1 + g[1, 2] * e2
+    z = g[2, 0] * e0 + g[2, 1] * e1 + g[2, 2] * e2
+    return np.sqrt(x * x + y * y + z * z)
+
+
+@njit_cached(inline="always")
+def estimate(ms, g, e0, e1, e2):  # pragma: no cover - compiled
+    """The heuristic of move set ``ms`` (its ``hkind``) for index difference e (m)."""
+    if ms.octile > 0.0:
+        return octile(ms.octile, e0, e1, e2)
+    if ms.hkind == H_GAUGE:
+        return gauge(ms.hmat, e0, e1, e2)
+    if ms.hkind == H_EUCLID:
+        return euclid(g, e0, e1, e2)
+    return 0.0
+
+
+def octile_np(s: float, e: np.ndarray) -> np.ndarray:
+    """:func:`octile` of (..., 3) index differences; returns (...,) float64 (m)."""
+    a = np.sort(np.abs(np.asarray(e, np.float64)), axis=-1)
+    return s * (_R3M2 * a[..., 0] + _R2M1 * a[..., 1] + a[..., 2])
+
+
+def gauge_np(hmat: np.ndarray, e: np.ndarray) -> np.ndarray:
+    """:func:`gauge` of (..., 3) index differences; returns (...,) float64 (m)."""
+    return np.maximum(0.0, (np.asarray(e, np.float64) @ np.asarray(hmat).T).max(axis=-1))
+
+
+def euclid_np(g: np.ndarray, e: np.ndarray) -> np.ndarray:
+    """:func:`euclid` of (..., 3) index differences; returns (...,) float64 (m)."""
+    return np.linalg.norm(np.asarray(e, np.float64) @ np.asarray(g).T, axis=-1)
+
+
+def estimate_np(ms, g: np.ndarray, e: np.ndarray) -> np.ndarray:
+    """:func:`estimate` of (..., 3) index differences; returns (...,) float64 (m)."""
+    if ms.octile > 0.0:
+        return octile_np(ms.octile, e)
+    if ms.hkind == H_GAUGE:
+        return gauge_np(ms.hmat, e)
+    if ms.hkind == H_EUCLID:
+        return euclid_np(g, e)
+    return np.zeros(np.shape(e)[:-1])
