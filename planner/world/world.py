@@ -9,8 +9,8 @@ Occupancy storage (chosen per world, see :attr:`World.storage`):
   (no list of blocked cells is kept); a lookup is one bounds test and one bit load, and it
   answers "in bounds" and "not blocked" at once. A 389 x 313 x 511 Warframe map takes
   7.8 MB. Cells meeting unknown space are a second bit set over the same box.
-* ``"hash"`` (fallback for huge boxes): the blocked cells as given, (M, 3) int64, and an
-  open-addressing set of their packed keys (power-of-two size, load <= 0.5, splitmix64
+* ``"hash"`` (fallback for huge boxes): the in-bounds blocked cells as given, (M, 3) int64,
+  an open-addressing set of their packed keys (power-of-two size, load <= 0.5, splitmix64
   mixing) plus an in-bounds test of the cell centre. Memory proportional to the number of
   blocked cells.
 
@@ -199,15 +199,15 @@ class World(UnknownSpace):
 
     @property
     def blocked(self) -> np.ndarray:
-        """(M, 3) int64 blocked cells: dense storage, the distinct in-bounds ones in
-        ascending key order, made on each call (module docstring); hash storage, as given."""
+        """(M, 3) int64 blocked cells in bounds: dense storage, distinct and in ascending key
+        order, made on each call (module docstring); hash storage, as given."""
         if self._free is None:
             return self._blocked
         return self.blocked_bits().cells()
 
     @property
     def n_blocked(self) -> int:
-        """Number of distinct blocked cells (dense storage: in bounds)."""
+        """Number of distinct blocked cells in bounds."""
         if self._free is None:
             return len(unique_keys(pack(self._blocked))) if len(self._blocked) else 0
         return self.blocked_bits().count()
@@ -246,7 +246,7 @@ class World(UnknownSpace):
             self._free.update(w, False)
             return
         check_range(w, w, 3)  # now, not inside a kernel
-        self._blocked = np.concatenate([self._blocked, w])
+        self._blocked = np.concatenate([self._blocked, w[self.in_bounds(w)]])
         self._checker = None
 
     def add_unknown(self, cells: np.ndarray) -> None:
@@ -260,7 +260,8 @@ class World(UnknownSpace):
             u.update(w, True)
             np.bitwise_and(u.bits, self.in_bounds_bits(u.lo, u.dims).bits, out=u.bits)
             return
-        self._unknown = SortedKeys(unique_keys(np.concatenate([self._unknown.keys, pack(w)])))
+        self._unknown = SortedKeys(unique_keys(np.concatenate([self._unknown.keys,
+                                                              pack(w[self.in_bounds(w)])])))
 
     def block_marked(self, grid: np.ndarray, lo: np.ndarray, dims: np.ndarray, mask: int,
                      unknown: bool = False) -> None:
