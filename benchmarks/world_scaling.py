@@ -124,13 +124,13 @@ def child(spec: str) -> dict:
         size = path.stat().st_size
     a, b = _endpoints(world)
     res = planner.plan(world, a, b)
-    lo, dims = world.free_bits.lo, world.free_bits.dims
-    return {"lattice": lattice, "edge": edge, "box": int(np.prod(dims)),
+    occ = world.occupancy
+    return {"lattice": lattice, "edge": edge, "box": int(np.prod(occ.dims)),
             "blocked": world.n_blocked, "unknown": world.n_unknown, "build": build,
             "build_peak": build_peak, "peak": _status("VmHWM:"), "before": before,
             "file": size, "found": res.found, "search": res.seconds,
             "expansions": res.expansions, "search_bytes": res.peak_bytes,
-            "storage": world.storage, "lo": lo.tolist()}
+            "storage": world.storage}
 
 
 def _run(spec: str) -> dict:

@@ -135,7 +135,7 @@ def check_schema(d: dict[str, np.ndarray], path: Path) -> None:
             if ref.shape != gd.shape or not np.allclose(ref, gd, rtol=_REL, atol=0):
                 raise ValueError(f"'lattice' says {name!r}, the generator is another lattice")
         from planner.occupancy.bits import n_bytes
-        from planner.world.world import index_box
+        from planner.world.cells import index_box
 
         lo, hi = _tol_bounds(bounds, lat)
         box = d["box"]
