@@ -19,9 +19,9 @@ warm-up (``/proc/self/clear_refs``):
 * peak: the process's peak resident memory over build + save + plan (VmHWM, MB), and the
   part above its memory before the build ("world + plan");
 * file: bytes of the saved world (:func:`planner.world.file.save_world`);
-* query: one long A* query (FCC: its 18-neighbour set; cubic 26) between free cells near
-  the two ends of the map's long axis: search seconds and the search's own arrays
-  (``PlanResult.peak_bytes``).
+* query: one long A* query (:func:`planner.plan` defaults) between the free cells nearest
+  to two fixed points (geb079: 11 m apart along the corridor; the hall: corner to corner):
+  search seconds, expansions and the search's own arrays (``PlanResult.peak_bytes``).
 
 The exponents are least-squares slopes of log(quantity) against log(blocked cells) over the
 rows of one lattice (1.0: grows as the blocked cells do). The machine may be shared: trust
@@ -78,18 +78,17 @@ def synthetic_map(cells: float, seed: int = 0):
     return obst, edge
 
 
-def _endpoints(world) -> tuple[np.ndarray, np.ndarray]:
-    """Free cell centres near the two ends of the world's long axis (m)."""
-    lo, hi = world.bounds
-    axis = int(np.argmax(hi - lo))
-    mid = (lo + hi) / 2
-    mid[2] = lo[2] + min(1.0, (hi[2] - lo[2]) / 2)
+# one long connected query on geb079 (along the corridor, 11 m apart) and across the hall
+GEB_QUERY = np.array([[15.37, -0.76, 2.16], [26.54, -0.63, 1.02]])
+HALL_QUERY = np.array([[0.5, 0.5, 0.5], [31.5, 31.5, 0.5]])
+
+
+def _endpoints(world, query: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The free cell centres (m) nearest to the two points of ``query`` (2, 3)."""
     ends = []
-    for t in (0.05, 0.95):
-        p = mid.copy()
-        p[axis] = lo[axis] + t * (hi[axis] - lo[axis])
+    for p in query:
         cell = world.lattice.quantize(p[None])[0]
-        near = world.nearest_free(cell, max_radius=0.25 * float((hi - lo)[axis]))
+        near = world.nearest_free(cell, max_radius=2.0)
         if near is None:
             raise SystemExit(f"no free cell near {p}")
         ends.append(world.lattice.to_world(near[None])[0])
@@ -105,7 +104,8 @@ def child(spec: str) -> dict:
     warm = planner.build_world(GEB if kind == "geb" else synthetic_map(1e5)[0], lattice,
                                cell_volume=0.32**3 if kind == "geb" else 1.0, radius=0.2,
                                unknown="blocked" if kind == "geb" else "free")
-    planner.plan(warm, *_endpoints(warm))
+    query = GEB_QUERY if kind == "geb" else HALL_QUERY
+    planner.plan(warm, *_endpoints(warm, query))
     del warm
     if kind == "geb":
         obst, edge, policy = planner.io.load_obstacles(GEB), float(value), "blocked"
@@ -122,7 +122,7 @@ def child(spec: str) -> dict:
         path = Path(tmp) / "w.npz"
         save_world(world, path)
         size = path.stat().st_size
-    a, b = _endpoints(world)
+    a, b = _endpoints(world, query)
     res = planner.plan(world, a, b)
     occ = world.occupancy
     return {"lattice": lattice, "edge": edge, "box": int(np.prod(occ.dims)),
@@ -151,7 +151,7 @@ def table(rows: list[dict]) -> str:
     """The growth table and the exponents per lattice."""
     mb = 2**20
     head = ("lattice  edge m     box cells      blocked  build CPU s  peak MB  world+plan MB"
-            "  bits/box cell  file KB  query s  expansions  search MB")
+            "  bits/box cell  file KB  query s  expansions  search MB  found")
     lines = [head]
     for r in rows:
         above = r["peak"] - r["before"]
@@ -159,7 +159,7 @@ def table(rows: list[dict]) -> str:
             f"{r['lattice']:7s} {r['edge']:7.4f} {r['box']:13,d} {r['blocked']:12,d} "
             f"{r['build']:12.2f} {r['peak'] / mb:8.0f} {above / mb:14.0f} "
             f"{8 * above / r['box']:14.2f} {r['file'] / 1024:8.0f} {r['search']:8.3f} "
-            f"{r['expansions']:11,d} {r['search_bytes'] / mb:10.1f}")
+            f"{r['expansions']:11,d} {r['search_bytes'] / mb:10.1f}  {r['found']}")
     lines.append("")
     lines.append("exponents against blocked cells (least squares over the rows of a lattice):")
     lines.append("lattice  build CPU  world+plan memory  file size  query s  search memory")

@@ -247,7 +247,7 @@ def unknown_box_grid(boxes: np.ndarray, box_sizes: np.ndarray, free_boxes: np.nd
     check_range(glo, ghi, 3)
     dims = ghi - glo + 1
     cells = float(np.prod(dims.astype(float)))
-    if known.nbytes + cells * (5 if radius else 1) > budget:
+    if known.nbytes + cells > budget:  # one byte a cell; the dilation scratch is a slab
         return None
     strides = grid_strides(dims)
     grid = np.zeros(int(cells), dtype=np.uint8)
@@ -273,15 +273,14 @@ def unknown_box_grid(boxes: np.ndarray, box_sizes: np.ndarray, free_boxes: np.nd
                     tests.support_v, tests.packing, tests.covering, tests.tol, grid)
     del known
     if radius is not None and radius > 0 and np.any(grid):
-        occ = np.flatnonzero(grid)
         runs = _stencil_runs(stencil)
-        if runs is not None:
-            diff = np.zeros(grid.size + 1, dtype=np.int32)
-            vk.dilate_rows(grid, occ, full @ strides, runs[0] @ strides, runs[1], diff)
-            del diff
+        if runs is not None:  # boundary cells by a scan; the run sums one slab at a time
+            edge = vk.boundary_cells(grid, full @ strides)
+            slab = int(dims[2]) * max(1, (1 << 22) // int(dims[2]))
+            vk.dilate_row_slabs(grid, edge, runs[0] @ strides, runs[1], slab,
+                                np.empty(slab + 1, dtype=np.int32))
         else:
-            vk.dilate(grid, occ, stencil @ strides, full @ strides)
-        del occ
+            vk.dilate(grid, np.flatnonzero(grid), stencil @ strides, full @ strides)
     return grid, glo, dims
 
 

@@ -198,7 +198,7 @@ def build_world(
     if obst.has_free_space and d == 3:  # classified cell by cell: refuse before any work
         lo, hi = unknown_region(lat, bounds, radius)
         n = float(np.prod(hi - lo)) / lat.cell_volume
-        per_cell = 24.0 if obst.origins is not None else 6.0  # cell lists; byte grids
+        per_cell = 24.0 if obst.origins is not None else 2.0  # cell lists; byte grids
         require(per_cell * n, f"the unknown-space classification of {obst.source} "
                 f"(~{n:,.0f} cells in its box)")
     try:
