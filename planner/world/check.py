@@ -15,6 +15,7 @@ import hashlib
 import math
 import os
 import zipfile
+import zlib
 from pathlib import Path
 
 import numpy as np
@@ -143,18 +144,16 @@ def check_schema(d: dict[str, np.ndarray], path: Path) -> None:
         if box.shape != (2, 3) or box.dtype != np.int64 or not np.array_equal(box, want):
             raise ValueError("'box' is not the index box of the generator and bounds")
         size = n_bytes(box[1])
-        for key in ("blocked", "unknown"):
-            a = d[key]
-            if a.shape != (size,) or a.dtype != np.uint8:
-                raise ValueError(f"{key!r} must be ({size},) uint8 bits over the box, got "
-                                 f"{a.dtype} {a.shape}")
-        code = _bits_check(d["blocked"], d["unknown"], box[0], box[1],
+        same = str(_scalar(d, "digest", "U")) == digest(d)
+        bits = {key: _inflate(d[key], size, key) for key in ("blocked", "unknown")}
+        code = _bits_check(bits["blocked"], bits["unknown"], box[0], box[1],
                            np.ascontiguousarray(g, dtype=np.float64), lo, hi, dim == 2)
         if code:
             raise ValueError(_CELL_PROBLEMS[code])
         # last: a well-formed file whose values were edited (cells removed, radius changed)
-        if str(_scalar(d, "digest", "U")) != digest(d):
+        if not same:
             raise ValueError("the arrays do not match the digest written at save")
+        d["blocked_bits"], d["unknown_bits"] = bits["blocked"], bits["unknown"]
     except ValueError as exc:  # PlannerError is a ValueError: a bad lattice too
         raise corrupt(path, str(exc)) from None
 
@@ -163,6 +162,20 @@ _CELL_PROBLEMS = {1: "bits set past the last cell of the box",
                   3: "'blocked' holds cells outside the bounds",
                   4: "'unknown' holds cells outside the bounds",
                   6: "a 2D world holds cells off the plane z = 0"}
+
+
+def _inflate(a: np.ndarray, size: int, key: str) -> np.ndarray:
+    """The ``size`` bytes of bits the zlib stream ``a`` (uint8) holds, read no further."""
+    if a.ndim != 1 or a.dtype != np.uint8:
+        raise ValueError(f"{key!r} must be a (K,) uint8 zlib stream, got {a.dtype} {a.shape}")
+    z = zlib.decompressobj()
+    try:
+        out = z.decompress(a.tobytes(), size + 1)
+    except zlib.error as exc:
+        raise ValueError(f"{key!r} is not a readable zlib stream ({exc})") from None
+    if len(out) != size or not z.eof or z.unused_data:
+        raise ValueError(f"{key!r} must hold {size} bytes of bits over the box")
+    return np.frombuffer(out, dtype=np.uint8).copy()
 
 
 def _tol_bounds(bounds: np.ndarray, lat) -> tuple[np.ndarray, np.ndarray]:

@@ -1,13 +1,14 @@
 """Saved worlds (``planner world MAP --out world.npz``): a built world, loaded without rebuilding.
 
-File format (numpy ``.npz``, deflate-compressed; written atomically):
+File format (numpy ``.npz``, members stored uncompressed; written atomically):
 
 * ``format`` = ``"planner.World"``, ``version`` = 3;
 * ``generator`` (3, 3) float64 (m) and ``lattice`` (its name, ``""`` for a custom one);
 * ``box`` (2, 3) int64: ``[lo, dims]`` of the world's index box (the one
   :class:`planner.World` derives from ``generator`` and ``bounds``);
-* ``blocked`` and ``unknown``: bit sets over that box (:mod:`planner.occupancy.bits`:
-  ``ceil(prod(dims) / 8)`` uint8, C order, little bit order): the in-bounds blocked cells
+* ``blocked`` and ``unknown``: zlib streams (uint8) of bit sets over that box
+  (:mod:`planner.occupancy.bits`: ``ceil(prod(dims) / 8)`` bytes, C order, little bit
+  order; decompressed to exactly that size, never more): the in-bounds blocked cells
   (inflated for ``radius``; under the ``"blocked"`` policy unknown space too) and the
   in-bounds cells meeting unknown space. Free cells are the in-bounds cells not blocked.
   Cells out of bounds are never free, so a path touches none of them and leaving them out
@@ -31,6 +32,7 @@ from __future__ import annotations
 import math
 import os
 import zipfile
+import zlib
 from pathlib import Path
 
 import numpy as np
@@ -92,7 +94,7 @@ def save_world(world, path: str | os.PathLike) -> None:
         "generator": np.asarray(world.lattice.generator, dtype=np.float64),
         "lattice": np.array(world.lattice.name or ""),
         "box": np.stack([free.lo, free.dims]).astype(np.int64),
-        "blocked": world.blocked_bits().bits, "unknown": unknown.bits,
+        "blocked": _deflate(world.blocked_bits().bits), "unknown": _deflate(unknown.bits),
         "bounds": world.bounds, "radius": np.array(world.radius),
         "unknown_policy": np.array(world.unknown_policy),
         "source": np.array(Path(src).name if src else ""),
@@ -102,7 +104,12 @@ def save_world(world, path: str | os.PathLike) -> None:
 
     arrays["digest"] = np.array(array_digest(arrays))
     with atomic_path(path) as tmp, open(tmp, "wb") as f:
-        np.savez_compressed(f, **arrays)
+        np.savez(f, **arrays)
+
+
+def _deflate(bits: np.ndarray) -> np.ndarray:
+    """A bit set as a zlib stream (uint8): mostly long runs, so kilobytes per megabyte."""
+    return np.frombuffer(zlib.compress(bits.tobytes(), 6), dtype=np.uint8)
 
 
 def load_world(path: str | os.PathLike):
@@ -140,8 +147,8 @@ def load_world(path: str | os.PathLike):
                   dim=dim, dense_budget=max(DENSE_BUDGET, d["blocked"].nbytes))
     # check_schema found the box the world's own and the bits in bounds, as saved.
     free, unknown = world.free_bits, world.unknown_bits
-    np.bitwise_and(free.bits, np.invert(d["blocked"]), out=free.bits)
-    unknown.bits[:] = d["unknown"]
+    np.bitwise_and(free.bits, np.invert(d["blocked_bits"]), out=free.bits)
+    unknown.bits[:] = d["unknown_bits"]
     world.source_sha256 = str(d["source_sha256"])
     world.saved_path = str(p)
     return world
