@@ -18,11 +18,11 @@ Measured, each engine in a process of its own (peak memory is per process):
 * ours: ``SearchResult.seconds`` (the kernel, after the warm-up: no JIT) of the world's
   first query and of the same query again ("repeat": the world's cell -> node map is then
   reused; the anchor allocates its arrays before its clock starts); the world's bytes
-  (occupancy grid or hash set, and the blocked-cell list it keeps); the search's own arrays
-  (``SearchResult.peak_bytes``); and the peak resident memory during the two searches
-  above the process's memory before the world was built (the kernel's high-water mark,
-  reset after the build with ``/proc/self/clear_refs``, freed build temporaries handed
-  back first): world + search, without the interpreter, numpy and numba;
+  (occupancy bits or hash set, and its unknown-cell bits or blocked-cell list); the
+  search's own arrays (``SearchResult.peak_bytes``); and the peak resident memory during
+  the two searches above the process's memory before the world was built (the kernel's
+  high-water mark, reset after the build with ``/proc/self/clear_refs``, freed build
+  temporaries handed back first): world + search, without the interpreter, numpy and numba;
 * the anchor (``benchmarks/cpp_anchor.py``, g++ -O3, compiled at run time; skipped with a
   note when there is no compiler): its own search seconds and its process's peak resident
   memory (its VmHWM: input grid, padded grid, g, stamps and heap).
@@ -138,7 +138,9 @@ def ours(n: int, lattice: str, density: float, seed: int, memory_budget: int | N
     return dict(engine=f"ours {lattice}", n=n, status=r.status, cost=r.cost,
                 expansions=r.expansions, seconds=r.seconds, repeat_seconds=again.seconds,
                 build_seconds=build,
-                world_bytes=int(occ.grid.nbytes + occ.table.nbytes + world.blocked.nbytes),
+                world_bytes=int(occ.grid.nbytes + occ.table.nbytes + (
+                    world.unknown_bits.bits.nbytes if world.unknown_bits is not None
+                    else world.blocked.nbytes)),
                 search_bytes=r.peak_bytes,
                 rss_bytes=peak - base if reset else None, storage=world.storage)
 

@@ -145,7 +145,9 @@ def anchor_batch(world: World, queries: np.ndarray, repeat: int = 1) -> dict | N
     occ = world.occupancy
     if occ.mode != 0:
         return None
-    free = occ.grid.reshape(tuple(occ.dims)) != 0
+    n = int(np.prod(occ.dims))  # the occupancy grid holds one bit per cell
+    free = np.unpackbits(occ.grid, count=n, bitorder="little").astype(bool).reshape(
+        tuple(occ.dims))
     cells = queries[:, :6].astype(np.int64) - np.tile(occ.lo, 2)
     res = cpp_anchor.run(free, np.tile(cells, (max(1, repeat), 1)))
     res, secs = res[: len(cells)], res[:, 2].reshape(-1, len(cells)).min(axis=0)

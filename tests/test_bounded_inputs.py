@@ -119,7 +119,7 @@ def test_a_saved_world_plans_as_its_map(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("change, words", [
-    ({"blocked": np.zeros((0, 3), np.int16)}, "digest"),
+    ({"source": np.array("other.bt")}, "digest"),
     ({"radius": np.array(5.0)}, "digest"),
 ])
 def test_edited_values_break_the_digest(small_world, capsys, change, words):
@@ -140,14 +140,27 @@ def test_every_key_is_checked_even_under_a_matching_digest(small_world, capsys, 
              "corrupt or modified world file", words)
 
 
-def test_cells_are_checked_sorted_and_in_bounds(small_world):
+def test_cells_are_checked_in_bounds(small_world):
+    import zlib
+
+    def bits(a):
+        return np.frombuffer(zlib.decompress(a.tobytes()), np.uint8).copy()
+
+    def stream(b):
+        return np.frombuffer(zlib.compress(b.tobytes()), np.uint8)
+
     with np.load(small_world) as z:
-        b = z["blocked"]
-    _tamper(small_world, redigest=True, blocked=b[::-1].copy())
-    with pytest.raises(MapError, match="not distinct and sorted"):
+        b, u = bits(z["blocked"]), bits(z["unknown"])
+    b[0] |= 1  # the first cell of the index box: a margin cell, out of bounds
+    _tamper(small_world, redigest=True, blocked=stream(b))
+    with pytest.raises(MapError, match="'blocked' holds cells outside the bounds"):
         load_world(small_world)
-    _tamper(small_world, redigest=True, blocked=(b.astype(np.int32) + 5000))
-    with pytest.raises(MapError, match="outside the bounds"):
+    u[0] |= 1
+    _tamper(small_world, redigest=True, blocked=stream(b * 0), unknown=stream(u))
+    with pytest.raises(MapError, match="'unknown' holds cells outside the bounds"):
+        load_world(small_world)
+    _tamper(small_world, redigest=True, unknown=stream(u[:-1]))
+    with pytest.raises(MapError, match=r"'unknown' must hold \d+ bytes of bits over the box"):
         load_world(small_world)
 
 

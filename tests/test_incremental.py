@@ -18,14 +18,13 @@ from planner.world import World
 
 
 def _free_cells(world: World) -> np.ndarray:
-    occ = world.occupancy
-    flat = np.flatnonzero(occ.grid)
-    return np.stack(np.unravel_index(flat, tuple(occ.dims)), axis=1) + occ.lo
+    return world.free_bits.cells()
 
 
 def _in_bounds_cells(world: World) -> np.ndarray:
     occ = world.occupancy
-    box = np.stack(np.unravel_index(np.arange(len(occ.grid)), tuple(occ.dims)), 1) + occ.lo
+    box = np.stack(np.unravel_index(np.arange(int(np.prod(occ.dims))), tuple(occ.dims)),
+                   1) + occ.lo
     return box[world.in_bounds(box)]
 
 

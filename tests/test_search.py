@@ -170,9 +170,6 @@ def test_cubic_sight_blocks_exactly_the_walked_cells():
 
     w = _box_world(n=24)
     occ = w.occupancy
-    def idx(c):
-        return ((c[0] - occ.lo[0]) * occ.dims[1] + c[1] - occ.lo[1]) * occ.dims[2] + (
-            c[2] - occ.lo[2])
     rng = np.random.default_rng(11)
     ring = np.array([d for d in itertools.product((-1, 0, 1), repeat=3)])
     for k in range(60):
@@ -182,9 +179,9 @@ def test_cubic_sight_blocks_exactly_the_walked_cells():
         near = {tuple(np.add(c, d)) for c in walked for d in ring}
         assert cubic_sight(occ, p, q)[0]
         for c in near:
-            occ.grid[idx(c)] = 0
+            changed = w.set_cells([c], blocked=True)
             assert cubic_sight(occ, p, q)[0] == (c not in walked), (p, q, c)
-            occ.grid[idx(c)] = 1
+            w.set_cells(changed, blocked=False)
 
 
 def test_cubic_integer_walk_matches_the_clipping():

@@ -3,9 +3,11 @@
 Everything here works on plain numpy arrays inside typed structs (``NamedTuple``s, which
 numba compiles as tuples with named fields) so that it compiles once and caches on disk:
 
-* :class:`Occupancy` - which cells are free. ``mode`` 0 (dense): ``grid`` is a flat uint8
-  array over the index box ``lo + [0, dims)`` holding 1 for every cell that is in bounds and
-  not blocked; any index outside the box is out of bounds. One byte load per lookup.
+* :class:`Occupancy` - which cells are free. ``mode`` 0 (dense): ``grid`` is a bit-packed
+  uint8 array over the index box ``lo + [0, dims)`` (cell ``f`` of the box in C order is bit
+  ``f & 7`` of byte ``f >> 3``, :mod:`planner.occupancy.bits`) holding 1 for every cell
+  that is in bounds and not blocked; any index outside the box is out of bounds. One byte
+  load, a shift and a mask per lookup; one bit per cell of the box.
   ``mode`` 1 (hash): ``table`` is an open-addressing set (size ``tmask + 1``, a power of two,
   load <= 0.5, empty slots -1) of packed keys of blocked cells; a cell is free iff its centre
   ``gmat @ w`` lies in ``[blo, bhi]`` (bounds already widened by the tolerance) and its key
@@ -27,7 +29,7 @@ from planner._numba import njit_cached
 from planner.lattice import quantize as qk
 from planner.occupancy.keys import in_key_set, pack3
 
-__all__ = ["Occupancy", "cell_free", "clear_cells", "fill_in_bounds", "free_many", "occ_free",
+__all__ = ["Occupancy", "bit_free", "cell_free", "clear_cells", "free_many", "occ_free",
            "point_free"]
 
 
@@ -35,7 +37,7 @@ class Occupancy(NamedTuple):
     """Free-cell lookup structure (module docstring). Arrays C-contiguous and writable."""
 
     mode: int  # 0 dense, 1 hash
-    grid: np.ndarray  # (n,) uint8, dense mode (1 element in hash mode)
+    grid: np.ndarray  # (ceil(n / 8),) uint8 free bits, dense mode (1 element in hash mode)
     lo: np.ndarray  # (3,) int64 lowest index of the dense box
     dims: np.ndarray  # (3,) int64 dense box size
     table: np.ndarray  # (T,) int64 hash set of blocked keys (1 element in dense mode)
@@ -58,12 +60,20 @@ def cell_free(mode, grid, lo, dims, table, tmask, g, blo, bhi, i, j, k):  # prag
         c = k - lo[2]
         if a < 0 or b < 0 or c < 0 or a >= dims[0] or b >= dims[1] or c >= dims[2]:
             return False
-        return grid[(a * dims[1] + b) * dims[2] + c] != 0
+        f = (a * dims[1] + b) * dims[2] + c
+        return (grid[f >> 3] >> (f & 7)) & 1 != 0
     for r in range(3):
         x = g[r, 0] * i + g[r, 1] * j + g[r, 2] * k
         if x < blo[r] or x > bhi[r]:
             return False
     return not in_key_set(table, tmask, pack3(i, j, k))
+
+
+@njit_cached(inline="always")
+def bit_free(grid, f):  # pragma: no cover - compiled
+    """True iff cell ``f`` (flat C-order index in the dense box) is free: bit ``f & 7`` of
+    byte ``f >> 3`` of a dense ``grid``. For kernels that step flat indices themselves."""
+    return (grid[f >> 3] >> (f & 7)) & 1 != 0
 
 
 @njit_cached(inline="always")
@@ -81,27 +91,9 @@ def free_many(occ, w, out):  # pragma: no cover - compiled
 
 
 @njit_cached
-def fill_in_bounds(grid, lo, dims, g, blo, bhi):  # pragma: no cover - compiled
-    """grid[cell] = 1 iff the cell centre lies in [blo, bhi] (dense mode construction)."""
-    for a in range(dims[0]):
-        i = lo[0] + a
-        for b in range(dims[1]):
-            j = lo[1] + b
-            base = (a * dims[1] + b) * dims[2]
-            for c in range(dims[2]):
-                k = lo[2] + c
-                ok = True
-                for r in range(3):
-                    x = g[r, 0] * i + g[r, 1] * j + g[r, 2] * k
-                    if x < blo[r] or x > bhi[r]:
-                        ok = False
-                        break
-                grid[base + c] = 1 if ok else 0
-
-
-@njit_cached
 def clear_cells(grid, lo, dims, w):  # pragma: no cover - compiled
-    """Mark the listed cells (N, 3) not free in a dense grid (cells outside are ignored)."""
+    """Set to 0 the listed cells (N, 3) of a byte grid (one uint8 per cell of the index box
+    ``lo``, ``dims``; cells outside it are ignored)."""
     for n in range(w.shape[0]):
         a = w[n, 0] - lo[0]
         b = w[n, 1] - lo[1]

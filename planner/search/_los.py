@@ -17,7 +17,7 @@ from typing import NamedTuple
 import numpy as np
 
 from planner._numba import njit_cached
-from planner.occupancy.grid import cell_free, occ_free
+from planner.occupancy.grid import bit_free, cell_free, occ_free
 from planner.occupancy.walk import SEG_TOL, segment_walk, walk_on, walk_scratch
 
 
@@ -145,7 +145,7 @@ def cubic_walk(occ, p0, p1, p2, q0, q1, q2):  # pragma: no cover - compiled
     e0, e1, e2 = s0 * t2, s1 * t1, s2  # flat index steps
     c0, c1, c2 = p0, p1, p2
     lookups = 1
-    if not (grid[idx] != 0 if dense else
+    if not (bit_free(grid, idx) if dense else
             cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi, c0, c1, c2)):
         return False, lookups
     left = a0 + a1 + a2
@@ -167,7 +167,7 @@ def cubic_walk(occ, p0, p1, p2, q0, q1, q2):  # pragma: no cover - compiled
                     if u0 > x0 or u1 > x1 or u2 > x2 or u0 + u1 + u2 == n:
                         continue
                     lookups += 1
-                    if grid[idx + e0 * u0 + e1 * u1 + e2 * u2] == 0:
+                    if not bit_free(grid, idx + e0 * u0 + e1 * u1 + e2 * u2):
                         return False, lookups
             idx += (e0 & -x0) + (e1 & -x1) + (e2 & -x2)
             k0 += i0 & -x0
@@ -175,7 +175,7 @@ def cubic_walk(occ, p0, p1, p2, q0, q1, q2):  # pragma: no cover - compiled
             k2 += i2 & -x2
             left -= n
             lookups += 1
-            if grid[idx] == 0:
+            if not bit_free(grid, idx):
                 return False, lookups
         return True, lookups
     while left > 0:
@@ -192,7 +192,7 @@ def cubic_walk(occ, p0, p1, p2, q0, q1, q2):  # pragma: no cover - compiled
                 if np.int64(u0) + np.int64(u1) + np.int64(u2) == n:
                     continue
                 lookups += 1
-                if not (grid[idx + e0 * u0 + e1 * u1 + e2 * u2] != 0 if dense else
+                if not (bit_free(grid, idx + e0 * u0 + e1 * u1 + e2 * u2) if dense else
                         cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi,
                               c0 + s0 * u0, c1 + s1 * u1, c2 + s2 * u2)):
                     return False, lookups
@@ -210,7 +210,7 @@ def cubic_walk(occ, p0, p1, p2, q0, q1, q2):  # pragma: no cover - compiled
             k2 += i2
         left -= n
         lookups += 1
-        if not (grid[idx] != 0 if dense else
+        if not (bit_free(grid, idx) if dense else
                 cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi, c0, c1, c2)):
             return False, lookups
     return True, lookups

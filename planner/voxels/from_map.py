@@ -9,7 +9,8 @@ import numpy as np
 from planner.errors import MapError
 from planner.lattice import Lattice
 
-__all__ = ["inflated_obstacles", "unknown_space", "unknown_region"]
+__all__ = ["inflated_obstacles", "inflation_parts", "unknown_grid", "unknown_region",
+           "unknown_space"]
 
 
 def _cells_near(keys: np.ndarray, lat: Lattice, bounds: np.ndarray) -> np.ndarray:
@@ -115,3 +116,43 @@ def inflated_obstacles(obst, lattice: Lattice, radius: float):
     if not keys:
         raise MapError(f"{obst.source}: no obstacles")
     return OccupiedVoxelList._from_keys(lattice, unique_keys(np.concatenate(keys)))
+
+
+def inflation_parts(obst, lattice: Lattice, radius: float):
+    """The cells of :func:`inflated_obstacles` in parts, without one list of them all: for
+    the points, then for the boxes, ``(grid, lo, dims)`` (a byte grid over an index box,
+    nonzero = blocked; ``radius`` > 0) or ``(cells,)`` ((N, 3) int64; ``radius`` 0).
+    A generator: one part's grid is made when the previous one is consumed."""
+    from planner.occupancy.keys import unpack
+    from planner.voxels.boxes import box_frame, overlap_keys
+    from planner.voxels.inflate import box_inflation_grid, point_inflation_grid
+
+    if not len(obst.points) and not len(obst.boxes):
+        raise MapError(f"{obst.source}: no obstacles")
+    if len(obst.points):
+        if radius > 0:
+            yield point_inflation_grid(obst.points, lattice, radius)
+        else:
+            yield (lattice.quantize(obst.points),)
+    if len(obst.boxes):
+        half = obst.box_sizes[:, None] / 2
+        lo, hi = obst.boxes - half, obst.boxes + half
+        if radius > 0:
+            yield box_inflation_grid(lo, hi, lattice, radius)
+        else:
+            centres, h, rot = box_frame(lo, hi, None, None, lattice.dim)
+            yield (unpack(overlap_keys(centres, h, rot, lattice), lattice.dim),)
+
+
+def unknown_grid(obst, lat: Lattice, bounds: np.ndarray, radius: float, planar: bool,
+                 blocked: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """:func:`unknown_space` of a grid map (free boxes, no sensor rays) as one byte grid
+    (:func:`planner.voxels.unknown.unknown_box_grid`: bit 1 unknown, bit 2 within
+    ``radius`` of it when ``blocked``); None for another map or when it does not fit."""
+    from planner.voxels.unknown import unknown_box_grid
+
+    if obst.origins is not None or not len(obst.free_boxes):
+        return None
+    lo, hi, res = _box_region(obst, lat, bounds, radius, planar)
+    return unknown_box_grid(obst.boxes, obst.box_sizes, obst.free_boxes, obst.free_box_sizes,
+                            res, lat, lo, hi, radius if blocked else None)

@@ -38,8 +38,8 @@ from planner.voxels.boxes import box_frame, box_keys, overlap_keys
 from planner.voxels.stencil import inflation_stencil, stencil_inflation
 from planner.voxels.voxel_list import OccupiedVoxelList
 
-__all__ = ["box_keys", "exact_box_inflation", "exact_inflation", "inflation_stencil",
-           "stencil_inflation"]
+__all__ = ["box_inflation_grid", "box_keys", "exact_box_inflation", "exact_inflation",
+           "inflation_stencil", "point_inflation_grid", "stencil_inflation"]
 
 
 
@@ -72,15 +72,46 @@ def exact_inflation(points: np.ndarray, lattice: Lattice, radius: float,
     x = as_points(points, lat.dim)
     if not len(x):
         raise MapError("point cloud is empty: no obstacle points to inflate")
-    base = lat.quantize(x)
     if r == 0:
-        return OccupiedVoxelList._from_keys(lat, unique_keys(pack(base)))
+        return OccupiedVoxelList._from_keys(lat, unique_keys(pack(lat.quantize(x))))
+    grid, lo, dims = point_inflation_grid(x, lat, r, memory_budget, lists=True)
+    n = int(np.count_nonzero(grid))
+    _check_result(r, float(grid.size), n, resolve_budget(memory_budget))
+    out = np.empty(n, dtype=np.int64)
+    vk.grid_keys(grid, lo, dims, BITS[lat.dim], index_limit(lat.dim), out)
+    return OccupiedVoxelList._from_keys(lat, out)
+
+
+def point_inflation_grid(points: np.ndarray, lattice: Lattice, radius: float,
+                         memory_budget: int | None = DEFAULT_BUDGET, lists: bool = False
+                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The cells of :func:`exact_inflation` (``radius`` > 0) marked in a byte grid.
+
+    Parameters
+    ----------
+    points : array_like, shape (N, d)
+        Obstacle points (m), at least one.
+    lattice, radius, memory_budget
+        As for :func:`exact_inflation` (``radius`` > 0).
+    lists : bool
+        The caller will list the cells (the budget then counts ~40 bytes a cell).
+
+    Returns
+    -------
+    grid : ndarray, shape (prod(dims),), uint8
+        Nonzero for a marked cell, C order over the index box ``lo + [0, dims)``.
+    lo, dims : ndarray, shape (d,), int64
+    """
+    lat = check_lattice(lattice)
+    r = check_radius(radius)
+    x = as_points(points, lat.dim)
+    base = lat.quantize(x)
     memory_budget = resolve_budget(memory_budget)
     # Each point blocks every cell whose centre is within rho = r - covering of it: about
     # that ball's volume in cells (halved for the lattice-point-count error), times the
     # points whose balls are disjoint, known before any enumeration.
     rho = r - lat.covering_radius
-    if rho > 0:
+    if rho > 0 and lists:
         ball = 0.5 * math.pi * 4 / 3 * min(rho, 1e100) ** lat.dim / lat.cell_volume
         _check_result(r, 0.0, ball * _disjoint_balls(x, rho), memory_budget)
     cand = offsets_within(lat, r + 2 * lat.covering_radius, memory_budget, r)
@@ -99,12 +130,7 @@ def exact_inflation(points: np.ndarray, lattice: Lattice, radius: float,
                   np.ascontiguousarray(cand @ strides),
                   np.ascontiguousarray(cand @ lat.generator.T, dtype=float),
                   vk.cell_polytope(lat.voronoi), tol, r)
-    n = int(np.count_nonzero(grid))
-    _check_result(r, cells, n, memory_budget)
-    out = np.empty(n, dtype=np.int64)
-    vk.grid_keys(grid, lo.astype(np.int64), dims.astype(np.int64), BITS[lat.dim],
-                 index_limit(lat.dim), out)
-    return OccupiedVoxelList._from_keys(lat, out)
+    return grid, lo.astype(np.int64), dims.astype(np.int64)
 
 
 def _disjoint_balls(x: np.ndarray, rho: float) -> int:
@@ -229,6 +255,38 @@ def exact_box_inflation(lo: np.ndarray, hi: np.ndarray, lattice: Lattice, radius
     centres, half, rot = box_frame(lo, hi, rotation, translation, d)
     if r == 0 or not len(centres):
         return OccupiedVoxelList._from_keys(lat, overlap_keys(centres, half, rot, lat))
+    grid, glo, dims = box_inflation_grid(lo, hi, lat, r, rotation=rotation,
+                                         translation=translation, memory_budget=memory_budget)
+    n = int(np.count_nonzero(grid))
+    _check_result(r, float(grid.size), n, resolve_budget(memory_budget))
+    out = np.empty(n, dtype=np.int64)
+    vk.grid_keys(grid, glo, dims, BITS[d], index_limit(d), out)
+    return OccupiedVoxelList._from_keys(lat, out)
+
+
+def box_inflation_grid(lo: np.ndarray, hi: np.ndarray, lattice: Lattice, radius: float, *,
+                       rotation: np.ndarray | None = None,
+                       translation: np.ndarray | None = None,
+                       memory_budget: int | None = DEFAULT_BUDGET,
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The cells of :func:`exact_box_inflation` (``radius`` > 0, at least one box, 3D)
+    marked in a byte grid.
+
+    Parameters
+    ----------
+    lo, hi, lattice, radius, rotation, translation, memory_budget
+        As for :func:`exact_box_inflation`.
+
+    Returns
+    -------
+    grid : ndarray, shape (prod(dims),), uint8
+        Nonzero for a marked cell, C order over the index box ``glo + [0, dims)``.
+    glo, dims : ndarray, shape (3,), int64
+    """
+    lat = check_lattice(lattice)
+    r = check_radius(radius)
+    d = lat.dim
+    centres, half, rot = box_frame(lo, hi, rotation, translation, d)
     if d != 3:
         raise MapError(f"box inflation with a radius needs a 3D lattice, got {d}D")
     memory_budget = resolve_budget(memory_budget)
@@ -275,8 +333,4 @@ def exact_box_inflation(lo: np.ndarray, hi: np.ndarray, lattice: Lattice, radius
                        np.ascontiguousarray(cand_flat[sure]), np.ascontiguousarray(
                            cand_flat[test]), np.ascontiguousarray(cand_world[test]),
                        verts, cell.packing_radius, cell.covering_radius, r, tol, grid)
-    n = int(np.count_nonzero(grid))
-    _check_result(r, cells, n, memory_budget)
-    out = np.empty(n, dtype=np.int64)
-    vk.grid_keys(grid, glo.astype(np.int64), dims.astype(np.int64), BITS[d], index_limit(d), out)
-    return OccupiedVoxelList._from_keys(lat, out)
+    return grid, glo.astype(np.int64), dims.astype(np.int64)

@@ -170,6 +170,62 @@ def dilate_rows(grid, occ_flat, full_flat, row_start, row_len, diff
 
 
 @njit_cached
+def boundary_cells(grid, full_flat):  # pragma: no cover - compiled
+    """Flat positions (ascending) of the cells of ``grid`` with bit 1 set that have a full
+    neighbour (flat offsets ``full_flat``) without it: :func:`mark_boundary` found by a scan
+    of the grid instead of from a list of every marked cell."""
+    n = grid.shape[0]
+    count = 0
+    for phase in range(2):
+        out = np.empty(count, dtype=np.int64)
+        m = 0
+        for p in range(n):
+            if grid[p] & 1 == 0:
+                continue
+            for j in range(full_flat.shape[0]):
+                q = p + full_flat[j]
+                if 0 <= q < n and grid[q] & 1 == 0:
+                    if phase == 1:
+                        out[m] = p
+                    m += 1
+                    break
+        count = m
+    return out
+
+
+@njit_cached
+def dilate_row_slabs(grid, edge, row_start, row_len, slab, diff
+                     ):  # pragma: no cover - compiled
+    """:func:`dilate_rows` from the boundary cells ``edge`` (ascending flat positions),
+    one slab of ``slab`` cells (a whole number of rows) at a time: ``diff`` (int32, at least
+    ``slab + 1``) is reused per slab. A run starts and ends in one row, so each slab's
+    prefix sum starts at 0; the scratch is one slab instead of the whole grid."""
+    n = grid.shape[0]
+    lo_off = row_start.min()
+    hi_off = row_start.max()
+    first = 0
+    for f0 in range(0, n, slab):
+        f1 = min(n, f0 + slab)
+        diff[:f1 - f0 + 1] = 0
+        while first < edge.shape[0] and edge[first] + hi_off < f0:
+            first += 1
+        e = first
+        while e < edge.shape[0] and edge[e] + lo_off < f1:
+            p = edge[e]
+            for j in range(row_start.shape[0]):
+                a = p + row_start[j]
+                if f0 <= a < f1:
+                    diff[a - f0] += 1
+                    diff[a - f0 + row_len[j]] -= 1
+            e += 1
+        run = 0
+        for f in range(f0, f1):
+            run += diff[f - f0]
+            if run > 0:
+                grid[f] |= 2
+
+
+@njit_cached
 def flat_positions(keys, lo, strides, bits, limit, out):  # pragma: no cover - compiled
     """Flat grid positions ``sum((w - lo) * strides)`` of packed ``keys`` into ``out``."""
     d = lo.shape[0]

@@ -193,36 +193,26 @@ def unknown_box_keys(boxes: np.ndarray, box_sizes: np.ndarray, free_boxes: np.nd
     return unique_keys(np.concatenate(parts))
 
 
-def unknown_box_space(boxes: np.ndarray, box_sizes: np.ndarray, free_boxes: np.ndarray,
-                      free_sizes: np.ndarray, resolution: float, lattice: Lattice,
-                      lo: np.ndarray, hi: np.ndarray, radius: float | None = None,
-                      near: np.ndarray | None = None, exclude: np.ndarray | None = None,
-                      budget: float | None = DEFAULT_BUDGET,
-                      ) -> tuple[np.ndarray, np.ndarray | None] | None:
+def unknown_box_grid(boxes: np.ndarray, box_sizes: np.ndarray, free_boxes: np.ndarray,
+                     free_sizes: np.ndarray, resolution: float, lattice: Lattice,
+                     lo: np.ndarray, hi: np.ndarray, radius: float | None = None,
+                     budget: float | None = DEFAULT_BUDGET,
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
     """The cells of :func:`unknown_box_keys` and, with ``radius``, those of
-    :func:`unknown_inflation` of its keys whose centre lies in the box ``near``: the same
-    sets, computed on dense grids (voxels of the map's grid, cells of the lattice's index
-    box) instead of sorted key lists. 3D lattices.
+    :func:`unknown_inflation` of its keys, marked in one byte grid over a lattice index box
+    (what :func:`unknown_box_space` lists, and :func:`planner.build_world` reads directly).
 
     Parameters
     ----------
-    boxes, free_boxes, box_sizes, free_sizes, resolution, lattice, lo, hi
-        As for :func:`unknown_box_keys`.
-    radius : float, optional
-        Robot radius (m, >= 0): also return the blocked cells.
-    near : ndarray, shape (2, 3), optional
-        ``[min, max]`` (m) of the blocked cells' centres returned (default: all).
-    exclude : ndarray, shape (E, 3), int, optional
-        Cells left out of the blocked cells returned (those already blocked otherwise).
-    budget : float, optional
-        Bytes the dense grids may use (default: the memory budget).
+    boxes, free_boxes, box_sizes, free_sizes, resolution, lattice, lo, hi, radius, budget
+        As for :func:`unknown_box_space`.
 
     Returns
     -------
-    (unknown, blocked) or None
-        ``unknown`` (U, 3) int64: the cells meeting unknown space; ``blocked`` (B, 3) int64,
-        or None without ``radius``; both distinct, in ascending key order. None when the
-        grids do not fit ``budget``.
+    (grid, glo, dims) or None
+        ``grid`` (prod(dims),) uint8 over the index box ``glo`` (3,) + ``[0, dims)`` in C
+        order: bit 1 for a cell meeting unknown space, bit 2 for one within ``radius`` of
+        it (with ``radius``). None when the grids do not fit ``budget``.
     """
     lat = lattice
     g = np.ascontiguousarray(lat.generator, dtype=float)
@@ -257,7 +247,7 @@ def unknown_box_space(boxes: np.ndarray, box_sizes: np.ndarray, free_boxes: np.n
     check_range(glo, ghi, 3)
     dims = ghi - glo + 1
     cells = float(np.prod(dims.astype(float)))
-    if known.nbytes + cells * (5 if radius else 1) > budget:
+    if known.nbytes + cells > budget:  # one byte a cell; the dilation scratch is a slab
         return None
     strides = grid_strides(dims)
     grid = np.zeros(int(cells), dtype=np.uint8)
@@ -282,20 +272,63 @@ def unknown_box_space(boxes: np.ndarray, box_sizes: np.ndarray, free_boxes: np.n
                     np.ascontiguousarray(tests.offsets @ strides), tests.axes, tests.axes_box,
                     tests.support_v, tests.packing, tests.covering, tests.tol, grid)
     del known
-    unknown = np.empty((int(np.count_nonzero(grid)), 3), dtype=np.int64)
+    if radius is not None and radius > 0 and np.any(grid):
+        runs = _stencil_runs(stencil)
+        if runs is not None:  # boundary cells by a scan; the run sums one slab at a time
+            edge = vk.boundary_cells(grid, full @ strides)
+            slab = int(dims[2]) * max(1, (1 << 22) // int(dims[2]))
+            vk.dilate_row_slabs(grid, edge, runs[0] @ strides, runs[1], slab,
+                                np.empty(slab + 1, dtype=np.int32))
+        else:
+            vk.dilate(grid, np.flatnonzero(grid), stencil @ strides, full @ strides)
+    return grid, glo, dims
+
+
+def unknown_box_space(boxes: np.ndarray, box_sizes: np.ndarray, free_boxes: np.ndarray,
+                      free_sizes: np.ndarray, resolution: float, lattice: Lattice,
+                      lo: np.ndarray, hi: np.ndarray, radius: float | None = None,
+                      near: np.ndarray | None = None, exclude: np.ndarray | None = None,
+                      budget: float | None = DEFAULT_BUDGET,
+                      ) -> tuple[np.ndarray, np.ndarray | None] | None:
+    """The cells of :func:`unknown_box_keys` and, with ``radius``, those of
+    :func:`unknown_inflation` of its keys whose centre lies in the box ``near``: the same
+    sets, computed on dense grids (voxels of the map's grid, cells of the lattice's index
+    box) instead of sorted key lists. 3D lattices.
+
+    Parameters
+    ----------
+    boxes, free_boxes, box_sizes, free_sizes, resolution, lattice, lo, hi
+        As for :func:`unknown_box_keys`.
+    radius : float, optional
+        Robot radius (m, >= 0): also return the blocked cells.
+    near : ndarray, shape (2, 3), optional
+        ``[min, max]`` (m) of the blocked cells' centres returned (default: all).
+    exclude : ndarray, shape (E, 3), int, optional
+        Cells left out of the blocked cells returned (those already blocked otherwise).
+    budget : float, optional
+        Bytes the dense grids may use (default: the memory budget).
+
+    Returns
+    -------
+    (unknown, blocked) or None
+        ``unknown`` (U, 3) int64: the cells meeting unknown space; ``blocked`` (B, 3) int64,
+        or None without ``radius``; both distinct, in ascending key order. None when the
+        grids do not fit ``budget``.
+    """
+    got = unknown_box_grid(boxes, box_sizes, free_boxes, free_sizes, resolution, lattice, lo,
+                           hi, radius, budget)
+    if got is None:
+        return None
+    grid, glo, dims = got
+    lat = lattice
+    g = np.ascontiguousarray(lat.generator, dtype=float)
+    single = np.count_nonzero(g, axis=1) <= 1  # G w then rounds the same in any order
+    unknown = np.empty((int(np.count_nonzero(grid & 1)), 3), dtype=np.int64)
     uk.grid_cells(grid, glo, dims, 1, unknown)
     if radius is None:
         return unknown, None
-    if radius > 0 and len(unknown):
-        occ = np.flatnonzero(grid)
-        runs = _stencil_runs(stencil)
-        if runs is not None:
-            diff = np.zeros(grid.size + 1, dtype=np.int32)
-            vk.dilate_rows(grid, occ, full @ strides, runs[0] @ strides, runs[1], diff)
-            del diff
-        else:
-            vk.dilate(grid, occ, stencil @ strides, full @ strides)
-        del occ
+    ghi = glo + dims - 1
+    strides = grid_strides(dims)
     if exclude is not None and len(exclude):  # bit 4: left out of the blocked cells
         inside = np.all((exclude >= glo) & (exclude <= ghi), axis=1)
         grid[(exclude[inside] - glo) @ strides] |= 4

@@ -23,9 +23,9 @@ from planner.io.sidecar import load_sidecar
 from planner.lattice import Lattice
 from planner.lattice.planar import planar_prism
 from planner.maps import resolve
-from planner.voxels.from_map import inflated_obstacles, unknown_region, unknown_space
+from planner.voxels.from_map import inflated_obstacles, unknown_region
+from planner.world.assemble import assemble
 from planner.world.file import check_options, is_world_file, load_world
-from planner.world.world import World
 
 __all__ = ["MapDefaults", "as_obstacles", "build_world", "default_cell_volume",
            "inflated_obstacles", "map_box", "resolve_defaults", "sidecar"]
@@ -198,27 +198,17 @@ def build_world(
     if obst.has_free_space and d == 3:  # classified cell by cell: refuse before any work
         lo, hi = unknown_region(lat, bounds, radius)
         n = float(np.prod(hi - lo)) / lat.cell_volume
-        require(24.0 * n, f"the unknown-space classification of {obst.source} (~{n:,.0f} "
-                "cells in its box)")
+        per_cell = 24.0 if obst.origins is not None else 2.0  # cell lists; byte grids
+        require(per_cell * n, f"the unknown-space classification of {obst.source} "
+                f"(~{n:,.0f} cells in its box)")
     try:
-        cells = inflated_obstacles(obst, lat, radius).indices
+        world = assemble(obst, lat, bounds, radius, policy, d == 2, source=obst.source,
+                         obstacles=obst, dim=d)
     except PlannerError as exc:  # name the map, as the readers do
         if str(obst.source) in str(exc):
             raise
         raise type(exc)(f"{obst.source}: {exc}") from None
-    unknown_cells = None
-    if obst.has_free_space:
-        unknown_cells, near = unknown_space(obst, lat, bounds, radius, d == 2,
-                                             policy == "blocked", cells)
-        if near is not None:
-            cells = np.concatenate([cells, near])
-    if d == 2:  # only the plane z = 0 is in bounds
-        cells = cells[cells[:, 2] == 0]
-    if unknown_cells is not None and d == 2:
-        unknown_cells = unknown_cells[unknown_cells[:, 2] == 0]
-    world = World(lat, cells, bounds, source=obst.source, radius=float(radius), obstacles=obst,
-                  build_seconds=time.perf_counter() - t0, unknown_cells=unknown_cells,
-                  unknown_policy=policy, dim=d)
+    world.build_seconds = time.perf_counter() - t0
     if isinstance(source, str | Path) and Path(source).is_file():
         world.source_file = str(source)
     return world

@@ -3,7 +3,7 @@
 A saved world (:mod:`planner.world.file`) is read member by member through the checked
 ``.npy`` reader (:mod:`planner.npyfile`: declared sizes against the memory budget and the
 member, no pickles, no trailing bytes); then :func:`check_schema` checks every key (type,
-shape, dtype, range, sortedness, a lattice name against its generator) and :func:`digest`
+shape, dtype, range, a lattice name against its generator) and :func:`digest`
 (BLAKE2b over every array's name, dtype, shape and bytes) against the ``digest`` stored at
 save. Any mismatch is one ``MapError``: ``corrupt or modified world file: <what>``.
 ``check_source`` compares the source map's name and SHA-256 with a map file.
@@ -15,6 +15,7 @@ import hashlib
 import math
 import os
 import zipfile
+import zlib
 from pathlib import Path
 
 import numpy as np
@@ -25,8 +26,8 @@ from planner.errors import MapError, PlannerError
 __all__ = ["KEYS", "check_schema", "check_source", "corrupt", "digest", "read_members"]
 
 # every key a saved world holds, besides the digest over them
-KEYS = ("format", "version", "generator", "lattice", "blocked", "unknown", "bounds", "radius",
-        "unknown_policy", "source", "source_sha256", "dim")
+KEYS = ("format", "version", "generator", "lattice", "box", "blocked", "unknown", "bounds",
+        "radius", "unknown_policy", "source", "source_sha256", "dim")
 _REL = 1e-9
 
 
@@ -103,7 +104,6 @@ def check_schema(d: dict[str, np.ndarray], path: Path) -> None:
     from planner.io.obstacles import UNKNOWN_POLICIES
     from planner.lattice import NAMED_LATTICES, Lattice
     from planner.lattice.paper import NAMED_LATTICES_2D
-    from planner.occupancy.keys import index_limit
 
     try:
         dim = int(_scalar(d, "dim", "iu"))
@@ -135,86 +135,87 @@ def check_schema(d: dict[str, np.ndarray], path: Path) -> None:
             ref = Lattice.named(name, lat.cell_volume).generator
             if ref.shape != gd.shape or not np.allclose(ref, gd, rtol=_REL, atol=0):
                 raise ValueError(f"'lattice' says {name!r}, the generator is another lattice")
-        blocked, unknown = d["blocked"], d["unknown"]
-        if blocked.ndim != 2 or blocked.shape[1] != 3 or blocked.dtype not in (np.int16,
-                                                                              np.int32):
-            raise ValueError(f"'blocked' must be (M, 3) int16 or int32, got {blocked.dtype} "
-                             f"{blocked.shape}")
-        lim = index_limit(3)
-        if len(blocked) and (blocked.min() < -lim or blocked.max() >= lim):
-            raise ValueError("'blocked' cells out of the packable index range")
-        if unknown.ndim != 1 or unknown.dtype != np.int64:
-            raise ValueError(f"'unknown' must be (U,) int64 keys, got {unknown.dtype} "
-                             f"{unknown.shape}")
+        from planner.occupancy.bits import n_bytes
+        from planner.world.cells import index_box
+
         lo, hi = _tol_bounds(bounds, lat)
-        code = _cells_check(np.ascontiguousarray(blocked), unknown,
-                            np.ascontiguousarray(g, dtype=np.float64), lo, hi, dim == 2)
+        box = d["box"]
+        want = np.stack(index_box(g, lo, hi))
+        if box.shape != (2, 3) or box.dtype != np.int64 or not np.array_equal(box, want):
+            raise ValueError("'box' is not the index box of the generator and bounds")
+        size = n_bytes(box[1])
+        same = str(_scalar(d, "digest", "U")) == digest(d)
+        bits = {key: _inflate(d[key], size, key) for key in ("blocked", "unknown")}
+        code = _bits_check(bits["blocked"], bits["unknown"], box[0], box[1],
+                           np.ascontiguousarray(g, dtype=np.float64), lo, hi, dim == 2)
         if code:
             raise ValueError(_CELL_PROBLEMS[code])
         # last: a well-formed file whose values were edited (cells removed, radius changed)
-        if str(_scalar(d, "digest", "U")) != digest(d):
+        if not same:
             raise ValueError("the arrays do not match the digest written at save")
+        d["blocked_bits"], d["unknown_bits"] = bits["blocked"], bits["unknown"]
     except ValueError as exc:  # PlannerError is a ValueError: a bad lattice too
         raise corrupt(path, str(exc)) from None
 
 
-_CELL_PROBLEMS = {1: "'blocked' cells are not distinct and sorted",
-                  2: "'unknown' keys are not distinct and sorted",
+_CELL_PROBLEMS = {1: "bits set past the last cell of the box",
                   3: "'blocked' holds cells outside the bounds",
                   4: "'unknown' holds cells outside the bounds",
-                  5: "'unknown' holds keys that are no packed cells",
                   6: "a 2D world holds cells off the plane z = 0"}
+
+
+def _inflate(a: np.ndarray, size: int, key: str) -> np.ndarray:
+    """The ``size`` bytes of bits the zlib stream ``a`` (uint8) holds, read no further."""
+    if a.ndim != 1 or a.dtype != np.uint8:
+        raise ValueError(f"{key!r} must be a (K,) uint8 zlib stream, got {a.dtype} {a.shape}")
+    z = zlib.decompressobj()
+    try:
+        out = z.decompress(a.tobytes(), size + 1)
+    except zlib.error as exc:
+        raise ValueError(f"{key!r} is not a readable zlib stream ({exc})") from None
+    if len(out) != size or not z.eof or z.unused_data:
+        raise ValueError(f"{key!r} must hold {size} bytes of bits over the box")
+    return np.frombuffer(out, dtype=np.uint8).copy()
 
 
 def _tol_bounds(bounds: np.ndarray, lat) -> tuple[np.ndarray, np.ndarray]:
     """The box a saved cell centre must lie in: :meth:`planner.World.in_bounds`'s."""
+    from planner.lattice.planar import planar_prism
     from planner.world.world import _BOUNDS_TOL
 
-    size = lat.cell_volume ** (1 / lat.dim)
+    size = 2.0 * (planar_prism(lat) if lat.dim == 2 else lat).packing_radius
     tol = _BOUNDS_TOL * max(float(np.abs(bounds).max()), size)
     return bounds[0] - tol, bounds[1] + tol
 
 
 @njit_cached
-def _cells_check(blocked, unknown, g, lo, hi, planar):  # pragma: no cover - compiled
-    """0, or the first problem (:data:`_CELL_PROBLEMS`) of the saved cells: ``blocked``
-    (M, 3) in strictly increasing packed-key order (lexicographic), ``unknown`` (U,)
-    strictly increasing non-negative keys, every cell centre ``g @ cell`` in ``[lo, hi]``
-    (m), and ``z == 0`` when ``planar``. One pass, no temporaries."""
-    bits = 21
-    lim = 1 << 20
-    mask = (1 << bits) - 1
-    c = np.empty(3, np.int64)
-    for n in range(blocked.shape[0] + unknown.shape[0]):
-        if n < blocked.shape[0]:
-            for j in range(3):
-                c[j] = blocked[n, j]
-            if n > 0:
-                for j in range(3):
-                    if blocked[n - 1, j] != c[j]:
-                        if blocked[n - 1, j] > c[j]:
-                            return 1
-                        break
-                else:
+def _bits_check(blocked, unknown, blo, dims, g, lo, hi, planar):  # pragma: no cover
+    """0, or the first problem (:data:`_CELL_PROBLEMS`) of the saved bit sets over the box
+    ``blo`` (3,), ``dims`` (3,): no bit past the last cell, every set cell's centre
+    ``g @ cell`` in ``[lo, hi]`` (m), and ``z == 0`` when ``planar``. One pass over the
+    set bits, no temporaries."""
+    n = dims[0] * dims[1] * dims[2]
+    plane = dims[1] * dims[2]
+    for q in range(blocked.shape[0]):
+        for which in range(2):
+            v = blocked[q] if which == 0 else unknown[q]
+            if v == 0:
+                continue
+            for t in range(8):
+                if not (v >> t) & 1:
+                    continue
+                f = q * 8 + t
+                if f >= n:
                     return 1
-            bad = 3
-        else:
-            u = n - blocked.shape[0]
-            k = unknown[u]
-            if k < 0:
-                return 5
-            if u > 0 and unknown[u - 1] >= k:
-                return 2
-            for j in range(2, -1, -1):
-                c[j] = (k & mask) - lim
-                k >>= bits
-            bad = 4
-        if planar and c[2] != 0:
-            return 6
-        for i in range(3):
-            x = g[i, 0] * c[0] + g[i, 1] * c[1] + g[i, 2] * c[2]
-            if not (lo[i] <= x <= hi[i]):
-                return bad
+                i = blo[0] + f // plane
+                j = blo[1] + (f // dims[2]) % dims[1]
+                k = blo[2] + f % dims[2]
+                if planar and k != 0:
+                    return 6
+                for r in range(3):
+                    x = g[r, 0] * i + g[r, 1] * j + g[r, 2] * k
+                    if not (lo[r] <= x <= hi[r]):
+                        return 3 + which
     return 0
 
 

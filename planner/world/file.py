@@ -1,15 +1,19 @@
 """Saved worlds (``planner world MAP --out world.npz``): a built world, loaded without rebuilding.
 
-File format (numpy ``.npz``, uncompressed for a fast load; written atomically):
+File format (numpy ``.npz``, members stored uncompressed; written atomically):
 
-* ``format`` = ``"planner.World"``, ``version`` = 2;
+* ``format`` = ``"planner.World"``, ``version`` = 3;
 * ``generator`` (3, 3) float64 (m) and ``lattice`` (its name, ``""`` for a custom one);
-* ``blocked`` (M, 3) int16 or int32 (the smallest that holds them): the distinct in-bounds
-  blocked cells (inflated for ``radius``; under the ``"blocked"`` policy unknown space too),
-  and ``unknown`` (U,) int64: sorted packed keys (:func:`planner.occupancy.keys.pack`) of the
-  in-bounds cells meeting unknown space. Free cells are the in-bounds cells in neither list (not
-  stored: they are the bulk of the box). Cells out of bounds are never free, so a path
-  touches none of them and leaving them out changes no plan and no count;
+* ``box`` (2, 3) int64: ``[lo, dims]`` of the world's index box (the one
+  :class:`planner.World` derives from ``generator`` and ``bounds``);
+* ``blocked`` and ``unknown``: zlib streams (uint8) of bit sets over that box
+  (:mod:`planner.occupancy.bits`: ``ceil(prod(dims) / 8)`` bytes, C order, little bit
+  order; decompressed to exactly that size, never more): the in-bounds blocked cells
+  (inflated for ``radius``; under the ``"blocked"`` policy unknown space too) and the
+  in-bounds cells meeting unknown space. Free cells are the in-bounds cells not blocked.
+  Cells out of bounds are never free, so a path touches none of them and leaving them out
+  changes no plan and no count. One bit a cell of the box before compression, and mostly
+  long runs after it;
 * ``bounds`` (2, 3) float64 (m), ``radius`` (m), ``unknown_policy``;
 * ``source`` (the map file name) and ``source_sha256`` (hex digest of its bytes, ``""`` for
   in-memory data); ``dim`` (2 for a 2D map planned on a prism of its 2D lattice);
@@ -28,6 +32,7 @@ from __future__ import annotations
 import math
 import os
 import zipfile
+import zlib
 from pathlib import Path
 
 import numpy as np
@@ -39,7 +44,7 @@ __all__ = ["FORMAT", "VERSION", "check_options", "is_world_file", "load_world", 
            "sha256"]
 
 FORMAT = "planner.World"
-VERSION = 2  # 2: every key checked and a digest over the arrays
+VERSION = 3  # 2: every key checked and a digest over the arrays; 3: bit sets over the box
 _REL = 1e-9
 
 
@@ -67,27 +72,29 @@ def is_world_file(path) -> bool:
 
 
 def save_world(world, path: str | os.PathLike) -> None:
-    """Write ``world`` (a :class:`planner.World`) to ``path`` (``.npz``) atomically."""
-    from planner.occupancy.keys import pack, unique_keys
+    """Write ``world`` (a :class:`planner.World`, dense storage) to ``path`` (``.npz``)
+    atomically.
 
+    Raises
+    ------
+    MapError
+        The world uses hash storage (its box is too large for bit sets).
+    """
     src = world.source or ""
     digest = getattr(world, "source_sha256", "") or ""
     path_of_source = getattr(world, "source_file", "") or src
     if not digest and path_of_source and Path(path_of_source).is_file():
         digest = sha256(path_of_source)
-    from planner.occupancy.keys import unpack
-
-    blocked = unpack(unique_keys(pack(world.blocked)), 3)
-    blocked = blocked[world.in_bounds(blocked)]
-    small = np.int16 if not len(blocked) or np.abs(blocked).max() < 2**15 else np.int32
-    blocked = blocked.astype(small)
-    unknown = world.unknown
-    unknown = pack(unknown[world.in_bounds(unknown)])
+    free, unknown = world.free_bits, world.unknown_bits
+    if free is None:
+        raise MapError("this world's box is too large for a saved world (hash storage); "
+                       "give smaller bounds or larger cells")
     arrays = {
         "format": np.array(FORMAT), "version": np.array(VERSION, dtype=np.int64),
         "generator": np.asarray(world.lattice.generator, dtype=np.float64),
         "lattice": np.array(world.lattice.name or ""),
-        "blocked": blocked, "unknown": unknown,
+        "box": np.stack([free.lo, free.dims]).astype(np.int64),
+        "blocked": _deflate(world.blocked_bits().bits), "unknown": _deflate(unknown.bits),
         "bounds": world.bounds, "radius": np.array(world.radius),
         "unknown_policy": np.array(world.unknown_policy),
         "source": np.array(Path(src).name if src else ""),
@@ -98,6 +105,11 @@ def save_world(world, path: str | os.PathLike) -> None:
     arrays["digest"] = np.array(array_digest(arrays))
     with atomic_path(path) as tmp, open(tmp, "wb") as f:
         np.savez(f, **arrays)
+
+
+def _deflate(bits: np.ndarray) -> np.ndarray:
+    """A bit set as a zlib stream (uint8): mostly long runs, so kilobytes per megabyte."""
+    return np.frombuffer(zlib.compress(bits.tobytes(), 6), dtype=np.uint8)
 
 
 def load_world(path: str | os.PathLike):
@@ -114,7 +126,7 @@ def load_world(path: str | os.PathLike):
     """
     from planner.lattice import Lattice
     from planner.world.check import check_schema, corrupt, read_members
-    from planner.world.world import World
+    from planner.world.world import DENSE_BUDGET, World
 
     p = Path(path)
     if not p.is_file():
@@ -132,10 +144,11 @@ def load_world(path: str | os.PathLike):
     lat = Lattice(g, name=name)
     world = World(lat, np.zeros((0, dim), np.int64), bounds, source=str(d["source"]),
                   radius=float(d["radius"]), unknown_policy=str(d["unknown_policy"]),
-                  dim=dim)
-    # check_schema found them in range, distinct and sorted, as save_world wrote them.
-    world._blocked = np.ascontiguousarray(d["blocked"], dtype=np.int64).reshape(-1, 3)
-    world._unknown_keys = np.ascontiguousarray(d["unknown"], dtype=np.int64)
+                  dim=dim, dense_budget=max(DENSE_BUDGET, d["blocked"].nbytes))
+    # check_schema found the box the world's own and the bits in bounds, as saved.
+    free, unknown = world.free_bits, world.unknown_bits
+    np.bitwise_and(free.bits, np.invert(d["blocked_bits"]), out=free.bits)
+    unknown.bits[:] = d["unknown_bits"]
     world.source_sha256 = str(d["source_sha256"])
     world.saved_path = str(p)
     return world

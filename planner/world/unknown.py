@@ -1,9 +1,11 @@
 """The unknown-space side of :class:`planner.World`: which cells meet unknown space, and why an
 end point is blocked by it.
 
-A world built from a tri-state map (:class:`planner.io.Obstacles`) keeps the sorted packed
-keys of the cells whose closed Voronoi cell meets unknown space (``_unknown_keys``), its
-``unknown_policy`` and its ``radius``; this mixin answers the questions about them.
+A world built from a tri-state map (:class:`planner.io.Obstacles`) keeps the set of cells
+whose closed Voronoi cell meets unknown space (``_unknown``: bits over the world's index box,
+:class:`planner.occupancy.bits.BoxBits`, or for a world too large for them the sorted packed
+keys, :class:`SortedKeys`), its ``unknown_policy`` and its ``radius``; this mixin answers
+the questions about them.
 """
 
 from __future__ import annotations
@@ -12,27 +14,58 @@ import numpy as np
 
 from planner.occupancy.keys import pack, unpack
 
-__all__ = ["UnknownSpace"]
+__all__ = ["SortedKeys", "UnknownSpace"]
+
+
+class SortedKeys:
+    """A cell set as sorted distinct packed keys (8 bytes a cell), with the interface of
+    :class:`planner.occupancy.bits.BoxBits` (``count``, ``contains``, ``cells``).
+
+    Parameters
+    ----------
+    keys : ndarray, shape (K,), int64
+        Sorted distinct keys (:func:`planner.occupancy.keys.pack`).
+    """
+
+    def __init__(self, keys: np.ndarray):
+        self.keys = keys
+
+    def count(self) -> int:
+        """Number of cells."""
+        return len(self.keys)
+
+    def contains(self, w: np.ndarray) -> np.ndarray:
+        """(N,) bool: cell ``w[n]`` ((N, 3) int64) is in the set."""
+        if not len(self.keys) or not len(w):
+            return np.zeros(len(w), dtype=bool)
+        k = pack(w)
+        pos = np.minimum(np.searchsorted(self.keys, k), len(self.keys) - 1)
+        return self.keys[pos] == k
+
+    def cells(self) -> np.ndarray:
+        """(K, 3) int64 cells in ascending key order."""
+        return unpack(self.keys, 3)
 
 
 class UnknownSpace:
-    """Mixin of :class:`planner.World` (needs ``_unknown_keys``, ``unknown_policy``,
+    """Mixin of :class:`planner.World` (needs ``_unknown``, ``unknown_policy``,
     ``radius``, ``_lattice``)."""
 
-    _unknown_keys: np.ndarray
+    _unknown: SortedKeys
     unknown_policy: str
     radius: float
 
     @property
     def unknown(self) -> np.ndarray:
         """(U, 3) int64 cells whose closed Voronoi cell meets unknown space (empty when the
-        map says nothing is unknown: a plain cloud, where everything not occupied is free)."""
-        return unpack(self._unknown_keys, 3)
+        map says nothing is unknown: a plain cloud, where everything not occupied is free),
+        in ascending key order. Made on each call from the compact set (24 bytes a cell)."""
+        return self._unknown.cells()
 
     @property
     def n_unknown(self) -> int:
         """Number of cells meeting unknown space."""
-        return len(self._unknown_keys)
+        return self._unknown.count()
 
     def is_unknown(self, indices: np.ndarray) -> np.ndarray:
         """(N,) bool: the cell meets unknown space (no lookup counted).
@@ -44,25 +77,20 @@ class UnknownSpace:
         """
         from planner.occupancy.walk import as_cells
 
-        w = as_cells(indices)
-        if not len(self._unknown_keys) or not len(w):
-            return np.zeros(len(w), dtype=bool)
-        k = pack(w)
-        pos = np.minimum(np.searchsorted(self._unknown_keys, k), len(self._unknown_keys) - 1)
-        return self._unknown_keys[pos] == k
+        return self._unknown.contains(as_cells(indices))
 
     @property
     def unknown_note(self) -> str:
         """One line saying how unknown space is treated, for results and reports."""
         if self.unknown_policy == "blocked":
             return "unknown space blocked (with the robot radius)"
-        if not len(self._unknown_keys):
+        if not self.n_unknown:
             return "no free-space information: everything in bounds not occupied is free"
         return "unknown space planned through as free"
 
     def _near_unknown(self, cell: np.ndarray) -> bool:
         """Unknown space is blocked and the cell is unknown or within the radius of it."""
-        if self.unknown_policy != "blocked" or not len(self._unknown_keys):
+        if self.unknown_policy != "blocked" or not self.n_unknown:
             return False
         from planner.voxels import inflation_stencil
 

@@ -3,13 +3,20 @@ checker.
 
 Occupancy storage (chosen per world, see :attr:`World.storage`):
 
-* ``"dense"`` (default when it fits ``dense_budget`` bytes, 256 MB): one byte per cell over
-  the index bounding box of the in-bounds cells, 1 = free. A lookup is one bounds test and
-  one byte load, and it answers "in bounds" and "not blocked" at once. A 389 x 313 x 511
-  Warframe map takes 62 MB.
-* ``"hash"`` (fallback for huge boxes): an open-addressing set of the blocked cells' packed
-  keys (power-of-two size, load <= 0.5, splitmix64 mixing) plus an in-bounds test of the
-  cell centre. Memory proportional to the number of blocked cells.
+* ``"dense"`` (default when it fits ``dense_budget`` bytes, 256 MB, i.e. boxes up to
+  ~2e9 cells): one bit per cell over the index bounding box of the in-bounds cells
+  (:mod:`planner.occupancy.bits`), 1 = free. This is the world's own record of its cells
+  (no list of blocked cells is kept); a lookup is one bounds test and one bit load, and it
+  answers "in bounds" and "not blocked" at once. A 389 x 313 x 511 Warframe map takes
+  7.8 MB. Cells meeting unknown space are a second bit set over the same box.
+* ``"hash"`` (fallback for huge boxes): the in-bounds blocked cells as given, (M, 3) int64,
+  an open-addressing set of their packed keys (power-of-two size, load <= 0.5, splitmix64
+  mixing) plus an in-bounds test of the cell centre. Memory proportional to the number of
+  blocked cells.
+
+:attr:`World.blocked`, :attr:`World.unknown` and :meth:`World.blocked_centres` are views
+made on each call from the compact sets (24 bytes a cell, and a pass over the box's bits):
+for exports and figures, not for inner loops. :attr:`World.n_blocked` counts without a list.
 
 Both live in a typed :class:`Occupancy` struct of plain numpy arrays read by the numba
 kernels (:mod:`planner.occupancy.grid`). :attr:`World.checker` (a :class:`ValidityChecker`)
@@ -26,20 +33,22 @@ from planner.checks import check_radius
 from planner.errors import MapError, PlanError
 from planner.io.obstacles import UNKNOWN_POLICIES
 from planner.lattice import Lattice
-from planner.occupancy import grid as wk
+from planner.occupancy import bits as ob
+from planner.occupancy.bits import BoxBits
 from planner.occupancy.grid import Occupancy
-from planner.occupancy.keys import build_key_set, check_range, pack, unique_keys
+from planner.occupancy.keys import build_key_set, pack
 from planner.occupancy.walk import Walk, as_cells, c_array, segment_walk, walk_of
+from planner.world.cells import CellSets
 from planner.world.checker import ValidityChecker
-from planner.world.unknown import UnknownSpace
+from planner.world.unknown import SortedKeys, UnknownSpace
 
 __all__ = ["World", "DENSE_BUDGET", "Occupancy", "ValidityChecker", "Walk", "as_point"]
 
-DENSE_BUDGET = 256 * 2**20  # bytes: above this the hash set is used
+DENSE_BUDGET = 256 * 2**20  # bytes of free bits: above this the hash set is used
 _BOUNDS_TOL = 1e-9
 
 
-class World(UnknownSpace):
+class World(CellSets, UnknownSpace):
     """Lattice + blocked cells + bounds, built complete.
 
     Parameters
@@ -47,7 +56,8 @@ class World(UnknownSpace):
     lattice : Lattice
         A 3D lattice.
     blocked_indices : array_like of int, shape (M, 3)
-        Blocked cells (already inflated for the robot radius). Duplicates are fine.
+        Blocked cells (already inflated for the robot radius). Duplicates are fine; cells
+        out of bounds are never free anyway (a dense world does not keep them).
     bounds : array_like, shape (2, 3)
         World box ``[min, max]`` in metres. A cell is in bounds iff its centre lies in the
         closed box (with ``1e-9`` relative tolerance).
@@ -60,7 +70,8 @@ class World(UnknownSpace):
     build_seconds : float, optional
         Time it took to build the world from its source (s).
     dense_budget : int
-        Largest dense occupancy grid in bytes; beyond it the hash set is used.
+        Largest dense occupancy bit set in bytes (8 cells a byte); beyond it the hash set
+        is used.
     unknown_cells : array_like of int, shape (U, 3), optional
         Cells whose closed Voronoi cell meets unknown space (see :meth:`is_unknown`).
     unknown_policy : str
@@ -129,9 +140,6 @@ class World(UnknownSpace):
                            f"where lattice indices stay exact (+-2**52); give smaller bounds")
         r = check_radius(radius)
         self._lattice = lattice
-        self._blocked = np.ascontiguousarray(b, dtype=np.int64)
-        if len(b):  # now, not inside a kernel
-            check_range(self._blocked, self._blocked, 3)
         self._bounds = bb
         self.source = source
         self.radius = r
@@ -149,7 +157,19 @@ class World(UnknownSpace):
             u = np.zeros((0, 3), dtype=np.int64)
         if u.ndim != 2 or u.shape[1] != 3 or not np.issubdtype(u.dtype, np.integer):
             raise MapError(f"unknown cells must be an (U, 3) integer array, got {u.shape}")
-        self._unknown_keys = unique_keys(pack(np.ascontiguousarray(u, dtype=np.int64)))
+        b = np.ascontiguousarray(b, dtype=np.int64)
+        u = np.ascontiguousarray(u, dtype=np.int64)
+        lo, dims = self._box()
+        self._free: BoxBits | None = None
+        self._blocked: np.ndarray | None = None
+        if ob.n_bytes(dims) <= self.dense_budget:
+            self._free = self.in_bounds_bits(lo, dims)
+            self._unknown = BoxBits.empty(lo, dims)
+        else:
+            self._blocked = np.zeros((0, 3), np.int64)
+            self._unknown = SortedKeys(np.zeros(0, np.int64))
+        self.block_cells(b)
+        self.add_unknown(u)
         self.unknown_policy = unknown_policy
         self.dim = int(dim)  # 2: a 2D map planned in the plane z = 0 of a prism lattice
         self.source_sha256 = ""
@@ -178,30 +198,15 @@ class World(UnknownSpace):
         """Twice the packing radius: the distance between face-neighbour centres (m)."""
         return 2.0 * self._lattice.packing_radius
 
-    @property
-    def blocked(self) -> np.ndarray:
-        """(M, 3) int64 blocked cells as given."""
-        return self._blocked
-
-    @property
-    def n_blocked(self) -> int:
-        """Number of distinct blocked cells."""
-        return len(unique_keys(pack(self._blocked))) if len(self._blocked) else 0
-
-    @property
-    def storage(self) -> str:
-        """``"dense"`` or ``"hash"`` (module docstring)."""
-        return "dense" if self.occupancy.mode == 0 else "hash"
-
     def blocked_centres(self) -> np.ndarray:
-        """(M, 3) centres of the blocked cells (m)."""
-        return self._lattice.to_world(self._blocked)
+        """(M, 3) centres of the :attr:`blocked` cells (m)."""
+        return self._lattice.to_world(self.blocked)
 
     def blocked_voxels(self):
-        """The blocked cells as an :class:`planner.voxels.OccupiedVoxelList`."""
+        """The :attr:`blocked` cells as an :class:`planner.voxels.OccupiedVoxelList`."""
         from planner.voxels import OccupiedVoxelList
 
-        return OccupiedVoxelList(self._lattice, self._blocked)
+        return OccupiedVoxelList(self._lattice, self.blocked)
 
     def _tol_bounds(self) -> tuple[np.ndarray, np.ndarray]:
         lo, hi = self._bounds
@@ -223,17 +228,9 @@ class World(UnknownSpace):
     def _build(self) -> Occupancy:
         g = c_array(self._lattice.generator, float)
         blo, bhi = (c_array(x, float) for x in self._tol_bounds())
-        corners = np.array([[(blo, bhi)[c][a] for a, c in enumerate(bits)]
-                            for bits in np.ndindex(2, 2, 2)])
-        w = corners @ np.linalg.inv(g).T
-        lo = np.floor(w.min(axis=0)).astype(np.int64) - 1
-        hi = np.ceil(w.max(axis=0)).astype(np.int64) + 1
-        dims = hi - lo + 1
-        if float(np.prod(dims.astype(float))) <= self.dense_budget:
-            grid = np.empty(int(np.prod(dims)), dtype=np.uint8)
-            wk.fill_in_bounds(grid, lo, dims, g, blo, bhi)
-            wk.clear_cells(grid, lo, dims, self._blocked)
-            return Occupancy(0, grid, lo, dims, np.full(1, -1, np.int64), 0, g, blo, bhi)
+        if self._free is not None:
+            f = self._free
+            return Occupancy(0, f.bits, f.lo, f.dims, np.full(1, -1, np.int64), 0, g, blo, bhi)
         keys = np.unique(pack(self._blocked))
         size = 16
         while size < 2 * len(keys):
@@ -369,31 +366,8 @@ class World(UnknownSpace):
             self.cell_checks = before
 
     def __repr__(self) -> str:
-        return (f"World({self._lattice!r}, {len(self._blocked)} blocked cells, "
+        return (f"World({self._lattice!r}, {self.n_blocked} blocked cells, "
                 f"bounds={self._bounds.tolist()})")
-
-    def set_cells(self, cells: np.ndarray, blocked: bool) -> np.ndarray:
-        """Block or free cells in place (dense storage only), for incremental planning.
-
-        Cells outside the bounds stay out of bounds (blocked). Returns the (K, 3) int64
-        distinct cells whose state changed, the batch to pass to an incremental search.
-        """
-        w = np.unique(as_cells(cells), axis=0)
-        occ = self.occupancy
-        if occ.mode != 0:
-            raise PlanError("set_cells needs dense occupancy storage (a smaller world)")
-        w = w[self.in_bounds(w)]
-        flat = ((w - occ.lo) * np.array([occ.dims[1] * occ.dims[2], occ.dims[2], 1])).sum(1)
-        new = 0 if blocked else 1
-        changed = occ.grid[flat] != new
-        occ.grid[flat[changed]] = new
-        w = w[changed]
-        if blocked:
-            self._blocked = np.concatenate([self._blocked, w])
-        elif len(w):
-            self._blocked = self._blocked[~np.isin(pack(self._blocked), pack(w))]
-        return w
-
 
 def as_point(p, what: str = "point", dim: int = 3) -> np.ndarray:
     """``p`` as a finite (3,) float array (m); PlanError naming ``what`` otherwise. With

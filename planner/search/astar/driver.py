@@ -52,13 +52,14 @@ def _no_sight():
 
 
 def _take_dense(occ) -> np.ndarray | None:
-    if occ.mode != 0 or 4 * occ.grid.size > DENSE_SLOT_BUDGET:
+    cells = int(np.prod(occ.dims))  # the occupancy grid holds one bit per cell
+    if occ.mode != 0 or 4 * cells > DENSE_SLOT_BUDGET:
         return None
     key = id(occ.grid)
     with _LOCK:
         a = _POOL.pop(key, None)
     if a is None:
-        a = _lazy_zeros(occ.grid.size)
+        a = _lazy_zeros(cells)
     return a
 
 

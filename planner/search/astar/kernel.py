@@ -159,21 +159,23 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state
         expansions += 1
         u0, u1, u2 = unpack3(nkey[s])
         if mode == 0:
-            # Dense grid lookups written out here: numba does not reliably inline the
+            # Dense bit-grid lookups written out here: numba does not reliably inline the
             # helper inside this large loop and a call pays reference counting.
             a0, b0, c0 = u0 - lo0, u1 - lo1, u2 - lo2
             base = (a0 * d1 + b0) * d2 + c0
             if (a0 >= reach and b0 >= reach and c0 >= reach and a0 < d0 - reach
                     and b0 < d1 - reach and c0 < d2 - reach):
                 for j in range(nu):
-                    ufree[j] = grid[base + uoff[j]] != 0
+                    f = base + uoff[j]
+                    ufree[j] = (grid[f >> 3] >> (f & 7)) & 1 != 0
             else:
                 for j in range(nu):
                     a = a0 + ust[j, 0]
                     b = b0 + ust[j, 1]
                     c = c0 + ust[j, 2]
+                    f = (a * d1 + b) * d2 + c
                     ufree[j] = (a >= 0 and b >= 0 and c >= 0 and a < d0 and b < d1
-                                and c < d2 and grid[(a * d1 + b) * d2 + c] != 0)
+                                and c < d2 and (grid[f >> 3] >> (f & 7)) & 1 != 0)
         else:
             for j in range(nu):
                 ufree[j] = cell_free(mode, grid, lo, dims, otable, otmask, gg, blo, bhi,

@@ -95,7 +95,8 @@ class DStarLite:
                 affect[e] |= np.int64(1) << np.int64(m)
         occ = world.occupancy
         if occ.mode != 0:
-            raise PlanError("D* Lite needs dense occupancy storage (a smaller world)")
+            raise PlanError("D* Lite needs dense occupancy storage (an index box of at most "
+                            "8 x the world's dense_budget cells; a smaller world)")
         self._bx = dk.new_box(occ.lo, occ.dims, self._ms)
         self._nd = dk.new_nodes(4096)
         self._heap = new_heap(4096)

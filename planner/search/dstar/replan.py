@@ -216,7 +216,7 @@ def collect(occ, ms, affect, bx, nd, st, cells, blocked, out_s, out_old, out_red
     serves turns lazy (it is not collected). A stencil node whose own cell is blocked has
     no edges to lose
     (blocked in this batch: its own cell's visit kills it; earlier: it died then), so
-    away from the box faces one byte of the dense occupancy grid (``occ``, the node
+    away from the box faces one bit of the dense occupancy grid (``occ``, the node
     map's box) skips it without touching its row."""
     st.stamp += 1
     stamp = st.stamp
@@ -246,7 +246,7 @@ def collect(occ, ms, affect, bx, nd, st, cells, blocked, out_s, out_old, out_red
             if inner:
                 if j < 0:
                     s = np.int64(slot[base])
-                elif grid[base - off[j]] == 0:
+                elif (grid[(base - off[j]) >> 3] >> ((base - off[j]) & 7)) & 1 == 0:
                     continue
                 else:
                     s = np.int64(slot[base - off[j]])
