@@ -25,6 +25,10 @@ import time
 
 import numpy as np
 
+from planner import planning as api
+from planner.cli import main
+from planner.lattice import NAMED_LATTICES
+
 __all__ = ["warm"]
 
 
@@ -37,11 +41,9 @@ def warm() -> float:
     more).
     """
     t0 = time.perf_counter()
-    from planner import planning as api
-    from planner.analysis.compare import compare
-    from planner.lattice import NAMED_LATTICES
-    from planner.maps import MAPS_DIR
-    from planner.search import warm_up
+    from planner.analysis.compare import compare  # lazy: numba, scipy
+    from planner.maps import MAPS_DIR  # lazy: scipy
+    from planner.search import warm_up  # lazy: numba, scipy
 
     warm_up()  # every search method's kernel
     # The README's first command itself (a few seconds): map reading, inflation, world
@@ -59,7 +61,7 @@ def warm() -> float:
 
 def _warm_explore(office: str) -> None:
     """D* Lite replanning (``planner explore``), on a short run."""
-    from planner.explore import explore
+    from planner.explore import explore  # lazy: numba, scipy
 
     explore(office, (2.5, 2.5, 1.2), (4.0, 2.5, 1.2), lattice="fcc", radius=0.25,
             cell_volume=0.05, max_steps=200)
@@ -89,8 +91,6 @@ def cache_stats() -> tuple[int, int, list[str]]:
 
 def check(argv: list[str]) -> int:
     """Run ``planner ARGV`` in this process; 0 if every kernel it used came from the cache."""
-    from planner.cli import main
-
     t = time.perf_counter()
     rc = main(argv)
     secs = time.perf_counter() - t

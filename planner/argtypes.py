@@ -8,8 +8,9 @@ import math
 
 import numpy as np
 
+from planner.budget import parse_size
 from planner.errors import PlannerError
-from planner.lattice import NAMED_LATTICES
+from planner.lattice import NAMED_LATTICES, Lattice
 from planner.lattice.paper import NAMED_LATTICES_2D
 
 
@@ -74,8 +75,6 @@ def int_range(lo: int, hi: int | None = None):
 
 def size(text: str) -> int:
     """A byte count such as ``4G`` or ``512M``."""
-    from planner.budget import parse_size
-
     try:
         return parse_size(text)
     except PlannerError as exc:
@@ -84,7 +83,7 @@ def size(text: str) -> int:
 
 def map_file(text: str) -> str:
     """A map file, or a bundled map by name (``office``) from any folder."""
-    from planner.maps import resolve
+    from planner.maps import resolve  # lazy: scipy
 
     return str(resolve(text))
 
@@ -117,8 +116,6 @@ def fov(text: str) -> tuple[float, float]:
 
 def generator(text: str):
     """A custom lattice: ``"a,b,c;d,e,f;g,h,i"`` (rows of G) or a ``.npy`` file."""
-    from planner.lattice import Lattice
-
     if text.endswith(".npy"):
         try:
             g = np.load(text, allow_pickle=False)

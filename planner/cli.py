@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from planner import argtypes as T
+from planner.budget import ENV
 from planner.commands.outputs import check_outputs
 from planner.errors import PlannerError
 from planner.lattice import NAMED_LATTICES
@@ -335,8 +336,6 @@ def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     a = build_parser().parse_args(_hoist_global_options(_join_negative_values(argv)))
     if a.memory_budget is not None:  # the one budget model reads it (and so do workers)
-        from planner.budget import ENV
-
         os.environ[ENV] = str(a.memory_budget)
     # numpy warnings are shown only when the command succeeds: an error is one line
     with warnings.catch_warnings(record=True) as caught:

@@ -60,6 +60,7 @@ import numpy as np
 
 from planner._guard import run_guarded
 from planner.errors import PlanError
+from planner.lattice import Lattice
 from planner.path import path_length
 from planner.world import ValidityChecker, World
 
@@ -426,8 +427,6 @@ def _pin_ends(pts: list[list[float]], s: np.ndarray, g: np.ndarray) -> list[list
 def _warm() -> None:
     """Load (or compile) the checker kernels on a tiny world, through a pickle round trip as
     the workers receive it."""
-    from planner.lattice import Lattice
-
     w = World(Lattice.named("cubic", cell_volume=1.0), np.array([[2, 2, 2]]),
               np.array([[0.0, 0.0, 0.0], [4.0, 4.0, 4.0]]))
     c = pickle.loads(pickle.dumps(w.checker))

@@ -51,7 +51,7 @@ def path_record(res, world, start, goal) -> dict:
     digest = getattr(world, "source_sha256", "") or ""
     src_file = getattr(world, "source_file", "")
     if not digest and src_file and Path(src_file).is_file():
-        from planner.world.file import sha256
+        from planner.world.file import sha256  # lazy: numba, scipy
 
         digest = sha256(src_file)
     if len(path) > 1:  # a start at a cell centre would appear twice

@@ -12,8 +12,12 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from planner import ompl, search
 from planner.errors import PlanError
 from planner.lattice import Lattice
+from planner.ompl import check_seed
+from planner.path import path_length
+from planner.world import World, as_point
 from planner.world.build import build_world
 
 __all__ = ["PlanResult", "build_world", "describe", "plan", "unknown_on_path"]
@@ -141,17 +145,11 @@ def plan(
     -------
     PlanResult
     """
-    from planner import search
-    from planner.path import path_length
-    from planner.world import World, as_point
-
     as_point(start, "start", 2)  # malformed input fails before any map is built
     as_point(goal, "goal", 2)
     if not isinstance(method, str):
         raise PlanError(f"method must be a string, got {method!r}")
     if method.startswith("ompl:"):
-        from planner.ompl import check_seed
-
         check_seed(seed)
     if isinstance(map_or_points, World):
         world = map_or_points
@@ -241,8 +239,6 @@ def unknown_on_path(world, path: np.ndarray) -> int:
 
 
 def _plan_ompl(world, s, g, planner_name, time_limit, seed, common) -> PlanResult:
-    from planner import ompl
-
     r = ompl.plan_ompl(world, s, g, planner=planner_name, time_limit=time_limit, seed=seed)
     path = r.path_simplified if r.path_simplified is not None else r.path
     d = r.to_dict()

@@ -180,3 +180,22 @@ def test_package_init_files_only_re_export():
 def test_modules_stay_small():
     long = {m for m, p in MODULES.items() if len(p.read_text().splitlines()) > MAX_LINES}
     assert long <= OVER_LIMIT, sorted(long - OVER_LIMIT)
+
+
+def test_imports_inside_functions_say_why():
+    """An import of a project module inside a function keeps a heavy library (numba, scipy,
+    matplotlib, a format extra) off the import path of its module, and says so."""
+    bad = []
+    for m, p in MODULES.items():
+        lines = p.read_text().splitlines()
+        for fn in ast.walk(ast.parse("\n".join(lines))):
+            if not isinstance(fn, ast.FunctionDef | ast.AsyncFunctionDef):
+                continue
+            for node in ast.walk(fn):
+                if isinstance(node, ast.Import | ast.ImportFrom):
+                    mod = node.module if isinstance(node, ast.ImportFrom) else node.names[0].name
+                    project = bool(node.level) if isinstance(node, ast.ImportFrom) else False
+                    if (project or (mod or "").startswith("planner")) and \
+                            "#" not in lines[node.lineno - 1]:
+                        bad.append(f"{m}:{node.lineno}")
+    assert bad == []

@@ -8,11 +8,17 @@ from pathlib import Path
 
 import numpy as np
 
+from planner import search
+from planner.analysis.path_figure import plot_paths as draw
 from planner.analysis.tables import format_table
 from planner.errors import MapError, PlanError
+from planner.io import load_scenarios
 from planner.maps import resolve
+from planner.path import path_length
 from planner.planning import plan
+from planner.progress import Progress
 from planner.search import warm_up
+from planner.view import write_view
 from planner.world.build import build_world, sidecar
 
 __all__ = ["compare", "format_rows", "plot_paths"]
@@ -56,8 +62,6 @@ def compare(
     its topic and frame), built instead of reading ``map_path`` again; ``map_path`` still
     names the map's sidecar and default queries.
     """
-    from planner.progress import Progress
-
     if not resolve(map_path).exists():
         raise MapError(f"{map_path}: no such file or bundled map")
     side = sidecar(resolve(map_path))
@@ -99,8 +103,6 @@ def compare(
                          f"{_xyz(s)} -> {_xyz(g)}" + (f" (cells of {name})"
                                                       if len(results) > 1 else ""))
     if view:
-        from planner.view import write_view
-
         s, g = queries[0]
         write_view(view, world, {k: r.path for k, r in results.items() if r.found}, start=s,
                    goal=g, title=f"{Path(map_path).name}: query 1 of {len(queries)}, cells of "
@@ -143,8 +145,6 @@ def _scenario_queries(map_path: str) -> list[tuple[np.ndarray, np.ndarray]]:
     scen = Path(str(map_path) + ".3dscen")
     if not scen.is_file():
         return []
-    from planner.io import load_scenarios
-
     sc = load_scenarios(scen)
     k = min(len(sc), SCENARIO_QUERIES)
     return [(sc.starts[i].astype(float), sc.goals[i].astype(float)) for i in range(k)]
@@ -153,9 +153,6 @@ def _scenario_queries(map_path: str) -> list[tuple[np.ndarray, np.ndarray]]:
 def _smoothed_length(world, res) -> float:
     """Length (m) after line-of-sight shortcutting (A*/Dijkstra cell paths); any-angle and
     OMPL paths are their own smoothed path."""
-    from planner import search
-    from planner.path import path_length
-
     if res.method not in ("astar", "dijkstra") or len(res.cells) < 3:
         return float(res.length)
     cells = search.shortcut(world, res.cells)
@@ -199,8 +196,6 @@ def format_rows(rows: list[dict], markdown: bool = False) -> str:
 def plot_paths(path: str, world, results: dict, max_cells: int = 4000,
                title: str | None = None) -> None:
     """Figure of paths over the cells: see :func:`planner.analysis.path_figure.plot_paths`."""
-    from planner.analysis.path_figure import plot_paths as draw
-
     draw(path, world, results, title=title, max_cells=max_cells)
 
 

@@ -19,6 +19,8 @@ from scipy.optimize import minimize
 from scipy.spatial.transform import Rotation
 
 from planner.analysis.tables import format_table
+from planner.budget import require
+from planner.errors import PlannerError
 from planner.lattice import NAMED_LATTICES, PAPER_DELTAS, Lattice
 from planner.occupancy.keys import pack
 
@@ -191,9 +193,6 @@ def lattice_table(cell_volume: float = 1.0, names: Iterable[str] = NAMED,
     When ``"hex"`` is named, the hex prism at :func:`optimal_hex_height` follows it (row
     ``"hex h=<height>"``, the height in metres).
     """
-    from planner.budget import require
-    from planner.errors import PlannerError
-
     # per point: the point, its cell, its error vector and the metrics' temporaries
     require(float(n_points) * 3 * 8 * 6, f"{n_points} uniform points (--points)",
             error=PlannerError)

@@ -47,8 +47,10 @@ from planner.analysis.measure import (
 )
 from planner.analysis.metadata import run_metadata
 from planner.analysis.style import LATTICE_COLORS
+from planner.budget import require
 from planner.errors import PlannerError
 from planner.fsutil import atomic_path, write_text_atomic
+from planner.io import load_points
 from planner.lattice import Lattice
 from planner.progress import Progress
 
@@ -105,8 +107,6 @@ def save_fig(fig, path: Path) -> None:
 def load_scan(path: Path) -> np.ndarray | None:
     """(N, 3) float64 points of one scan (metres) with non-finite and exact-origin
     (no-return) points dropped; ``None`` (with a message) when it cannot be read."""
-    from planner.io import load_points
-
     if not path.exists():
         print(f"  skip {path.name}: {path} not found", file=sys.stderr)
         return None
@@ -346,8 +346,6 @@ def reproduce(out: Path, *, rotations: int = 100, volumes: Sequence[float] = (0.
     k, n, n_table = rotations, samples, 10**6
     if quick:
         k, n, n_table = min(k, 4), min(n, 50_000), 100_000
-    from planner.budget import require
-
     # per sample: its point, its cell and the error vectors (float64 / int64 triples)
     require(float(n) * 3 * 8 * 6, f"{n} samples per distribution (--samples)",
             error=PlannerError)

@@ -30,8 +30,10 @@ import time
 
 import numpy as np
 
+from planner.analysis.metadata import row_commit
 from planner.bench.host import worker_host
 from planner.bench.rotations import IDENTITY_XYZW
+from planner.bench.worlds import cached_frame, rotated_lattice
 from planner.errors import PlannerError
 
 __all__ = ["EXPLORE_KEYS", "explore_rows", "check_explore_table"]
@@ -65,8 +67,6 @@ def check_explore_table(table: dict) -> str | None:
 
 def _setting(task: dict):
     """The map the robot explores, its bounds (m) and the task's (turned) lattice."""
-    from planner.bench.worlds import cached_frame, rotated_lattice
-
     frame = cached_frame(task["map"])
     lat = rotated_lattice(task["lattice"], task["cell_volume"],
                           task.get("quaternion_xyzw", IDENTITY_XYZW))
@@ -75,8 +75,7 @@ def _setting(task: dict):
 
 def explore_rows(task: dict) -> list[dict]:
     """Rows of one exploration task (a world configuration and a batch of queries)."""
-    from planner.analysis.metadata import row_commit
-    from planner.explore import explore
+    from planner.explore import explore  # lazy: numba
 
     cfg = {**EXPLORE_KEYS, **task.get("explore", {})}
     rows = []

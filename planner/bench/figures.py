@@ -22,7 +22,9 @@ from pathlib import Path
 import numpy as np
 
 from planner.analysis.style import LATTICE_COLORS, OTHER_COLOR
+from planner.bench.paired import query_key, wilson_interval
 from planner.fsutil import atomic_path
+from planner.lattice import Lattice
 
 __all__ = ["operating_points", "pareto_front", "plot_tradeoffs"]
 
@@ -39,9 +41,6 @@ def operating_points(rows: list[dict]) -> list[dict]:
     solved (medians over each one's own solved queries would favour a configuration that
     fails the hard ones); the lattice's covering radius at that cell volume (m).
     """
-    from planner.bench.paired import query_key
-    from planner.lattice import Lattice
-
     groups: dict = defaultdict(list)
     for r in rows:
         if not str(r["method"]).startswith("ompl:"):
@@ -193,8 +192,6 @@ def _success_figure(plt, pts: list[dict], rows: list[dict], maps: list[str],
                     out_dir: Path) -> Path:
     """Success against cell volume and covering radius; one cell volume: bars with n."""
     from matplotlib.ticker import FixedLocator, NullLocator
-
-    from planner.bench.paired import wilson_interval
 
     single = all(len({p["cell_volume"] for p in pts if p["map"] == m}) == 1 for m in maps)
     fig, axes = plt.subplots(len(maps), 1 if single else 2,

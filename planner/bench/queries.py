@@ -91,7 +91,7 @@ def scenario_queries(path: str, n: int, seed: int) -> tuple[np.ndarray, np.ndarr
 
     Returns starts, goals (n, 3) as float points and the listed optimal costs (n,).
     """
-    from planner.io import load_scenarios
+    from planner.io import load_scenarios  # lazy: scipy
 
     sc = load_scenarios(path)
     starts, goals, costs = sc.starts, sc.goals, sc.costs

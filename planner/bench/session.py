@@ -66,7 +66,7 @@ def results_lock(out: Path) -> Iterator[None]:
 
 
 def _paper(suite: Suite, out: Path, jobs: int) -> int:
-    from planner.analysis.paper import reproduce
+    from planner.analysis.paper import reproduce  # lazy: numba, scipy
 
     args = dict(suite.paper)
     if "volumes" in args:

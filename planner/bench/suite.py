@@ -34,6 +34,7 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from planner.budget import require
 from planner.errors import PlannerError
 from planner.lattice import NAMED_LATTICES, Lattice
 
@@ -80,7 +81,7 @@ class Suite:
 def _resolve(p: str, base: Path) -> Path | None:
     """A map path relative to the suite's folder, then the current folder, else a bundled
     map name (``office``); None when absent."""
-    from planner.maps import MAPS, map_path
+    from planner.maps import MAPS, map_path  # lazy: scipy
 
     for root in (base, Path.cwd()):
         q = (root / p).resolve()
@@ -91,8 +92,8 @@ def _resolve(p: str, base: Path) -> Path | None:
 
 
 def _check_methods(path: Path, methods: tuple[str, ...], planners: tuple[str, ...]) -> None:
-    from planner.ompl import PLANNERS
-    from planner.search import METHODS
+    from planner.ompl import PLANNERS  # lazy: numba, scipy
+    from planner.search import METHODS  # lazy: numba, scipy
 
     for m in methods:
         if m not in (*METHODS, "explore"):
@@ -172,7 +173,7 @@ def load_suite(name_or_path: str) -> Suite:
         if lat not in NAMED_LATTICES:
             raise SuiteError(f"{path}: unknown lattice {lat!r}")
     _check_methods(path, suite.methods, suite.ompl_planners)
-    from planner.bench.rotations import ROTATION_KINDS
+    from planner.bench.rotations import ROTATION_KINDS  # lazy: scipy
 
     if suite.rotation not in ROTATION_KINDS:
         raise SuiteError(f"{path}: rotation must be one of {', '.join(ROTATION_KINDS)}, "
@@ -200,8 +201,6 @@ def load_suite(name_or_path: str) -> Suite:
 def _check_size(path: Path, suite: Suite) -> None:
     """Refuse a suite whose run list (every map x cell volume x radius x rotation x lattice
     x move set x method x query) would not fit the memory budget, before it is listed."""
-    from planner.budget import require
-
     methods = max(1, len(suite.methods) + len(suite.ompl_planners) * len(suite.ompl_seeds))
     per_rotation = sum(len(m.cell_volumes) * len(m.radii) * (m.queries or suite.queries)
                        for m in suite.maps) * len(suite.lattices) * len(suite.neighbors)
@@ -280,7 +279,7 @@ def _check_raw(path: Path, raw: dict) -> None:
         raise bad("explore", "an [explore] table")
     if ex and "explore" not in raw.get("methods", ()):
         raise SuiteError(f"{path}: an [explore] table needs \"explore\" in methods")
-    from planner.bench.explore_rows import check_explore_table
+    from planner.bench.explore_rows import check_explore_table  # lazy: scipy
 
     why = check_explore_table(ex)
     if why:

@@ -11,8 +11,11 @@ from pathlib import Path
 
 import numpy as np
 
+from planner.analysis.metadata import metadata_markdown, run_metadata
 from planner.analysis.style import LATTICE_COLORS, OTHER_COLOR
 from planner.analysis.tables import format_table
+from planner.bench import paired
+from planner.bench.figures import plot_tradeoffs
 from planner.bench.paired import wilson_interval
 from planner.bench.rows import unique_rows
 from planner.fsutil import atomic_path, write_text_atomic
@@ -199,8 +202,6 @@ def plot(rows: list[dict], out_dir: Path) -> list[Path]:
         fig.savefig(tmp, dpi=110, format="png")
     plt.close(fig)
     files.append(p)
-    from planner.bench.figures import plot_tradeoffs
-
     return files + plot_tradeoffs(rows, out_dir)
 
 
@@ -213,8 +214,6 @@ def write_report(out_dir: Path, suite, rows: list[dict], summary: list[dict], re
 
     ``partial`` (why the suite is incomplete) puts a PARTIAL flag at the top.
     """
-    from planner.analysis.metadata import metadata_markdown, run_metadata
-
     unsafe = [r for r in rows if r.get("found") and r.get("collision_free") is False]
     title = f"# Benchmark suite `{suite.name}`" + (" (PARTIAL)" if partial else "")
     lines = [title, ""]
@@ -226,8 +225,6 @@ def write_report(out_dir: Path, suite, rows: list[dict], summary: list[dict], re
              f"{len(unsafe)} paths violated the robot clearance against the raw obstacles.", ""]
     if suite.skipped:
         lines += [f"Skipped (files absent): {', '.join(suite.skipped)}", ""]
-    from planner.bench import paired
-
     rot = getattr(suite, "rotation", "none")
     lines += [f"Rotations: `{rot}`, {len({r.get('rotation', 0) for r in rows})} per map "
               "(the lattice turned by R^T in the map's frame, i.e. the map by R; the same "
@@ -287,9 +284,6 @@ def results_section(suite, rows: list[dict], record: dict, figures: list[Path], 
     """The README's results block, generated from the rows (see
     :mod:`planner.analysis.readme_results`): the paired headline table and its sentences,
     the rotation spread, the dropped queries, and the trade-off figures."""
-    from planner.analysis.metadata import run_metadata
-    from planner.bench import paired
-
     meta = run_metadata(1)
     ran = sorted({r["commit"] for r in rows if r.get("commit")})
     stamp = f"report at commit {meta['commit']}" + (

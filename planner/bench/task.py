@@ -8,8 +8,14 @@ import time
 
 import numpy as np
 
+from planner import planning as api
+from planner import search
+from planner.analysis.metadata import row_commit
+from planner.bench.explore_rows import explore_rows
 from planner.bench.host import worker_host
+from planner.bench.metrics import Clearance
 from planner.bench.rotations import IDENTITY_XYZW
+from planner.bench.worlds import cached_frame, cached_world
 from planner.errors import PlannerError
 from planner.path import path_length
 
@@ -21,16 +27,12 @@ LATTICE_METHODS = ("astar", "dijkstra", "theta", "lazy-theta")
 
 
 def _frame(map_path: str):
-    from planner.bench.worlds import cached_frame
-
     return cached_frame(map_path)
 
 
 def _world(task: dict):
     """Per-process cache: a worker builds (or loads, see
     :func:`planner.bench.worlds.cached_world`) each world once for all its queries."""
-    from planner.bench.worlds import cached_world
-
     quat = tuple(task.get("quaternion_xyzw", IDENTITY_XYZW))
     key = (task["map"], task["lattice"], task["cell_volume"], task["radius"], quat)
     if key not in _WORLDS:
@@ -43,8 +45,6 @@ def _world(task: dict):
 def _clearance(map_path: str):
     """Clearance against the map's obstacles (paths of rotated worlds are in the map's own
     frame too, see :mod:`planner.bench.worlds`)."""
-    from planner.bench.metrics import Clearance
-
     if map_path not in _CLEARANCE:
         _CLEARANCE.clear()
         o = _frame(map_path).obstacles
@@ -57,13 +57,7 @@ def run_task(task: dict) -> list[dict]:
 
     A plain function of plain data so that it pickles to processes and Dask workers.
     """
-    from planner import planning as api
-    from planner import search
-    from planner.analysis.metadata import row_commit
-
     if task["method"] == "explore":  # a robot sensing its way, not one planned path
-        from planner.bench.explore_rows import explore_rows
-
         return explore_rows(task)
     world = _world(task)
     clear = _clearance(task["map"])

@@ -19,7 +19,7 @@ __all__ = ["plan_tasks"]
 
 def _build_cached(spec: tuple) -> None:
     """Build one world into the cache (a pool task: the world stays in its file)."""
-    from planner.bench.worlds import cached_world
+    from planner.bench.worlds import cached_world  # lazy: scipy
 
     cached_world(*spec)
 
@@ -64,8 +64,8 @@ def plan_tasks(suite: Suite, log=print, saved: dict | None = None,
 
     Returns the tasks and, per group, the query record (kept, dropped by reason, queries).
     """
-    from planner.bench.rotations import sample_rotations
-    from planner.bench.worlds import cached_world, map_frame
+    from planner.bench.rotations import sample_rotations  # lazy: scipy
+    from planner.bench.worlds import cached_world, map_frame  # lazy: scipy
 
     rotated = suite.rotation != "none"
     quats = sample_rotations(suite.rotation, suite.rotations, seed=suite.seed)

@@ -20,6 +20,9 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from planner.bench.rotations import IDENTITY_XYZW
+from planner.fsutil import atomic_path
+from planner.io.validate import fill_boxes
+from planner.lattice import Lattice
 
 __all__ = ["MapFrame", "map_frame", "rotated_lattice", "rotated_world", "FreeSpace"]
 
@@ -34,8 +37,6 @@ class FreeSpace:
     """
 
     def __init__(self, obst):
-        from planner.io.validate import fill_boxes
-
         sizes = obst.free_box_sizes
         step = float(obst.resolution or sizes.min())
         cubes = fill_boxes(obst.free_boxes, sizes, step)
@@ -77,7 +78,7 @@ class MapFrame:
 
 def map_frame(map_path: str) -> MapFrame:
     """Load a map and its world box as :func:`planner.build_world` would choose it."""
-    from planner.world.build import as_obstacles, map_box
+    from planner.world.build import as_obstacles, map_box  # lazy: numba
 
     obst = as_obstacles(map_path)
     bounds = map_box(map_path, obst)
@@ -100,8 +101,6 @@ def cached_frame(map_path: str) -> MapFrame:
 def rotated_lattice(lattice: str, cell_volume: float, quaternion):
     """The named lattice turned by R^T, R the rotation of unit ``quaternion`` (x, y, z, w):
     generator ``R^T G`` (3, 3), same name and cell volume (m^3)."""
-    from planner.lattice import Lattice
-
     lat = Lattice.named(lattice, cell_volume=cell_volume)
     q = np.asarray(quaternion, dtype=float)
     if np.allclose(q, IDENTITY_XYZW, atol=0, rtol=0):
@@ -120,7 +119,7 @@ def rotated_world(map_path: str, lattice: str, cell_volume: float, radius: float
     planner.World
         In the map's own frame, bounds the map's box.
     """
-    from planner.world.build import build_world
+    from planner.world.build import build_world  # lazy: numba
 
     return build_world(map_path, rotated_lattice(lattice, cell_volume, quaternion),
                        radius=radius)
@@ -139,9 +138,8 @@ def cached_world(cache_dir: str | None, map_path: str, lattice: str, cell_volume
     import hashlib
     from pathlib import Path
 
-    from planner.fsutil import atomic_path
-    from planner.occupancy.keys import pack, unpack
-    from planner.world import World
+    from planner.occupancy.keys import pack, unpack  # lazy: numba
+    from planner.world import World  # lazy: numba
 
     if cache_dir is None:
         return rotated_world(map_path, lattice, cell_volume, radius, quaternion)

@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from planner.analysis.tables import format_table
+from planner.commands.worlds import map_source
 from planner.errors import PlannerError
 
 
@@ -13,9 +15,7 @@ def explore(a: argparse.Namespace) -> int:
     did not reach its goal, 2 if D* Lite disagreed with A* or the robot touched the map."""
     import json
 
-    from planner.analysis.tables import format_table
-    from planner.commands.worlds import map_source
-    from planner.explore import explore as run
+    from planner.explore import explore as run  # lazy: numba, scipy
 
     rows, bad = [], 0
     lattices = a.lattice or [None]  # None: explore's default, resolved from the map
@@ -48,8 +48,8 @@ def per_lattice(out: str, name: str | None, several: bool) -> Path:
 
 def _view(out: Path, a: argparse.Namespace, res, source) -> None:
     """The true inflated world of one exploration, its trajectory and its last plan."""
-    from planner.view import write_view
-    from planner.world.build import build_world
+    from planner.view import write_view  # lazy: numba, scipy
+    from planner.world.build import build_world  # lazy: numba, scipy
 
     world = build_world(source, res.lattice, cell_volume=a.cell_volume, radius=a.radius,
                         bounds=a.bounds)

@@ -5,13 +5,15 @@ from __future__ import annotations
 import argparse
 import json
 
+from planner import planning as api
+from planner.analysis import compare as comparison
 from planner.commands.worlds import bag_options, build, check_dim, check_neighbors, map_source
+from planner.export import write_path_bag, write_tum
+from planner.path import write_path
 
 
 def plan(a: argparse.Namespace) -> int:
     """Plan one path; write it, its figure, view or bag when asked. Exit 1 if none found."""
-    from planner import planning as api
-    from planner.analysis import compare
 
     check_neighbors([a.generator if a.generator is not None else a.lattice], a.neighbors,
                     a.method)
@@ -23,21 +25,15 @@ def plan(a: argparse.Namespace) -> int:
         max_expansions=a.max_expansions,
     )
     if a.out and a.out.lower().endswith(".tum"):
-        from planner.export import write_tum
-
         write_tum(a.out, res.path)
     elif a.out:
-        from planner.path import write_path
-
         write_path(a.out, res, world, a.start, a.goal)
     if a.bag and res.found:
-        from planner.export import write_path_bag
-
         write_path_bag(a.bag, res.path, frame=getattr(world.obstacles, "frame", None) or "map")
     if a.plot and res.found:
-        compare.plot_paths(a.plot, world, {label: res})
+        comparison.plot_paths(a.plot, world, {label: res})
     if a.view:
-        from planner.view import write_view
+        from planner.view import write_view  # lazy: numba, scipy
 
         write_view(a.view, world, {label: res.path} if res.found else {}, start=a.start,
                    goal=a.goal)
@@ -48,25 +44,24 @@ def plan(a: argparse.Namespace) -> int:
 def compare(a: argparse.Namespace) -> int:
     """Plan the same queries on every lattice and print one row per lattice. Exit 1 if any
     query found no path."""
-    from planner.analysis import compare
-    from planner.world.file import is_world_file, load_world
+    from planner.world.file import is_world_file, load_world  # lazy: numba, scipy
 
     lattices = list(a.lattices) + ([a.generator] if a.generator is not None else [])
     radius = a.radius
     if is_world_file(a.map):  # one lattice: the saved one
         saved = load_world(a.map)
         if a.check_source:
-            from planner.world.check import check_source
+            from planner.world.check import check_source  # lazy: numba, scipy
 
             check_source(saved)
         lattices = [saved.lattice]
         radius = saved.radius if radius is None else radius
     check_neighbors(lattices, a.neighbors, a.method)
-    rows = compare.compare(
+    rows = comparison.compare(
         a.map, lattices=lattices, cell_volume=a.cell_volume, radius=radius, bounds=a.bounds,
         start=a.start, goal=a.goal, method=a.method, neighbors=a.neighbors, plot=a.plot,
         progress=not a.json, format=a.format, max_expansions=a.max_expansions,
         unknown=a.unknown, view=a.view, source=map_source(a) if bag_options(a) else None,
     )
-    print(json.dumps(rows) if a.json else compare.format_rows(rows))
+    print(json.dumps(rows) if a.json else comparison.format_rows(rows))
     return 0 if all(r["found"] for r in rows) else 1

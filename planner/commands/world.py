@@ -6,23 +6,21 @@ import argparse
 from pathlib import Path
 
 from planner.commands.worlds import build
+from planner.export import write_world_cells
+from planner.export.octomap import check_cubic_name
 
 
 def world(a: argparse.Namespace) -> int:
     """Build the world once and write it (.npz), its cells (.ply) or an OctoMap tree (.bt)."""
-    from planner.world.file import save_world
+    from planner.world.file import save_world  # lazy: numba, scipy
 
     suffix = Path(a.out).suffix.lower()
     if suffix == ".bt":  # refused before the (long) build when the lattice cannot be a tree
-        from planner.export.octomap import check_cubic_name
-
         check_cubic_name(a.generator if a.generator is not None else a.lattice, a.map)
     w, label = build(a)
     if suffix == ".npz":
         save_world(w, a.out)
     else:
-        from planner.export import write_world_cells
-
         write_world_cells(a.out, w)
     print(f"{a.out}: {label} world, {w.n_blocked} blocked and {w.n_unknown} unknown "
           f"cells, radius {w.radius:g} m, unknown space {w.unknown_policy}, built in "
@@ -32,7 +30,7 @@ def world(a: argparse.Namespace) -> int:
 
 def view(a: argparse.Namespace) -> int:
     """Write one self-contained .html view of the world and the given path files."""
-    from planner.view import read_path_file, write_view
+    from planner.view import read_path_file, write_view  # lazy: numba, scipy
 
     paths = dict(read_path_file(p) for p in a.path)  # bad files refused before the build
     w, label = build(a)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from planner.errors import PlannerError
+from planner.lattice import Lattice
 
 BAG_OPTIONS = ("topic", "fixed_frame", "max_clouds")
 
@@ -21,7 +22,7 @@ def map_source(a: argparse.Namespace):
     bag = bag_options(a)
     if not bag:
         return a.map
-    from planner.io import load_obstacles
+    from planner.io import load_obstacles  # lazy: scipy
 
     return load_obstacles(a.map, a.format, **bag)
 
@@ -32,14 +33,14 @@ def build(a: argparse.Namespace):
     Options not given stay None: :func:`planner.world.build.build_world` resolves them from
     the map, as in the API.
     """
-    from planner.world.build import build_world
-    from planner.world.file import is_world_file
+    from planner.world.build import build_world  # lazy: numba, scipy
+    from planner.world.file import is_world_file  # lazy: numba, scipy
 
     lattice = a.generator if a.generator is not None else a.lattice
     world = build_world(map_source(a), lattice, cell_volume=a.cell_volume, radius=a.radius,
                         bounds=a.bounds, format=a.format, unknown=a.unknown)
     if getattr(a, "check_source", False) and is_world_file(a.map):
-        from planner.world.check import check_source
+        from planner.world.check import check_source  # lazy: numba, scipy
 
         check_source(world)
     return world, (a.generator.name if a.generator is not None else world.lattice.name
@@ -49,8 +50,6 @@ def build(a: argparse.Namespace):
 def check_neighbors(lattices: list, neighbors: str, method: str) -> None:
     """Refuse a bad or oversized move set before the world is built (index-space moves
     do not depend on the cell volume)."""
-    from planner.lattice import Lattice
-
     if method.startswith("ompl") or neighbors in ("face", "full"):
         return
     for lat in lattices:

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from planner.errors import PlanError
 from planner.fsutil import atomic_path
 
 __all__ = ["summary_png", "animate_gif", "frame_replans"]
@@ -134,8 +135,6 @@ def animate_gif(res, path: str | Path, max_frames: int = 150, fps: float = 6.0,
     """
     plt = _pyplot()
     from matplotlib.animation import FuncAnimation, PillowWriter
-
-    from planner.errors import PlanError
 
     if isinstance(max_frames, bool) or not isinstance(max_frames, int) or max_frames < 1:
         raise PlanError(f"max_frames must be a positive integer, got {max_frames!r}")

@@ -28,11 +28,18 @@ from pathlib import Path
 
 import numpy as np
 
+from planner import io
+from planner.budget import require
 from planner.errors import MapError, PlanError
+from planner.explore.figures import animate_gif, summary_png
 from planner.explore.sensor import Sensor, cast_rays, ray_directions
 from planner.lattice import Lattice
+from planner.maps import resolve
 from planner.occupancy.walk import walk_of
+from planner.progress import Progress
+from planner.voxels.from_map import inflated_obstacles
 from planner.world import World
+from planner.world.build import as_obstacles, build_world, resolve_defaults, sidecar
 
 __all__ = ["ExploreResult", "explore", "ray_directions", "cast_rays"]
 
@@ -136,16 +143,12 @@ class ExploreResult:
         """Summary figure (PNG): top view with the true and the seen obstacles and the
         trajectory; per-replan cell checks and times of D* Lite and A*. Written atomically.
         """
-        from planner.explore.figures import summary_png
-
         return summary_png(self, path)
 
     def animate(self, path: str | Path, max_frames: int = 150, fps: float = 6.0) -> Path:
         """Animated GIF of the run, one frame per replan (evenly subsampled to at most
         ``max_frames``): observed area, seen obstacles, trajectory, current plan, goal
         (:func:`planner.explore.figures.animate_gif`). Written atomically."""
-        from planner.explore.figures import animate_gif
-
         return animate_gif(self, path, max_frames=max_frames, fps=fps)
 
 
@@ -202,16 +205,9 @@ def explore(
     -------
     ExploreResult
     """
-    from planner import io
-    from planner.progress import Progress
-    from planner.search import search
-    from planner.search.dstar.lite import DStarLite
-    from planner.voxels.from_map import inflated_obstacles
-    from planner.world.build import as_obstacles, build_world, resolve_defaults, sidecar
-
+    from planner.search import search  # lazy: numba
+    from planner.search.dstar.lite import DStarLite  # lazy: numba
     if isinstance(source, str | Path):  # a bundled map by name ("office"), as build_world
-        from planner.maps import resolve
-
         source = resolve(source)
     side = sidecar(source)
     if not (isinstance(sensor_range, int | float) and math.isfinite(sensor_range)
@@ -369,8 +365,6 @@ def _sensor_reach(sensor_range: float, truth, pts: np.ndarray, lat) -> float:
     """The range a ray is cast over (m): ``sensor_range``, cut to the diagonal of the box
     holding the world and every obstacle (nothing lies farther), and checked against the
     memory budget (each ray's walk scratch grows with its length)."""
-    from planner.budget import require
-
     lo = np.minimum(truth.bounds[0], pts.min(axis=0))
     hi = np.maximum(truth.bounds[1], pts.max(axis=0))
     reach = min(float(sensor_range), float(np.linalg.norm(hi - lo)) + 2 * lat.covering_radius)

@@ -15,11 +15,13 @@ from __future__ import annotations
 import numpy as np
 
 from planner._numba import njit_cached
+from planner.budget import require
 from planner.errors import PlanError
 from planner.lattice import Lattice
 from planner.occupancy.grid import Occupancy, occ_free
 from planner.occupancy.keys import build_key_set, pack
 from planner.occupancy.walk import walk_on, walk_scratch
+from planner.voxels import box_keys
 
 __all__ = ["Sensor", "cast_rays", "ray_directions"]
 
@@ -37,8 +39,6 @@ def ray_directions(fov=(360.0, 30.0), resolution: float = 3.0) -> np.ndarray:
                         f"0 < resolution <= 90 degrees, got {fov!r}, {resolution!r}")
     na = max(1, int(round(h / res)))
     nv = int(round(v / res))
-    from planner.budget import require
-
     # per ray: its direction, the angle grids and the hit cell (float64 / int64 triples)
     rays = float(na + 1) * (2 * nv + 1)
     require(rays * 8 * 12, f"{rays:.3g} sensor rays (--resolution {res:g} degrees)",
@@ -130,8 +130,6 @@ class Sensor:
         self.points, self.boxes = points, box_sizes is not None
         if self.boxes:
             from scipy.spatial import cKDTree
-
-            from planner.voxels import box_keys
 
             # each box at its own size (OctoMap's pruned leaves are larger than the rest)
             uniq = np.unique(np.concatenate([box_keys(points[box_sizes == b], b, lattice)

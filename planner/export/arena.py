@@ -22,6 +22,7 @@ import os
 import platform
 import sqlite3
 
+from planner import __version__
 from planner.fsutil import atomic_path
 
 __all__ = ["SCHEMA", "planner_name", "write_arena_db"]
@@ -57,8 +58,6 @@ def _num(x):
 def write_arena_db(out: str | os.PathLike, rows: list[dict], *, suite: str = "") -> int:
     """Write ``rows`` (the suite's result rows) as OMPL's benchmark database at ``out``,
     atomically; returns the number of runs written."""
-    from planner import __version__
-
     experiments: dict[tuple, list[dict]] = {}
     for r in rows:
         key = (str(r.get("map")), r.get("cell_volume"), r.get("radius"), r.get("rotation", 0))

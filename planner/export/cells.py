@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from planner.errors import MapError
+from planner.export.octomap import write_octomap
 from planner.fsutil import atomic_path
 
 __all__ = ["BLOCKED", "UNKNOWN", "write_ply_cells", "write_world_cells"]
@@ -59,8 +60,6 @@ def write_world_cells(out: str | os.PathLike, world) -> None:
     if suffix == ".ply":
         write_ply_cells(out, world)
     elif suffix == ".bt":
-        from planner.export.octomap import write_octomap
-
         write_octomap(out, world)  # imported here: the octree writer is its own module
     else:
         raise MapError(f"{out}: unknown cell file type {suffix!r}; use .ply or .bt")

@@ -44,7 +44,7 @@ def check_cubic(generator: np.ndarray, what: str = "the world") -> float:
 def check_cubic_name(lattice, map_path: str) -> None:
     """Refuse a non-cubic ``--lattice`` (a name or a Lattice) before a map is built; a saved
     world is checked once loaded."""
-    from planner.world.file import is_world_file
+    from planner.world.file import is_world_file  # lazy: numba, scipy
 
     if is_world_file(map_path):
         return

@@ -40,12 +40,18 @@ from pathlib import Path
 import numpy as np
 
 from planner.errors import MapError
+from planner.fsutil import atomic_path
 from planner.io._files import DECOMPRESSED_BUDGET, check_file
-from planner.io.movingai import load_scenarios
+from planner.io.bag import read_bag
+from planner.io.lidar import read_e57, read_las
+from planner.io.movingai import load_scenarios, read_3dmap
 from planner.io.obstacles import Obstacles, Scenarios
+from planner.io.ply import read_ply, write_ply
+from planner.io.rosmap import read_rosmap
 from planner.io.scans import read_pose_list
 from planner.io.sidecar import load_sidecar
-from planner.io.validate import robust_extent
+from planner.io.text import read_npy, read_xyz
+from planner.io.validate import cloud, robust_extent
 
 __all__ = [
     "DECOMPRESSED_BUDGET",
@@ -141,35 +147,27 @@ def load_obstacles(path: PathLike, format: str | None = None, *,
 def _read(p: Path, fmt: str, compression: str | None, budget: int | None,
           options: dict) -> Obstacles:
     if fmt == "ply":
-        from planner.io.ply import read_ply
         return read_ply(p)
     if fmt == "pcd":
-        from planner.io.pcd import read_pcd
+        from planner.io.pcd import read_pcd  # lazy: numba
         return read_pcd(p)
     if fmt == "xyz":
-        from planner.io.text import read_xyz
         return read_xyz(p, compression, budget)
     if fmt == "npy":
-        from planner.io.text import read_npy
         return read_npy(p)
     if fmt == "bt":
-        from planner.io.octomap import read_octomap
+        from planner.io.octomap import read_octomap  # lazy: numba
         return read_octomap(p)
     if fmt == "3dmap":
-        from planner.io.movingai import read_3dmap
         return read_3dmap(p)
     if fmt == "poses":
         return read_pose_list(p, load_obstacles)
     if fmt == "rosmap":
-        from planner.io.rosmap import read_rosmap
         return read_rosmap(p)
     if fmt == "bag":
-        from planner.io.bag import read_bag
         return read_bag(p, **options)
     if fmt == "las":
-        from planner.io.lidar import read_las
         return read_las(p)
-    from planner.io.lidar import read_e57
     return read_e57(p)
 
 
@@ -191,8 +189,6 @@ def obstacles_from_points(points, source: str = "<array>") -> Obstacles:
     MapError
         Bad shape or dtype, no finite point, or absurd coordinates.
     """
-    from planner.io.validate import cloud
-
     return cloud(points, source, sensor_frame=False)
 
 
@@ -269,9 +265,6 @@ def save_points(path: PathLike, points: np.ndarray, *, dtype=np.float64) -> None
     import bz2
     import gzip
     import lzma
-
-    from planner.fsutil import atomic_path
-    from planner.io.ply import write_ply
 
     p = Path(path)
     fmt, compression = _resolve_format(p, None)

@@ -10,6 +10,7 @@ from planner.errors import MapError
 from planner.io._files import check_file, loadtxt, read_text
 from planner.io.obstacles import Obstacles
 from planner.io.validate import cloud
+from planner.npyfile import read_npy_file
 
 
 def read_xyz(p: Path, compression: str | None = None, budget: int | None = None) -> Obstacles:
@@ -22,8 +23,6 @@ def read_xyz(p: Path, compression: str | None = None, budget: int | None = None)
 
 def read_npy(p: Path) -> Obstacles:
     """An (N, 3) numeric ``.npy`` array (no pickles)."""
-    from planner.npyfile import read_npy_file
-
     check_file(p)
     # header first: declared size against the budget and the file, no pickles, no trailer
     arr = read_npy_file(p, p.name)

@@ -17,6 +17,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from planner.budget import memory_budget
 from planner.errors import LatticeError
 
 __all__ = ["VoronoiCell", "ENUM_LIMIT", "reduce_basis", "geometry"]
@@ -186,8 +187,6 @@ class VoronoiCell:
             memory budget of :mod:`planner.budget`).
         """
         if budget is None:
-            from planner.budget import memory_budget
-
             budget = memory_budget()
         need = self.count_within(radius) * self.dim * 8 * 3
         if need > budget:

@@ -46,6 +46,8 @@ from typing import Any
 import numpy as np
 
 from planner.errors import MapError
+from planner.fsutil import write_text_atomic
+from planner.io import load_points, load_sidecar, save_points
 from planner.maps._sampling import NOISE_SIGMA
 from planner.maps._scenes import build
 
@@ -109,8 +111,6 @@ MAPS: dict[str, Callable[..., np.ndarray]] = {
 
 
 def _write_json(path: Path, info: dict[str, Any]) -> None:
-    from planner.fsutil import write_text_atomic
-
     text = json.dumps(info, indent=2) + "\n"
     # one line per innermost list of numbers: "start": [2.0, 2.0, 1.178]
     text = re.sub(r"\[\s+([-+0-9.eE,\s]+?)\s+\]",
@@ -120,8 +120,6 @@ def _write_json(path: Path, info: dict[str, Any]) -> None:
 
 def generate(name: str, out_dir: str | os.PathLike[str], seed: int = 0) -> tuple[Path, Path]:
     """Write ``<name>.ply`` and ``<name>.json`` into ``out_dir``; return both paths."""
-    from planner.io import save_points
-
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     points, info = build(name, seed)
@@ -171,8 +169,6 @@ def read_sidecar(map_path: str | os.PathLike[str]) -> dict[str, Any]:
     The one sidecar reader is :func:`planner.io.load_sidecar`; this name is kept for the
     maps' callers.
     """
-    from planner.io import load_sidecar
-
     return load_sidecar(map_path)
 
 
@@ -187,8 +183,6 @@ def load_map_info(name_or_path: str | os.PathLike[str]) -> dict[str, Any]:
     else:
         p = Path(name_or_path)
         js = p if p.suffix.lower() == ".json" else p.with_suffix(".json")
-    from planner.io import load_sidecar
-
     info = load_sidecar(js, required=("bounds", "queries"))
     info["ply_path"] = str((js.parent / info.get("file", js.with_suffix(".ply").name)).resolve())
     return info
@@ -196,8 +190,6 @@ def load_map_info(name_or_path: str | os.PathLike[str]) -> dict[str, Any]:
 
 def load_map_points(name_or_path: str | os.PathLike[str]) -> np.ndarray:
     """Points (N, 3) float64 of a bundled map name or of a point-cloud file."""
-    from planner.io import load_points
-
     path = map_path(name_or_path) if isinstance(name_or_path, str) and name_or_path in MAPS \
         else Path(name_or_path)
     return np.asarray(load_points(path), dtype=np.float64)

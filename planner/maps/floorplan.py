@@ -14,6 +14,9 @@ from pathlib import Path
 
 import numpy as np
 
+from planner.fsutil import atomic_path, write_text_atomic
+from planner.maps.bundled import _write_json
+
 __all__ = ["FLOORPLAN", "floorplan_image", "generate_floorplan"]
 
 FLOORPLAN = "floorplan"
@@ -56,9 +59,6 @@ def floorplan_image() -> np.ndarray:
 
 def generate_floorplan(out_dir: str | os.PathLike[str]) -> tuple[Path, Path, Path]:
     """Write ``floorplan.pgm``, ``floorplan.yaml`` and ``floorplan.json`` into ``out_dir``."""
-    from planner.fsutil import atomic_path, write_text_atomic
-    from planner.maps.bundled import _write_json
-
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     img = floorplan_image()

@@ -7,7 +7,12 @@ import sys
 
 import numpy as np
 
+from planner.errors import PlannerError
 from planner.io import load_points
+from planner.match import anchor
+from planner.match.experiment import run_experiment, trial_methods
+from planner.match.experiment_pairs import load_sources, user_pair
+from planner.match.experiment_report import format_report, write_outputs
 from planner.match.matcher import match, pose_matrix
 
 __all__ = ["run_match"]
@@ -36,12 +41,6 @@ def run_match_experiment(a) -> int:
     """``planner match-experiment``: the pairs from ``a.sources`` (in ``a.data``) and
     ``a.pair`` triples, the trials (:func:`planner.match.experiment.run_experiment`), then
     the table and verdict on stdout and the outputs in ``a.out``. Returns 0."""
-    from planner.errors import PlannerError
-    from planner.match import anchor
-    from planner.match.experiment import run_experiment, trial_methods
-    from planner.match.experiment_pairs import load_sources, user_pair
-    from planner.match.experiment_report import format_report, write_outputs
-
     names = [s for s in (a.sources or "").split(",") if s]
     trial_methods(a.lattices.split(","), False)  # bad names refused before loading data
     pairs = load_sources(names, a.data, seed=a.seed,

@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from planner.errors import PlannerError
+from planner.fsutil import write_text_atomic
 from planner.lattice import NAMED_LATTICES, Lattice
 from planner.match import anchor
 from planner.match.experiment_pairs import Pair, Trial, draw_trial
@@ -149,8 +150,6 @@ def _prepare_out(out: Path, config: dict, resume: bool, force: bool) -> list[dic
         if diff:
             raise PlannerError(f"{out} holds a run with other settings ({', '.join(diff)}): "
                                f"use another --out, or --force to start again")
-    from planner.fsutil import write_text_atomic
-
     out.mkdir(parents=True, exist_ok=True)
     write_text_atomic(cfg_path, json.dumps(config, indent=1))
     if rows_path.is_file():  # cut a line left unfinished by a kill

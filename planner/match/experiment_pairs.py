@@ -31,6 +31,10 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from planner.errors import MapError, PlannerError
+from planner.io import load_obstacles, load_points
+from planner.lattice import NAMED_LATTICES
+from planner.match.matcher import match
+from planner.match.simulate import BoxMap, lidar_directions, sample_pose_pairs
 
 __all__ = ["Pair", "SOURCES", "Trial", "draw_trial", "geb079_pairs", "load_sources",
            "room_pair", "user_pair", "velodyne_pair"]
@@ -96,8 +100,6 @@ def draw_trial(seed: int, pair: int, index: int, max_offset: float, max_angle: f
 
 
 def _points(path: Path) -> np.ndarray:
-    from planner.io import load_points
-
     return load_points(path)
 
 
@@ -132,9 +134,6 @@ def geb079_pairs(data: Path, per_separation: int = 1, seed: int = 0, noise: floa
                  azimuth_step: float = 0.2) -> list[Pair]:
     """Scans simulated in geb079 at known poses, ``per_separation`` pairs per separation
     (:data:`SEPARATIONS`), range noise ``noise`` (m, standard deviation)."""
-    from planner.io import load_obstacles
-    from planner.match.simulate import BoxMap, lidar_directions, sample_pose_pairs
-
     box_map = BoxMap(load_obstacles(data / "octomap" / "geb079.bt"))
     rng = np.random.default_rng([seed, 79])
     dirs = lidar_directions(azimuth_step)
@@ -150,9 +149,6 @@ def geb079_pairs(data: Path, per_separation: int = 1, seed: int = 0, noise: floa
 def room_pair(data: Path, cell_volume: float = 0.001, levels: int = 4) -> Pair:
     """PCL's room scans: room_scan2 (source) into room_scan1's frame, around the published
     odometry guess refined by every named lattice (see the module)."""
-    from planner.lattice import NAMED_LATTICES
-    from planner.match.matcher import match
-
     d = data / "pcl_room"
     src, ref = _points(d / "room_scan2.pcd"), _points(d / "room_scan1.pcd")
     guess = np.eye(4)

@@ -24,7 +24,7 @@ import numpy as np
 from planner.errors import LatticeError, MapError
 from planner.lattice import Lattice
 from planner.match import _kernels
-from planner.occupancy.keys import build_key_set
+from planner.occupancy.keys import build_key_set, pack
 from planner.voxels import OccupiedVoxelList
 
 __all__ = ["MultiResVoxelList", "level_lattices", "resolve_lattice"]
@@ -125,8 +125,6 @@ class MultiResVoxelList:
         """(N,) bool: whether each point ((N, 3), metres) falls in an occupied cell of
         ``level``."""
         lv = self._levels[level]
-        from planner.occupancy.keys import pack
-
         keys = pack(lv.lattice.quantize(points))
         return _kernels.contains_keys(lv.table, lv.bits, keys)
 

@@ -10,6 +10,8 @@ import time
 import numpy as np
 
 from planner.errors import PlanError
+from planner.search.heuristic import estimate_np
+from planner.search.result import SearchResult
 
 NX_NODE_CAP = 1_000_000
 
@@ -19,9 +21,6 @@ def search_networkx(world, s: np.ndarray, gl: np.ndarray, ms, cap: int | None = 
     the graph of allowed moves of :class:`~planner.search.moves.MoveSet` ``ms``, built by
     BFS over the start's free component (at most ``cap`` cells, default 1,000,000)."""
     import networkx as nx
-
-    from planner.search.heuristic import estimate_np
-    from planner.search.result import SearchResult
 
     cap = cap or NX_NODE_CAP
     t0 = time.perf_counter()

@@ -35,9 +35,10 @@ import numpy as np
 
 from planner import budget as _budget
 from planner.errors import PlanError
+from planner.lattice import Lattice
 from planner.occupancy.walk import as_cells
 from planner.search._los import new_scratch, shortcut_kernel
-from planner.search._nodes import BYTES_PER_NODE
+from planner.search._nodes import BYTES_PER_NODE, new_slots, rehash
 from planner.search.astar import driver as _driver
 from planner.search.astar.kernel import LAZY_THETA, THETA, SearchParams
 from planner.search.heuristic import H_EUCLID, H_GAUGE, H_ZERO
@@ -48,6 +49,7 @@ from planner.search.moves import (
     move_set,
     move_stencils,
 )
+from planner.search.reference import search_networkx
 from planner.search.result import (
     RUN_EXHAUSTED,
     RUN_FOUND,
@@ -99,9 +101,6 @@ def warm_up() -> float:
         return 0.0
     _WARM.append(0.0)  # before the searches below, which call warm_up again
     t0 = time.perf_counter()
-    from planner.lattice import Lattice
-    from planner.search._nodes import new_slots, rehash
-
     w = World(Lattice.named("cubic", 1.0), np.array([[1, 1, 1]]), [[0, 0, 0], [3, 3, 3]])
     for method in ("astar", "lazy-theta"):
         search(w, [0, 0, 0], [3, 3, 2], method=method)
@@ -173,8 +172,6 @@ def search(
     if backend == "networkx":
         if job.params.anyangle:
             raise PlanError("the networkx backend supports astar and dijkstra only")
-        from planner.search.reference import search_networkx  # networkx: only when asked
-
         res = search_networkx(world, s, gl, job.ms, job.max_nodes or None)
         res.guarantee = job.guarantee
         return res

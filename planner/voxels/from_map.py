@@ -8,6 +8,23 @@ import numpy as np
 
 from planner.errors import MapError
 from planner.lattice import Lattice
+from planner.occupancy.keys import unique_keys, unpack
+from planner.voxels.boxes import box_frame, overlap_keys
+from planner.voxels.inflate import (
+    box_inflation_grid,
+    exact_box_inflation,
+    exact_inflation,
+    point_inflation_grid,
+)
+from planner.voxels.unknown import (
+    ray_free_keys,
+    unknown_box_grid,
+    unknown_box_keys,
+    unknown_box_space,
+    unknown_cell_keys,
+    unknown_inflation,
+)
+from planner.voxels.voxel_list import OccupiedVoxelList
 
 __all__ = ["inflated_obstacles", "inflation_parts", "unknown_grid", "unknown_region",
            "unknown_space"]
@@ -17,8 +34,6 @@ def _cells_near(keys: np.ndarray, lat: Lattice, bounds: np.ndarray) -> np.ndarra
     """Indices (N, 3) of the cells of packed ``keys`` whose centre lies within a covering
     radius of the bounds box (m, (2, 3)), unpacked in chunks: a large radius dilates
     unknown space far past the box, and only cells in it can ever be searched."""
-    from planner.occupancy.keys import unpack
-
     lo, hi = bounds[0] - lat.covering_radius, bounds[1] + lat.covering_radius
     parts = [np.zeros((0, 3), dtype=np.int64)]
     for i in range(0, len(keys), 1 << 22):
@@ -41,9 +56,6 @@ def unknown_space(obst, lat: Lattice, bounds: np.ndarray, radius: float, planar:
     """The (U, 3) cells meeting unknown space (:func:`_unknown_keys`) and, when unknown
     space is blocked, the (N, 3) cells it blocks near the bounds (:func:`_cells_near`;
     grid maps: less the ``occupied`` ones, (M, 3), blocked already)."""
-    from planner.occupancy.keys import unpack
-    from planner.voxels.unknown import unknown_box_space, unknown_inflation
-
     if obst.origins is None and len(obst.free_boxes):  # a grid map: on dense grids
         lo, hi, res = _box_region(obst, lat, bounds, radius, planar)
         near = np.stack([bounds[0] - lat.covering_radius, bounds[1] + lat.covering_radius])
@@ -71,9 +83,6 @@ def _box_region(obst, lat: Lattice, bounds: np.ndarray, radius: float, planar: b
 def _unknown_keys(obst, lat: Lattice, bounds: np.ndarray, radius: float, planar: bool
                   ) -> np.ndarray:
     """Keys of the cells meeting unknown space over :func:`unknown_region`."""
-    from planner.voxels.inflate import exact_inflation
-    from planner.voxels.unknown import ray_free_keys, unknown_box_keys, unknown_cell_keys
-
     lo, hi = unknown_region(lat, bounds, radius)
     parts = []
     if len(obst.free_boxes):
@@ -102,10 +111,6 @@ def inflated_obstacles(obst, lattice: Lattice, radius: float):
     -------
     OccupiedVoxelList
     """
-    from planner.occupancy.keys import unique_keys
-    from planner.voxels.inflate import exact_box_inflation, exact_inflation
-    from planner.voxels.voxel_list import OccupiedVoxelList
-
     keys = []
     if len(obst.points):
         keys.append(exact_inflation(obst.points, lattice, radius).keys)
@@ -123,10 +128,6 @@ def inflation_parts(obst, lattice: Lattice, radius: float):
     the points, then for the boxes, ``(grid, lo, dims)`` (a byte grid over an index box,
     nonzero = blocked; ``radius`` > 0) or ``(cells,)`` ((N, 3) int64; ``radius`` 0).
     A generator: one part's grid is made when the previous one is consumed."""
-    from planner.occupancy.keys import unpack
-    from planner.voxels.boxes import box_frame, overlap_keys
-    from planner.voxels.inflate import box_inflation_grid, point_inflation_grid
-
     if not len(obst.points) and not len(obst.boxes):
         raise MapError(f"{obst.source}: no obstacles")
     if len(obst.points):
@@ -149,8 +150,6 @@ def unknown_grid(obst, lat: Lattice, bounds: np.ndarray, radius: float, planar: 
     """:func:`unknown_space` of a grid map (free boxes, no sensor rays) as one byte grid
     (:func:`planner.voxels.unknown.unknown_box_grid`: bit 1 unknown, bit 2 within
     ``radius`` of it when ``blocked``); None for another map or when it does not fit."""
-    from planner.voxels.unknown import unknown_box_grid
-
     if obst.origins is not None or not len(obst.free_boxes):
         return None
     lo, hi, res = _box_region(obst, lat, bounds, radius, planar)

@@ -39,6 +39,7 @@ from planner.voxels._checks import (
     grid_strides,
     resolve_budget,
 )
+from planner.voxels.inflate import box_keys, stencil_inflation
 from planner.voxels.stencil import _stencil_runs, inflation_stencil
 
 # Margins within which another summation order of G w could decide a voxel face (voxels)
@@ -155,8 +156,6 @@ def unknown_box_keys(boxes: np.ndarray, box_sizes: np.ndarray, free_boxes: np.nd
     ndarray, shape (U,), int64
         Sorted unique keys.
     """
-    from planner.voxels.inflate import box_keys
-
     d = lattice.dim
     res = float(resolution)
     phase, g0, dims, first, n = _voxel_frame(boxes, box_sizes, free_boxes, free_sizes, res, lo,
@@ -426,8 +425,6 @@ def unknown_inflation(unknown_keys: np.ndarray, lattice: Lattice, radius: float,
     -------
     ndarray, shape (B,), int64
     """
-    from planner.voxels.inflate import stencil_inflation
-
     keys = unique_keys(np.asarray(unknown_keys, dtype=np.int64))
     if radius == 0 or not len(keys):
         return keys

@@ -18,6 +18,7 @@ import numpy as np
 from planner.budget import require
 from planner.checks import check_radius
 from planner.errors import MapError, PlanError, PlannerError
+from planner.io.load import load_obstacles
 from planner.io.obstacles import UNKNOWN_POLICIES, Obstacles
 from planner.io.sidecar import load_sidecar
 from planner.lattice import Lattice
@@ -41,8 +42,6 @@ def as_obstacles(source, format: str | None = None):
     ``"poses"`` reads a pose list and merges its scans, keeping each scan's sensor origin
     for ray-cast free space.
     """
-    from planner.io.load import load_obstacles  # the readers' own imports stay lazy
-
     if isinstance(source, Obstacles):
         return source
     if isinstance(source, str | Path):

@@ -22,6 +22,15 @@ import numpy as np
 
 from planner._numba import njit_cached
 from planner.errors import MapError, PlannerError
+from planner.fsutil import sha256
+from planner.io.obstacles import UNKNOWN_POLICIES
+from planner.lattice import NAMED_LATTICES, Lattice
+from planner.lattice.paper import NAMED_LATTICES_2D
+from planner.lattice.planar import planar_prism
+from planner.npyfile import read_array
+from planner.occupancy.bits import n_bytes
+from planner.world.cells import index_box
+from planner.world.world import _BOUNDS_TOL
 
 __all__ = ["KEYS", "check_schema", "check_source", "corrupt", "digest", "read_members"]
 
@@ -52,8 +61,6 @@ def digest(arrays: dict[str, np.ndarray]) -> str:
 def read_members(path: Path) -> dict[str, np.ndarray]:
     """Every member of the ``.npz`` at ``path``, each read through
     :func:`planner.npyfile.read_array` (exactly the keys :data:`KEYS` and ``digest``)."""
-    from planner.npyfile import read_array
-
     try:
         with open(path, "rb") as f:  # np.savez writes no archive comment: the end record
             f.seek(max(0, f.seek(0, os.SEEK_END) - 22))  # is the last 22 bytes
@@ -101,10 +108,6 @@ def check_schema(d: dict[str, np.ndarray], path: Path) -> None:
     MapError
         ``corrupt or modified world file: <what>`` for the first key that fails.
     """
-    from planner.io.obstacles import UNKNOWN_POLICIES
-    from planner.lattice import NAMED_LATTICES, Lattice
-    from planner.lattice.paper import NAMED_LATTICES_2D
-
     try:
         dim = int(_scalar(d, "dim", "iu"))
         if dim not in (2, 3):
@@ -135,9 +138,6 @@ def check_schema(d: dict[str, np.ndarray], path: Path) -> None:
             ref = Lattice.named(name, lat.cell_volume).generator
             if ref.shape != gd.shape or not np.allclose(ref, gd, rtol=_REL, atol=0):
                 raise ValueError(f"'lattice' says {name!r}, the generator is another lattice")
-        from planner.occupancy.bits import n_bytes
-        from planner.world.cells import index_box
-
         lo, hi = _tol_bounds(bounds, lat)
         box = d["box"]
         want = np.stack(index_box(g, lo, hi))
@@ -180,9 +180,6 @@ def _inflate(a: np.ndarray, size: int, key: str) -> np.ndarray:
 
 def _tol_bounds(bounds: np.ndarray, lat) -> tuple[np.ndarray, np.ndarray]:
     """The box a saved cell centre must lie in: :meth:`planner.World.in_bounds`'s."""
-    from planner.lattice.planar import planar_prism
-    from planner.world.world import _BOUNDS_TOL
-
     size = 2.0 * (planar_prism(lat) if lat.dim == 2 else lat).packing_radius
     tol = _BOUNDS_TOL * max(float(np.abs(bounds).max()), size)
     return bounds[0] - tol, bounds[1] + tol
@@ -230,8 +227,6 @@ def check_source(world, map_path: str | os.PathLike | None = None) -> None:
     MapError
         The world names no source, the source is not found, or its bytes changed.
     """
-    from planner.fsutil import sha256
-
     saved = Path(getattr(world, "saved_path", "") or "world.npz")
     src = Path(world.source or "").name
     if not src or not world.source_sha256:

@@ -39,6 +39,11 @@ import numpy as np
 
 from planner.errors import MapError
 from planner.fsutil import atomic_path, sha256
+from planner.lattice import Lattice
+from planner.npyfile import read_array
+from planner.world.check import check_schema, corrupt, read_members
+from planner.world.check import digest as array_digest
+from planner.world.world import DENSE_BUDGET, World
 
 __all__ = ["FORMAT", "VERSION", "check_options", "is_world_file", "load_world", "save_world",
            "sha256"]
@@ -53,8 +58,6 @@ def is_world_file(path) -> bool:
     """True for an ``.npz`` that is not known to be another format: a world written by
     :func:`save_world`, or a damaged ``.npz`` (which :func:`load_world` then reports as a
     corrupt world file rather than as a map of no known format)."""
-    from planner.npyfile import read_array
-
     if not isinstance(path, str | os.PathLike):
         return False
     p = Path(path)
@@ -100,8 +103,6 @@ def save_world(world, path: str | os.PathLike) -> None:
         "source": np.array(Path(src).name if src else ""),
         "source_sha256": np.array(digest), "dim": np.array(getattr(world, "dim", 3)),
     }
-    from planner.world.check import digest as array_digest
-
     arrays["digest"] = np.array(array_digest(arrays))
     with atomic_path(path) as tmp, open(tmp, "wb") as f:
         np.savez(f, **arrays)
@@ -124,10 +125,6 @@ def load_world(path: str | os.PathLike):
     MapError
         Not a saved world, another format version, or a damaged file.
     """
-    from planner.lattice import Lattice
-    from planner.world.check import check_schema, corrupt, read_members
-    from planner.world.world import DENSE_BUDGET, World
-
     p = Path(path)
     if not p.is_file():
         raise MapError(f"{p}: file not found" if not p.exists() else f"{p}: not a regular file")
@@ -157,9 +154,6 @@ def load_world(path: str | os.PathLike):
 def _check_version(p: Path) -> None:
     """MapError unless ``p`` is a saved world of this :data:`VERSION` (read from the small
     ``format`` and ``version`` members only, through the checked reader)."""
-    from planner.npyfile import read_array
-    from planner.world.check import corrupt
-
     try:
         with zipfile.ZipFile(p) as z:
             names = z.namelist()
@@ -189,8 +183,6 @@ def check_options(world, lattice=None, cell_volume=None, radius=None, unknown=No
     """One-line MapError when an option asked for differs from what the saved world holds
     (another lattice, cell volume, radius, unknown policy or bounds): rebuild from the map
     instead of silently using the saved one."""
-    from planner.lattice import Lattice
-
     name = os.path.basename(getattr(world, "saved_path", "") or "saved world")
     lat = world.lattice
 

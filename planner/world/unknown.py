@@ -13,6 +13,8 @@ from __future__ import annotations
 import numpy as np
 
 from planner.occupancy.keys import pack, unpack
+from planner.occupancy.walk import as_cells
+from planner.voxels import inflation_stencil
 
 __all__ = ["SortedKeys", "UnknownSpace"]
 
@@ -75,8 +77,6 @@ class UnknownSpace:
         radius of unknown space), *unknown* (free to plan through only under the ``"free"``
         policy; this test) or *free* (observed free, or a plain cloud's non-occupied space).
         """
-        from planner.occupancy.walk import as_cells
-
         return self._unknown.contains(as_cells(indices))
 
     @property
@@ -92,8 +92,6 @@ class UnknownSpace:
         """Unknown space is blocked and the cell is unknown or within the radius of it."""
         if self.unknown_policy != "blocked" or not self.n_unknown:
             return False
-        from planner.voxels import inflation_stencil
-
         near = cell[None] + inflation_stencil(self._lattice, self.radius)
         return bool(self.is_unknown(near).any())
 

@@ -33,11 +33,13 @@ from planner.checks import check_radius
 from planner.errors import MapError, PlanError
 from planner.io.obstacles import UNKNOWN_POLICIES
 from planner.lattice import Lattice
+from planner.lattice.planar import planar_prism
 from planner.occupancy import bits as ob
 from planner.occupancy.bits import BoxBits
 from planner.occupancy.grid import Occupancy
 from planner.occupancy.keys import build_key_set, pack
 from planner.occupancy.walk import Walk, as_cells, c_array, segment_walk, walk_of
+from planner.voxels import OccupiedVoxelList
 from planner.world.cells import CellSets
 from planner.world.checker import ValidityChecker
 from planner.world.unknown import SortedKeys, UnknownSpace
@@ -115,8 +117,6 @@ class World(CellSets, UnknownSpace):
             raise MapError(f"lattice must be a Lattice, got {type(lattice).__name__}")
         b = np.asarray(blocked_indices)
         if lattice.dim == 2:  # a 2D world: the plane z = 0 of the lattice's prism
-            from planner.lattice.planar import planar_prism
-
             lattice, dim = planar_prism(lattice), 2
             b = b.reshape(-1, 2) if b.size == 0 else b
             if b.ndim == 2 and b.shape[1] == 2:
@@ -204,8 +204,6 @@ class World(CellSets, UnknownSpace):
 
     def blocked_voxels(self):
         """The :attr:`blocked` cells as an :class:`planner.voxels.OccupiedVoxelList`."""
-        from planner.voxels import OccupiedVoxelList
-
         return OccupiedVoxelList(self._lattice, self.blocked)
 
     def _tol_bounds(self) -> tuple[np.ndarray, np.ndarray]:
