@@ -33,7 +33,7 @@ from scipy.spatial.transform import Rotation
 from planner.errors import MapError, PlannerError
 from planner.io import load_obstacles, load_points
 from planner.lattice import NAMED_LATTICES
-from planner.match.matcher import match
+from planner.match.matcher import check_transform, match
 from planner.match.simulate import BoxMap, lidar_directions, sample_pose_pairs
 
 __all__ = ["Pair", "SOURCES", "Trial", "draw_trial", "geb079_pairs", "load_sources",
@@ -109,12 +109,7 @@ def _transform_file(path: Path) -> np.ndarray:
     except (OSError, ValueError) as exc:
         raise PlannerError(f"{path}: not a 4x4 transform ({' '.join(str(exc).split())})"
                            ) from None
-    if m.shape != (4, 4) or not np.isfinite(m).all():
-        raise PlannerError(f"{path}: expected a 4x4 matrix of numbers, got shape {m.shape}")
-    r = m[:3, :3]
-    if not np.allclose(r @ r.T, np.eye(3), atol=1e-4) or np.linalg.det(r) < 0:
-        raise PlannerError(f"{path}: not a rigid transform (rotation block not orthonormal)")
-    return m
+    return check_transform(m, str(path), atol=1e-4)  # text files round their digits
 
 
 def user_pair(source: str | Path, reference: str | Path, transform: str | Path) -> Pair:

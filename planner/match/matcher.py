@@ -34,7 +34,7 @@ from planner.match import _kernels
 from planner.match.multires import MultiResVoxelList, resolve_lattice
 from planner.occupancy.keys import pack
 
-__all__ = ["MatchResult", "match", "pose_matrix", "pose_error"]
+__all__ = ["MatchResult", "match", "pose_matrix", "pose_error", "check_transform"]
 
 _MAX_MOVES = 60  # moves per level before the step is forced down (a bound, rarely hit)
 
@@ -98,13 +98,15 @@ def pose_error(estimate: np.ndarray, truth: np.ndarray) -> tuple[float, float]:
     return float(np.linalg.norm(d[:3, 3])), ang
 
 
-def _check_transform(m, what: str) -> np.ndarray:
+def check_transform(m, what: str, atol: float = 1e-6) -> np.ndarray:
+    """``m`` as a (4, 4) float rigid transform; :class:`PlannerError` naming ``what`` if it
+    is not finite, not 4x4, or its rotation block is not orthonormal within ``atol``."""
     t = np.asarray(m, dtype=float)
     if t.shape != (4, 4) or not np.isfinite(t).all():
-        raise PlannerError(f"{what} must be a finite 4x4 matrix")
+        raise PlannerError(f"{what}: expected a finite 4x4 matrix, got shape {t.shape}")
     r = t[:3, :3]
-    if not np.allclose(r @ r.T, np.eye(3), atol=1e-6) or np.linalg.det(r) < 0:
-        raise PlannerError(f"{what} is not a rigid transform (rotation block not orthonormal)")
+    if not np.allclose(r @ r.T, np.eye(3), atol=atol) or np.linalg.det(r) < 0:
+        raise PlannerError(f"{what}: not a rigid transform (rotation block not orthonormal)")
     return t
 
 
@@ -218,7 +220,7 @@ def match(source, reference, *, lattice: str | Lattice = "fcc", cell_volume: flo
     else:
         ref = MultiResVoxelList(_as_cloud(reference, "reference"),
                                 resolve_lattice(lattice, cell_volume), levels, scale)
-    m0 = np.eye(4) if init is None else _check_transform(init, "init")
+    m0 = np.eye(4) if init is None else check_transform(init, "init")
     t0 = time.perf_counter()
     r, t = m0[:3, :3].copy(), m0[:3, 3].copy()
     c_src = src.mean(axis=0)
