@@ -14,7 +14,6 @@ from planner.path import write_path
 
 def plan(a: argparse.Namespace) -> int:
     """Plan one path; write it, its figure, view or bag when asked. Exit 1 if none found."""
-
     check_neighbors([a.generator if a.generator is not None else a.lattice], a.neighbors,
                     a.method)
     world, label = build(a)

@@ -86,12 +86,14 @@ def _laz_end(p: Path, head: bytes, offset: int, size: int) -> int:
         if not offset + 8 <= start < size:
             return size  # table offset not written (-1) or unreadable: laspy decides
         try:
-            vlrs = laspy.open(str(p)).header.vlrs
+            with laspy.open(str(p)) as reader:
+                vlrs = reader.header.vlrs
             raw = next(v.record_data for v in vlrs if v.record_id == 22204)
+            vlr = lazrs.LazVlr(raw)
             f.seek(offset)
-            table = lazrs.read_chunk_table(f, lazrs.LazVlr(raw))
+            table = lazrs.read_chunk_table(f, vlr)
             out = io.BytesIO()
-            lazrs.write_chunk_table(out, table, lazrs.LazVlr(raw))
+            lazrs.write_chunk_table(out, table, vlr)
         except StopIteration:
             return size
         except Exception as exc:  # laspy / lazrs error types on corrupt headers or tables
@@ -100,15 +102,13 @@ def _laz_end(p: Path, head: bytes, offset: int, size: int) -> int:
         f.seek(start)
         if f.read(len(encoded)) != encoded:
             raise MapError(f"{p.name}: corrupt LAZ chunk table at byte {start}")
-    end = start + len(encoded)
-    if head[25] >= 4 and len(head) >= 255 and int(np.frombuffer(head, "<u4", 1, 243)[0]):
-        end = max(end, _las_end(p, head, end, size))
-    return end
+    return _las_end(p, head, start + len(encoded), size)
 
 
 def _las_end(p: Path, head: bytes, points_end: int, size: int) -> int:
-    """Byte offset where an uncompressed LAS file ends: after its points, or after the
-    last extended VLR (LAS 1.4), each a 60-byte header and its declared payload."""
+    """Byte offset where a LAS/LAZ file ends: at ``points_end`` (after its point records, or a
+    LAZ's chunk table), or after the last extended VLR (LAS 1.4), each a 60-byte header
+    and its declared payload."""
     if head[25] < 4 or len(head) < 247:
         return points_end
     start = int(np.frombuffer(head, "<u8", 1, 235)[0])
