@@ -1,4 +1,4 @@
-"""Cold numbers where users feel them: 1,000 DA1 queries in a new process, checkout against checkout.
+"""Cold numbers where users feel them: 1,000 DA1 queries in a new process, two checkouts.
 
 Usage::
 
@@ -40,8 +40,8 @@ def child(path: str, queries: int) -> None:
     t0 = time.perf_counter()
     import numpy as np
 
-    from planner.search import search
     from planner.lattice import Lattice
+    from planner.search import search
     from planner.world import World
 
     t1 = time.perf_counter()

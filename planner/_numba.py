@@ -4,15 +4,69 @@ numba's ``cache=True`` needs a writable cache location (``__pycache__`` beside t
 ``NUMBA_CACHE_DIR`` or a user cache folder under HOME). On a read-only install with no
 writable HOME it raises "no locator available" when the function is *defined*, which would
 make ``import planner`` fail. :func:`njit_cached` falls back to compiling in memory.
+
+numba keys each cached kernel on its own source file only. A kernel that inlines a helper
+from another module would load stale machine code after that helper changes (a checkout
+that was edited or moved to another commit). So the package keeps one stamp of its kernel
+sources beside the in-tree cache: when the sources differ from the stamp, the in-tree cache
+is cleared before any kernel is defined, and if it cannot be cleared (a read-only tree), the
+kernels compile in memory. An installed package never changes, so its shipped cache stays.
+(A cache under ``NUMBA_CACHE_DIR`` is the user's to manage.)
 """
 
 from __future__ import annotations
 
+import hashlib
+import os
+import tempfile
 from collections.abc import Callable
+from pathlib import Path
 
 from numba import njit
 
 __all__ = ["njit_cached"]
+
+_ROOT = Path(__file__).resolve().parent
+_STAMP = _ROOT / "__pycache__" / "kernels.stamp"
+
+
+def _sources_digest() -> str:
+    """Digest of the package's kernel sources: relative path and content of every ``.py``
+    file that mentions numba (only those can define, or be inlined into, a kernel)."""
+    h = hashlib.blake2b(digest_size=16)
+    for p in sorted(_ROOT.rglob("*.py")):
+        text = p.read_bytes()
+        if b"numba" in text or b"njit" in text:
+            h.update(p.relative_to(_ROOT).as_posix().encode())
+            h.update(text)
+    return h.hexdigest()
+
+
+def _sync_cache() -> bool:
+    """Clear the in-tree kernel cache if the sources changed since it was filled.
+
+    Returns False when the cache is stale and cannot be cleared: then nothing is cached.
+    """
+    digest = _sources_digest()
+    try:
+        if _STAMP.read_text() == digest:
+            return True
+    except OSError:
+        pass
+    try:
+        for p in _ROOT.rglob("*.nb[ic]"):
+            p.unlink()
+        _STAMP.parent.mkdir(exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=_STAMP.parent, prefix=".stamp-")
+        with os.fdopen(fd, "w") as f:
+            f.write(digest)
+        os.replace(tmp, _STAMP)
+    except OSError:
+        return not any(_ROOT.rglob("*.nb[ic]"))
+    return True
+
+
+_CACHE = _sync_cache()
 
 
 def njit_cached(fn: Callable | None = None, **options) -> Callable:
@@ -21,6 +75,8 @@ def njit_cached(fn: Callable | None = None, **options) -> Callable:
     Use as ``@njit_cached`` or ``@njit_cached(nogil=True)``.
     """
     def wrap(f: Callable) -> Callable:
+        if not _CACHE:
+            return njit(cache=False, **options)(f)
         try:
             return njit(cache=True, **options)(f)
         except RuntimeError as exc:  # numba: "cannot cache function ...: no locator available"
