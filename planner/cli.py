@@ -62,7 +62,8 @@ def _add_bag_args(p: argparse.ArgumentParser) -> None:
     b.add_argument("--max-clouds", type=T.int_range(1), help="read at most this many clouds")
 
 
-def _add_world_args(p: argparse.ArgumentParser, *, lattice: bool = True) -> None:
+def _add_world_args(p: argparse.ArgumentParser, *, lattice: bool = True,
+                    unknown: bool = True) -> None:
     p.add_argument("map", type=T.map_file,
                    help="map file: ROS bag (.bag, rosbag2 folder, .db3, .mcap), LAS/LAZ, "
                         "E57, map_server YAML (+ PGM), saved world (.npz), MovingAI .3dmap, "
@@ -93,6 +94,8 @@ def _add_world_args(p: argparse.ArgumentParser, *, lattice: bool = True) -> None
                         "world file or in the current folder) still has the SHA-256 "
                         "recorded at save")
     _add_bag_args(p)
+    if not unknown:  # explore: the robot itself decides what unknown space is
+        return
     p.add_argument("--unknown", choices=("blocked", "free"), default=None,
                    help="unknown space: blocked (kept the robot radius away, as obstacles) or "
                         "free (default: blocked when the map says what was observed free, else "
@@ -187,7 +190,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("explore", help="explore an unknown map with a simulated range sensor, "
                                        "replanning with D* Lite (checked against A*)")
-    _add_world_args(p, lattice=False)
+    _add_world_args(p, lattice=False, unknown=False)
     p.add_argument("--lattice", default=None, type=T.explore_lattices,
                    help="named lattice, comma-separated names, or 'all' (default: fcc)")
     p.add_argument("--start", type=T.vec3, required=True, help="x,y,z (m); negatives allowed")

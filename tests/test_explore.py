@@ -128,3 +128,22 @@ def test_cli_writes_the_gif_and_refuses_another_suffix(tmp_path, capsys):
     assert gif.read_bytes()[:6] in (b"GIF87a", b"GIF89a")
     assert main([*args, "--gif", str(tmp_path / "run.png")]) == 2
     assert "unsupported output type '.png'" in capsys.readouterr().err
+
+
+def test_cli_reads_the_map_in_the_format_given_and_has_no_unknown_option(tmp_path, capsys):
+    import shutil
+
+    from planner.cli import main
+    from planner.maps import MAPS_DIR
+
+    renamed = tmp_path / "office.dat"  # a text-point extension: unreadable without --format
+    shutil.copy(MAPS_DIR / "office.ply", renamed)
+    args = ["explore", str(renamed), "--start", "2.5,2.5,1.2", "--goal", "4.0,2.5,1.2",
+            "--lattice", "fcc", "--radius", "0.25", "--cell-volume", "0.05", "--max-steps", "200"]
+    assert main(args) == 2
+    capsys.readouterr()
+    assert main([*args, "--format", "ply", "--json"]) == 0
+    assert '"status": "reached"' in capsys.readouterr().out
+    with pytest.raises(SystemExit) as stop:
+        main([*args, "--format", "ply", "--unknown", "free"])
+    assert stop.value.code == 2 and "--unknown" in capsys.readouterr().err

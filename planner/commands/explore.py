@@ -20,6 +20,10 @@ def explore(a: argparse.Namespace) -> int:
     rows, bad = [], 0
     lattices = a.lattice or [None]  # None: explore's default, resolved from the map
     source = map_source(a)  # a bag is read once, with its topic and frame
+    if a.format is not None and source is a.map:  # explore reads the map: it needs the format
+        from planner.io import load_obstacles  # lazy: scipy
+
+        source = load_obstacles(a.map, a.format)
     for name in lattices:
         res = run(source, a.start, a.goal, lattice=name, radius=a.radius,
                   cell_volume=a.cell_volume, bounds=a.bounds, sensor_range=a.sensor_range,
