@@ -16,6 +16,7 @@ import math
 import numpy as np
 
 from planner._numba import njit_cached
+from planner.occupancy.bits import line_range
 
 
 @njit_cached
@@ -102,34 +103,50 @@ def mark_unknown_centres(g, ilo, idims, lo, hi, phase, res, g0, known, vdims, si
     lies in ``[lo, hi]`` and in an unknown voxel (voxel ``floor((x - phase) / res) - g0``,
     clipped to the grid). A cell whose centre lies within ``eps`` voxels of a voxel face
     along an axis whose coordinate sums several terms (``single[a]`` False) is written to
-    ``border`` instead (while it has room). Returns the number of border cells."""
+    ``border`` instead (while it has room). Returns the number of border cells.
+
+    Along a line of the last index the centre moves by ``G[:, 2]``: the cells in the
+    bounds are an interval of it (found by bisection), and an axis the line does not move
+    along is classified once per line; each cell is decided by the same float expressions
+    either way."""
     s0 = vdims[1] * vdims[2]
     s1 = vdims[2]
     v = np.empty(3, dtype=np.int64)
-    y = np.empty(3)
+    xs = np.empty(3)
+    moves = np.empty(3, dtype=np.bool_)
+    for m in range(3):
+        moves[m] = g[m, 2] != 0.0
     nb = 0
+    k0, k1 = ilo[2], ilo[2] + idims[2]
     for a in range(idims[0]):
         i = ilo[0] + a
         for b in range(idims[1]):
             j = ilo[1] + b
-            x0 = g[0, 0] * i + g[0, 1] * j
-            x1 = g[1, 0] * i + g[1, 1] * j
-            x2 = g[2, 0] * i + g[2, 1] * j
+            xs[0] = g[0, 0] * i + g[0, 1] * j
+            xs[1] = g[1, 0] * i + g[1, 1] * j
+            xs[2] = g[2, 0] * i + g[2, 1] * j
+            ka, kb = k0, k1
+            for m in range(3):
+                ra, rb = line_range(xs[m], g[m, 2], lo[m], hi[m], ka, kb)
+                ka, kb = max(ka, ra), min(kb, rb)
+            if ka >= kb:
+                continue
             base = (i - glo[0]) * strides[0] + (j - glo[1]) * strides[1]
-            for c in range(idims[2]):
-                k = ilo[2] + c
-                y[0] = x0 + g[0, 2] * k
-                y[1] = x1 + g[1, 2] * k
-                y[2] = x2 + g[2, 2] * k
-                if not (lo[0] <= y[0] <= hi[0] and lo[1] <= y[1] <= hi[1]
-                        and lo[2] <= y[2] <= hi[2]):
-                    continue
-                unsure = False
-                for m in range(3):
-                    t = (y[m] - phase[m]) / res
+            line_unsure = False
+            for m in range(3):  # the axes the line does not move along, once
+                if not moves[m]:
+                    t = (xs[m] + g[m, 2] * ka - phase[m]) / res
                     if not single[m] and _near_face(t, eps):
-                        unsure = True
+                        line_unsure = True
                     v[m] = min(max(np.int64(math.floor(t)) - g0[m], 0), vdims[m] - 1)
+            for k in range(ka, kb):
+                unsure = line_unsure
+                for m in range(3):
+                    if moves[m]:
+                        t = (xs[m] + g[m, 2] * k - phase[m]) / res
+                        if not single[m] and _near_face(t, eps):
+                            unsure = True
+                        v[m] = min(max(np.int64(math.floor(t)) - g0[m], 0), vdims[m] - 1)
                 if unsure:
                     if nb < border.shape[0]:
                         border[nb, 0] = i
