@@ -246,7 +246,7 @@ def unknown_box_grid(boxes: np.ndarray, box_sizes: np.ndarray, free_boxes: np.nd
     check_range(glo, ghi, 3)
     dims = ghi - glo + 1
     cells = float(np.prod(dims.astype(float)))
-    if known.nbytes + cells > budget:  # one byte a cell; the dilation scratch is a slab
+    if known.nbytes + cells > budget:  # one byte a cell; the dilation scratch is a plane
         return None
     strides = grid_strides(dims)
     grid = np.zeros(int(cells), dtype=np.uint8)
