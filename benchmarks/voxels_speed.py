@@ -25,10 +25,13 @@ lattice first; numba caches to disk).
 A last table times the whole world build of geb079 at 0.08**3 m^3 cells, radius
 ``--box-radius``, unknown space blocked (:func:`planner.build_world`: load, exact box
 inflation, unknown-space classification and inflation), wall and CPU seconds, best of
-``--repeats``, after a warm-up build at the same cell volume.
+``--repeats``, after a warm-up build at the same cell volume. With ``--stages``, one more
+build per lattice is split into its compiled stages (CPU seconds of each kernel, the rest
+being numpy and Python between them); ``--edge`` sets the cell edge (default 0.08 m).
 
 Run: ``python benchmarks/voxels_speed.py [--lattices fcc bcc] [--baseline-seconds 60]``
-(``--only-boxes`` / ``--only-world`` for one table alone).
+(``--only-boxes`` / ``--only-world`` for one table alone;
+``--only-world --stages --edge 0.02 --lattices fcc cubic`` for the stages at 2 cm).
 """
 
 from __future__ import annotations
@@ -190,11 +193,56 @@ def _box_table(data: Path, names: list[str], radius: float) -> str:
     return "\n".join(lines)
 
 
-def _world_table(data: Path, names: list[str], radius: float, repeats: int) -> str:
-    """:func:`planner.build_world` on geb079.bt at 0.08**3 m^3 cells (the map's resolution
-    cubed), radius ``radius``, unknown space blocked: load + quantize + exact inflation of
-    the leaves + unknown-space classification and its inflation, per lattice (best of
-    ``repeats``)."""
+# The build's compiled stages: (module, kernel, label); several kernels may share a label.
+_STAGES = [
+    ("planner.voxels._box_kernels", "within_mark", "obstacle boxes: exact inflation"),
+    ("planner.voxels.kernels", "exact_mark", "obstacle points: exact inflation"),
+    ("planner.voxels._unknown_kernels", "fill_known", "unknown: known voxels"),
+    ("planner.voxels._unknown_kernels", "edge_voxels", "unknown: known voxels"),
+    ("planner.voxels._unknown_kernels", "mark_unknown_centres", "unknown: cell centres"),
+    ("planner.voxels._box_kernels", "overlap_mark", "unknown: cells on boundary voxels"),
+    ("planner.voxels.kernels", "dilate_runs", "unknown: inflation"),
+    ("planner.occupancy.bits", "fill_in_bounds", "world bits: in bounds"),
+    ("planner.occupancy.bits", "mark_from_grid", "world bits: from the grids"),
+]
+
+
+def _stage_seconds(build) -> tuple[float, dict[str, float]]:
+    """CPU seconds of ``build()`` and of each stage of :data:`_STAGES` in it (the kernels
+    are wrapped for the call: their callers look them up on their modules)."""
+    import importlib
+
+    spent: dict[str, float] = {}
+    saved = []
+    for mod_name, name, label in _STAGES:
+        mod = importlib.import_module(mod_name)
+        kernel = getattr(mod, name)
+
+        def timed(*a, _k=kernel, _label=label):
+            c0 = time.process_time()
+            try:
+                return _k(*a)
+            finally:
+                spent[_label] = spent.get(_label, 0.0) + time.process_time() - c0
+
+        saved.append((mod, name, kernel))
+        setattr(mod, name, timed)
+    try:
+        c0 = time.process_time()
+        build()
+        total = time.process_time() - c0
+    finally:
+        for mod, name, kernel in saved:
+            setattr(mod, name, kernel)
+    return total, spent
+
+
+def _world_table(data: Path, names: list[str], radius: float, repeats: int,
+                 edge: float = 0.08, stages: bool = False) -> str:
+    """:func:`planner.build_world` on geb079.bt at ``edge**3`` m^3 cells (0.08 m: the map's
+    resolution cubed), radius ``radius``, unknown space blocked: load + quantize + exact
+    inflation of the leaves + unknown-space classification and its inflation, per lattice
+    (best of ``repeats``); with ``stages``, one more build split into its stages."""
     import os
 
     from planner import build_world
@@ -202,11 +250,12 @@ def _world_table(data: Path, names: list[str], radius: float, repeats: int) -> s
     geb = data / "octomap" / "geb079.bt"
     if not geb.exists():
         return f"geb079.bt: not found under {data}, world table skipped"
-    vol = 0.08**3
-    lines = [f"build_world(geb079.bt, cell volume 0.08**3 m^3, radius {radius:g} m, unknown "
+    vol = edge**3
+    lines = [f"build_world(geb079.bt, cell volume {edge:g}**3 m^3, radius {radius:g} m, unknown "
              f"blocked), best of {repeats}; load average "
              f"{', '.join(f'{x:.1f}' for x in os.getloadavg())}:",
              f"  {'lattice':7s} {'wall s':>7s} {'cpu s':>7s} {'blocked':>11s} {'unknown':>11s}"]
+    split = []
     for name in names:
         # Compile / load kernels and derive the lattice geometry at this scale first.
         build_world(geb, name, cell_volume=vol, radius=radius, bounds=[[0, 0, 0], [1, 1, 1]])
@@ -217,6 +266,22 @@ def _world_table(data: Path, names: list[str], radius: float, repeats: int) -> s
             best = min(best, (time.perf_counter() - t0, time.process_time() - c0))
         lines.append(f"  {name:7s} {best[0]:7.3f} {best[1]:7.3f} {w.n_blocked:11,} "
                      f"{w.n_unknown:11,}")
+        del w
+        if stages:
+            split.append((name, *_stage_seconds(
+                lambda n=name: build_world(geb, n, cell_volume=vol, radius=radius))))
+    if split:
+        labels = list(dict.fromkeys(label for _, _, label in _STAGES))
+        lines += ["", "CPU seconds per stage of one more build ('rest': numpy and Python "
+                  "between the kernels, reading the map included):",
+                  f"  {'stage':36s}" + "".join(f" {n:>7s}" for n, _, _ in split)]
+        for label in labels + ["rest", "total"]:
+            row = []
+            for _, total, spent in split:
+                v = {"total": total, "rest": total - sum(spent.values())}.get(
+                    label, spent.get(label, 0.0))
+                row.append(f" {v:7.2f}")
+            lines.append(f"  {label:36s}" + "".join(row))
     return "\n".join(lines)
 
 
@@ -235,12 +300,16 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--only-boxes", action="store_true", help="only the box inflation table")
     p.add_argument("--only-world", action="store_true", help="only the geb079 world table")
     p.add_argument("--repeats", type=int, default=3, help="world builds per lattice (best)")
+    p.add_argument("--edge", type=float, default=0.08, help="cell edge (m) of the world table")
+    p.add_argument("--stages", action="store_true",
+                   help="world table: CPU seconds per stage of one more build")
     args = p.parse_args(argv)
     if args.only_boxes:
         print(_box_table(args.data, args.lattices, args.box_radius))
         return 0
     if args.only_world:
-        print(_world_table(args.data, args.lattices, args.box_radius, args.repeats))
+        print(_world_table(args.data, args.lattices, args.box_radius, args.repeats, args.edge,
+                           args.stages))
         return 0
     rows = []
     for label, pts, vol in _datasets(args.data):

@@ -103,6 +103,28 @@ def test_quantize_is_exact_for_user_generators(dim, seed):
 
 
 @pytest.mark.parametrize("name", NAMES)
+def test_geometry_at_any_cell_volume_is_the_unit_cell_scaled(name):
+    """Neighbours and rounding candidates are the same index offsets at every scale; the
+    cell's vertices and radii scale with the cell edge, its second moment not at all."""
+    unit = Lattice.named(name, 1.0)
+    for volume in (0.02**3, 0.04**3, 0.16**3, 0.32**3, 7.3):
+        lat = Lattice.named(name, volume)
+        edge = volume ** (1 / 3)
+        for kind in ("face", "full"):
+            assert np.array_equal(lat.neighbors(kind), unit.neighbors(kind)), (volume, kind)
+        assert np.array_equal(lat.rounding_offsets(), unit.rounding_offsets()), volume
+        got, want = (np.sort(np.round(v / v.max(), 9), axis=0) for v in
+                     (lat.voronoi_vertices, unit.voronoi_vertices * edge))
+        np.testing.assert_allclose(got, want, atol=1e-9)
+        assert lat.covering_radius == pytest.approx(unit.covering_radius * edge, rel=1e-12)
+        assert lat.packing_radius == pytest.approx(unit.packing_radius * edge, rel=1e-12)
+        assert lat.normalized_second_moment == pytest.approx(unit.normalized_second_moment,
+                                                             rel=1e-12)
+        x = np.random.default_rng(3).uniform(-40 * edge, 40 * edge, (2000, 3))
+        assert np.array_equal(lat.quantize_generic(x), brute_force_nearest(lat, x)), volume
+
+
+@pytest.mark.parametrize("name", NAMES)
 def test_cell_centres_quantize_to_themselves(name):
     lat = Lattice.named(name, cell_volume=0.01)
     w = np.random.default_rng(1).integers(-10**5, 10**5, (10000, 3))

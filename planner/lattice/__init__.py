@@ -1,7 +1,8 @@
 """Lattice geometry: generators, exact quantization, Voronoi cells and adjacency.
 
 :class:`Lattice` (:mod:`~planner.lattice.lattice`), its geometry
-(:mod:`~planner.lattice._geometry`), the closest-point kernels (:mod:`~planner.lattice.quantize`,
+(:mod:`~planner.lattice._geometry`, the cell as a polytope in
+:mod:`~planner.lattice._polytope`), the closest-point kernels (:mod:`~planner.lattice.quantize`,
 loaded on first use), the paper's generators (:mod:`~planner.lattice.paper`) and 2D lattices as
 prisms (:mod:`~planner.lattice.planar`).
 """

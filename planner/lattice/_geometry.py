@@ -6,12 +6,16 @@ Nothing is tabulated per lattice: everything follows from the generator ``G`` (`
 columns are basis vectors, metres). Enumerations run over boxes of integer coefficients in
 the LLL-reduced basis; their size is checked against a budget first (ill-conditioned
 generators would otherwise ask for billions of vectors).
+
+The integer sets (relevant and touching vectors, rounding candidates) depend only on the
+lattice's shape, not its scale: they are derived once per shape and cell volumes share
+them (:func:`_shape_sets`). The polytope's vertices, edges and second moment are computed
+in :mod:`planner.lattice._polytope`.
 """
 
 from __future__ import annotations
 
 import itertools
-import math
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -19,11 +23,10 @@ import numpy as np
 
 from planner.budget import memory_budget
 from planner.errors import LatticeError
+from planner.lattice._polytope import TOL, cell_edges, second_moment, voronoi_vertices
 
 __all__ = ["VoronoiCell", "ENUM_LIMIT", "reduce_basis", "geometry"]
 
-# Relative tolerance for geometric ties (distances compared in units of the cell size).
-TOL = 1e-9
 # Most lattice vectors the geometry may enumerate (cubic needs 125; an aspect ratio of ~500
 # between reduced basis vectors reaches it). Beyond it, deriving the cell takes minutes.
 ENUM_LIMIT = 20_000
@@ -231,30 +234,38 @@ class VoronoiCell:
         return np.ascontiguousarray(ax[np.sort(keep)])
 
 
-def _cell_edges(normals: np.ndarray, offsets: np.ndarray, verts: np.ndarray, d: int,
-                scale: float) -> tuple[np.ndarray, np.ndarray]:
-    """Edges ``(e0, e1)`` of the cell: two vertices bound an edge iff they share d-1 facets."""
-    on = np.abs(verts @ normals.T - offsets) < 1e-7 * scale  # (nv, k): vertex on facet
-    shared = on.astype(np.int64) @ on.T.astype(np.int64)
-    i, j = np.nonzero(np.triu(shared >= d - 1, k=1))
-    return verts[i], verts[j]
+def _shape_key(g: np.ndarray, d: int) -> bytes:
+    """The shape of generator ``g`` (d, d): ``g`` scaled to unit determinant (cells about 1
+    across) and rounded to 12 decimals, so that one shape at any cell volume gives one key
+    (the scaled matrix differs from volume to volume in its last bits). The rounding moves
+    the lattice by at most 5e-13 of a cell, far inside the 1e-9 tolerances of the tests."""
+    u = g / abs(float(np.linalg.det(g))) ** (1 / d)
+    return np.ascontiguousarray(np.round(u, 12)).tobytes()
 
 
 @lru_cache(maxsize=64)
-def geometry(gen_bytes: bytes, d: int) -> dict:
-    """Geometry of the lattice with this generator (cached; everything derived, nothing tabled).
+def _shape_sets(shape: bytes, d: int) -> dict:
+    """The integer sets of a lattice shape (:func:`_shape_key`): the reduction ``T`` and, in
+    reduced coefficients, the Voronoi-relevant (``face_z``) and touching (``full_z``)
+    vectors and the rounding candidate sets (``round_offsets``, ``orthant_offsets``,
+    ``orthant_counts``). Cached per process: the linear programmes cost most of a lattice.
 
-    Keys: ``reduced``, ``reduction``, ``face``, ``full``, ``cell`` (:class:`VoronoiCell`),
-    ``round_offsets``, ``orthant_offsets``, ``orthant_counts``.
+    Exact for every scale ``s`` of the shape: the lattice ``s U`` has the vectors ``s U w``
+    and the Voronoi cell ``s V``, so every test below scales as a whole: norms and coset
+    minima by ``s**2``, the rounding parallelepiped, the cells and the ball slack of each
+    linear programme by ``s``, and every tolerance is relative to the cell's size. Each
+    test therefore decides the same integer vectors at every scale; only the metric
+    quantities (vectors in metres, vertices, radii) scale, and :func:`geometry` computes
+    those from the generator itself.
     """
-    g = np.frombuffer(gen_bytes, dtype=float).reshape(d, d)
-    b, t = reduce_basis(gen_bytes, d)
+    u = np.frombuffer(shape, dtype=float).reshape(d, d)
+    b, t = reduce_basis(shape, d)
     # Covering radius bound: Babai rounding in the reduced basis errs by at most half the
     # longest diagonal of its parallelepiped, so coset minima lie within twice that.
     z = grid(box_for_radius(b, 2 * _half_diagonal(b)))
     v = z @ b.T
     n2 = np.einsum("ij,ij->i", v, v)
-    scale2 = float(np.abs(np.linalg.det(g))) ** (2 / d)
+    scale2 = float(np.abs(np.linalg.det(u))) ** (2 / d)
     face, full = [], []
     # Voronoi's theorem: v is relevant (shares a facet) iff +-v are the only shortest vectors
     # of the coset v + 2L. The cells of 0 and v touch at all iff v/2 lies in the closed
@@ -270,20 +281,8 @@ def geometry(gen_bytes: bytes, d: int) -> dict:
         if len(shortest) == 2:
             face.append(shortest)
     face_z = np.concatenate(face)
-    full_z = np.concatenate(full)
-    rel = face_z @ b.T  # (k, d) relevant vectors, world units
-
-    verts = _voronoi_vertices(rel)
-    cover = float(np.linalg.norm(verts, axis=1).max())
-    norms = np.linalg.norm(rel, axis=1)
-    normals, offsets = rel / norms[:, None], norms / 2
-    e0, e1 = _cell_edges(normals, offsets, verts, d, scale2 ** 0.5)
-    cell = VoronoiCell(
-        generator=_frozen(g), reduced=_frozen(b), reduction=_frozen(t, np.int64),
-        relevant=_frozen(rel), normals=_frozen(normals), offsets=_frozen(offsets),
-        vertices=_frozen(verts), edges=(_frozen(e0), _frozen(e1)),
-        packing_radius=float(norms.min() / 2), covering_radius=cover,
-        second_moment=_second_moment(rel, verts))
+    rel = face_z @ b.T
+    cover = float(np.linalg.norm(voronoi_vertices(rel), axis=1).max())
     offsets_all = rounding_offsets(b, rel, cover)
     # Per sign pattern of the rounding residual (bit i set: f_i > 0), padded with the
     # zero offset so that every row has the same length for the compiled kernel. Each
@@ -293,18 +292,53 @@ def geometry(gen_bytes: bytes, d: int) -> dict:
            for o in range(2**d)]
     width = max(len(p) for p in per)
     by_orthant = np.zeros((2**d, width, d), dtype=np.int64)
-    counts = np.array([len(p) for p in per], dtype=np.int64)
     for o, p in enumerate(per):
         by_orthant[o, : len(p)] = p
+    out = {"reduction": t, "face_z": face_z, "full_z": np.concatenate(full),
+           "round_offsets": offsets_all, "orthant_offsets": by_orthant,
+           "orthant_counts": np.array([len(p) for p in per], dtype=np.int64)}
+    for a in out.values():
+        a.setflags(write=False)
+    return out
+
+
+@lru_cache(maxsize=64)
+def geometry(gen_bytes: bytes, d: int) -> dict:
+    """Geometry of the lattice with this generator (cached; everything derived, nothing tabled).
+
+    The integer sets come from the lattice's shape (:func:`_shape_sets`, derived once per
+    shape, whatever the cell volume); the cell in metres from the generator itself.
+
+    Keys: ``reduced``, ``reduction``, ``face``, ``full``, ``cell`` (:class:`VoronoiCell`),
+    ``round_offsets``, ``orthant_offsets``, ``orthant_counts``.
+    """
+    g = np.frombuffer(gen_bytes, dtype=float).reshape(d, d)
+    sets = _shape_sets(_shape_key(g, d), d)
+    t = sets["reduction"]
+    b = g @ t  # the shape's reduced basis at this scale
+    face_z = sets["face_z"]
+    rel = face_z @ b.T  # (k, d) relevant vectors, world units
+    scale2 = float(np.abs(np.linalg.det(g))) ** (2 / d)
+    verts = voronoi_vertices(rel)
+    cover = float(np.linalg.norm(verts, axis=1).max())
+    norms = np.linalg.norm(rel, axis=1)
+    normals, offsets = rel / norms[:, None], norms / 2
+    e0, e1 = cell_edges(normals, offsets, verts, d, scale2 ** 0.5)
+    cell = VoronoiCell(
+        generator=_frozen(g), reduced=_frozen(b), reduction=_frozen(t, np.int64),
+        relevant=_frozen(rel), normals=_frozen(normals), offsets=_frozen(offsets),
+        vertices=_frozen(verts), edges=(_frozen(e0), _frozen(e1)),
+        packing_radius=float(norms.min() / 2), covering_radius=cover,
+        second_moment=second_moment(rel, verts))
     return {
-        "reduced": b,
+        "reduced": cell.reduced,
         "reduction": t,
         "face": sorted_offsets(face_z @ t.T, g),  # reduced coefficients -> user indices
-        "full": sorted_offsets(full_z @ t.T, g),
+        "full": sorted_offsets(sets["full_z"] @ t.T, g),
         "cell": cell,
-        "round_offsets": offsets_all,
-        "orthant_offsets": by_orthant,
-        "orthant_counts": counts,
+        "round_offsets": sets["round_offsets"],
+        "orthant_offsets": sets["orthant_offsets"],
+        "orthant_counts": sets["orthant_counts"],
     }
 
 
@@ -313,58 +347,6 @@ def sorted_offsets(w: np.ndarray, g: np.ndarray) -> np.ndarray:
     lengths = np.round(np.linalg.norm(w @ g.T, axis=1), 9)
     order = np.lexsort(tuple(w.T[::-1]) + (lengths,))
     return np.ascontiguousarray(w[order], dtype=np.int64)
-
-
-def _voronoi_vertices(rel: np.ndarray) -> np.ndarray:
-    """Vertices of the Voronoi cell {x : x.v <= |v|^2/2 for every relevant v}; (n, d)."""
-    d = rel.shape[1]
-    rhs = 0.5 * np.einsum("ij,ij->i", rel, rel)
-    tol = TOL * float(rhs.max())
-    found = []
-    for idx in itertools.combinations(range(len(rel)), d):
-        a = rel[list(idx)]
-        if abs(np.linalg.det(a)) < 1e-12 * float(np.abs(a).max()) ** d:
-            continue
-        x = np.linalg.solve(a, rhs[list(idx)])
-        if np.all(rel @ x <= rhs + tol * 10):
-            found.append(x)
-    pts = np.array(found)
-    scale = math.sqrt(float(rhs.max()))
-    _, keep = np.unique(np.round(pts / scale, 7), axis=0, return_index=True)
-    return pts[np.sort(keep)]
-
-
-def _second_moment(rel: np.ndarray, verts: np.ndarray) -> float:
-    """Exact normalised second moment of the Voronoi cell: (1/d) E|x|^2 / V^(2/d)."""
-    d = rel.shape[1]
-    rhs = 0.5 * np.einsum("ij,ij->i", rel, rel)
-    tol = 1e-7 * float(rhs.max())
-    vol = 0.0
-    inertia = 0.0
-    for v, r in zip(rel, rhs, strict=True):
-        on = verts[np.abs(verts @ v - r) < tol]
-        if d == 2:
-            # An edge of a polygon: triangle (0, a, b).
-            a, b = on[0], on[1]
-            area = abs(a[0] * b[1] - a[1] * b[0]) / 2
-            vol += area
-            inertia += area / 12 * (a @ a + b @ b + (a + b) @ (a + b))
-            continue
-        # A polygonal face: order vertices by angle about its centroid, fan into tetrahedra.
-        c = on.mean(axis=0)
-        n = v / np.linalg.norm(v)
-        e1 = on[0] - c
-        e1 /= np.linalg.norm(e1)
-        e2 = np.cross(n, e1)
-        ang = np.arctan2((on - c) @ e2, (on - c) @ e1)
-        ring = on[np.argsort(ang)]
-        for i in range(1, len(ring) - 1):
-            a, b, cc = ring[0], ring[i], ring[i + 1]
-            tv = abs(np.linalg.det(np.stack([a, b, cc]))) / 6
-            s = a + b + cc
-            vol += tv
-            inertia += tv / 20 * (a @ a + b @ b + cc @ cc + s @ s)
-    return inertia / vol / d / vol ** (2 / d)
 
 
 def rounding_offsets(

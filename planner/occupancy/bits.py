@@ -19,8 +19,8 @@ import numpy as np
 
 from planner._numba import njit_cached
 
-__all__ = ["BoxBits", "fill_in_bounds", "get_cells", "list_cells", "mark_from_grid",
-           "n_bytes", "set_cells"]
+__all__ = ["BoxBits", "fill_in_bounds", "get_cells", "line_range", "list_cells",
+           "mark_from_grid", "n_bytes", "set_cells"]
 
 
 def n_bytes(dims: np.ndarray) -> int:
@@ -28,27 +28,66 @@ def n_bytes(dims: np.ndarray) -> int:
     return (int(np.prod(np.asarray(dims, dtype=np.int64))) + 7) // 8
 
 
+@njit_cached(inline="always")
+def _test(y, bound, mode):  # pragma: no cover - compiled
+    """``y >= bound``, ``y > bound``, ``y <= bound`` or ``y < bound`` (``mode`` 0 to 3)."""
+    if mode == 0:
+        return y >= bound
+    if mode == 1:
+        return y > bound
+    if mode == 2:
+        return y <= bound
+    return y < bound
+
+
+@njit_cached(inline="always")
+def _first_k(x, g, k0, k1, bound, mode):  # pragma: no cover - compiled
+    """The first k of ``[k0, k1)`` passing ``_test(x + g * k, bound, mode)`` (k1 if none),
+    for a test that fails and then passes as k grows. Float products and sums are monotone
+    in k, so bisection with the very expression the cells use finds the same cells."""
+    a, b = k0, k1
+    while a < b:
+        mid = (a + b) // 2
+        if _test(x + g * mid, bound, mode):
+            b = mid
+        else:
+            a = mid + 1
+    return a
+
+
+@njit_cached(inline="always")
+def line_range(x, g, lo, hi, k0, k1):  # pragma: no cover - compiled
+    """``(a, b)``: the k of ``[k0, k1)`` with ``lo <= x + g * k <= hi`` are ``[a, b)`` (one
+    coordinate of the cell centres ``G w`` along a line of the last index, ``x`` the sum of
+    the other two terms)."""
+    if g == 0.0:
+        y = x + g * k0
+        return (k0, k1) if lo <= y <= hi else (k0, k0)
+    if g > 0.0:  # y grows with k: from y >= lo until y > hi
+        a = _first_k(x, g, k0, k1, lo, 0)
+        return a, _first_k(x, g, a, k1, hi, 1)
+    a = _first_k(x, g, k0, k1, hi, 2)  # y falls: from y <= hi until y < lo
+    return a, _first_k(x, g, a, k1, lo, 3)
+
+
 @njit_cached
 def fill_in_bounds(bits, lo, dims, g, blo, bhi):  # pragma: no cover - compiled
     """Set the bit of every cell whose centre ``g @ w`` (m) lies in ``[blo, bhi]``; clear
-    the others. ``bits`` (ceil(n / 8),) uint8 over the box ``lo`` (3,), ``dims`` (3,)."""
+    the others. ``bits`` (ceil(n / 8),) uint8 over the box ``lo`` (3,), ``dims`` (3,).
+    A line of the last index holds one interval of such cells (:func:`line_range`)."""
     bits[:] = 0
-    f = 0
+    k0, k1 = lo[2], lo[2] + dims[2]
     for a in range(dims[0]):
         i = lo[0] + a
         for b in range(dims[1]):
             j = lo[1] + b
-            for c in range(dims[2]):
-                k = lo[2] + c
-                ok = True
-                for r in range(3):
-                    x = g[r, 0] * i + g[r, 1] * j + g[r, 2] * k
-                    if x < blo[r] or x > bhi[r]:
-                        ok = False
-                        break
-                if ok:
-                    bits[f >> 3] |= np.uint8(1 << (f & 7))
-                f += 1
+            ka, kb = k0, k1
+            for r in range(3):
+                ra, rb = line_range(g[r, 0] * i + g[r, 1] * j, g[r, 2], blo[r], bhi[r], ka, kb)
+                ka, kb = max(ka, ra), min(kb, rb)
+            row = (a * dims[1] + b) * dims[2] - k0
+            for f in range(row + ka, row + kb):
+                bits[f >> 3] |= np.uint8(1 << (f & 7))
 
 
 @njit_cached

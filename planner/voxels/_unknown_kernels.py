@@ -16,6 +16,7 @@ import math
 import numpy as np
 
 from planner._numba import njit_cached
+from planner.occupancy.bits import line_range
 
 
 @njit_cached
@@ -95,6 +96,16 @@ def _near_face(t, eps):  # pragma: no cover - compiled
     return math.floor(t - eps) != math.floor(t + eps)
 
 
+@njit_cached(inline="always")
+def _voxel(x, gk, k, phase, res, g0, n, single, eps):  # pragma: no cover - compiled
+    """Voxel index (clipped to ``[0, n)``) along one axis of the cell centre ``x + gk * k``,
+    and whether it lies within ``eps`` voxels of a face along an axis that sums several
+    terms (``single`` False)."""
+    t = (x + gk * k - phase) / res
+    return (min(max(np.int64(math.floor(t)) - g0, 0), n - 1),
+            (not single) and _near_face(t, eps))
+
+
 @njit_cached
 def mark_unknown_centres(g, ilo, idims, lo, hi, phase, res, g0, known, vdims, single, eps,
                          grid, glo, strides, border):  # pragma: no cover - compiled
@@ -102,12 +113,17 @@ def mark_unknown_centres(g, ilo, idims, lo, hi, phase, res, g0, known, vdims, si
     lies in ``[lo, hi]`` and in an unknown voxel (voxel ``floor((x - phase) / res) - g0``,
     clipped to the grid). A cell whose centre lies within ``eps`` voxels of a voxel face
     along an axis whose coordinate sums several terms (``single[a]`` False) is written to
-    ``border`` instead (while it has room). Returns the number of border cells."""
+    ``border`` instead (while it has room). Returns the number of border cells.
+
+    Along a line of the last index the centre moves by ``G[:, 2]``: the cells in the
+    bounds are an interval of it (found by bisection), and an axis the line does not move
+    along is classified once per line; each cell is decided by the same float expressions
+    either way."""
     s0 = vdims[1] * vdims[2]
     s1 = vdims[2]
-    v = np.empty(3, dtype=np.int64)
-    y = np.empty(3)
+    m0, m1, m2 = g[0, 2] != 0.0, g[1, 2] != 0.0, g[2, 2] != 0.0
     nb = 0
+    k0, k1 = ilo[2], ilo[2] + idims[2]
     for a in range(idims[0]):
         i = ilo[0] + a
         for b in range(idims[1]):
@@ -115,29 +131,36 @@ def mark_unknown_centres(g, ilo, idims, lo, hi, phase, res, g0, known, vdims, si
             x0 = g[0, 0] * i + g[0, 1] * j
             x1 = g[1, 0] * i + g[1, 1] * j
             x2 = g[2, 0] * i + g[2, 1] * j
-            base = (i - glo[0]) * strides[0] + (j - glo[1]) * strides[1]
-            for c in range(idims[2]):
-                k = ilo[2] + c
-                y[0] = x0 + g[0, 2] * k
-                y[1] = x1 + g[1, 2] * k
-                y[2] = x2 + g[2, 2] * k
-                if not (lo[0] <= y[0] <= hi[0] and lo[1] <= y[1] <= hi[1]
-                        and lo[2] <= y[2] <= hi[2]):
-                    continue
-                unsure = False
-                for m in range(3):
-                    t = (y[m] - phase[m]) / res
-                    if not single[m] and _near_face(t, eps):
-                        unsure = True
-                    v[m] = min(max(np.int64(math.floor(t)) - g0[m], 0), vdims[m] - 1)
-                if unsure:
+            ka, kb = line_range(x0, g[0, 2], lo[0], hi[0], k0, k1)
+            ra, rb = line_range(x1, g[1, 2], lo[1], hi[1], ka, kb)
+            ka, kb = max(ka, ra), min(kb, rb)
+            ra, rb = line_range(x2, g[2, 2], lo[2], hi[2], ka, kb)
+            ka, kb = max(ka, ra), min(kb, rb)
+            if ka >= kb:
+                continue
+            base = (i - glo[0]) * strides[0] + (j - glo[1]) * strides[1] - glo[2] * strides[2]
+            # The axes the line does not move along, once (at any k: the same values).
+            v0, q0 = _voxel(x0, g[0, 2], ka, phase[0], res, g0[0], vdims[0], single[0], eps)
+            v1, q1 = _voxel(x1, g[1, 2], ka, phase[1], res, g0[1], vdims[1], single[1], eps)
+            v2, q2 = _voxel(x2, g[2, 2], ka, phase[2], res, g0[2], vdims[2], single[2], eps)
+            for k in range(ka, kb):
+                if m0:
+                    v0, q0 = _voxel(x0, g[0, 2], k, phase[0], res, g0[0], vdims[0], single[0],
+                                    eps)
+                if m1:
+                    v1, q1 = _voxel(x1, g[1, 2], k, phase[1], res, g0[1], vdims[1], single[1],
+                                    eps)
+                if m2:
+                    v2, q2 = _voxel(x2, g[2, 2], k, phase[2], res, g0[2], vdims[2], single[2],
+                                    eps)
+                if q0 or q1 or q2:
                     if nb < border.shape[0]:
                         border[nb, 0] = i
                         border[nb, 1] = j
                         border[nb, 2] = k
                     nb += 1
-                elif known[v[0] * s0 + v[1] * s1 + v[2]] == 0:
-                    grid[base + (k - glo[2]) * strides[2]] |= 1
+                elif known[v0 * s0 + v1 * s1 + v2] == 0:
+                    grid[base + k * strides[2]] |= 1
     return nb
 
 

@@ -170,59 +170,84 @@ def dilate_rows(grid, occ_flat, full_flat, row_start, row_len, diff
 
 
 @njit_cached
-def boundary_cells(grid, full_flat):  # pragma: no cover - compiled
-    """Flat positions (ascending) of the cells of ``grid`` with bit 1 set that have a full
-    neighbour (flat offsets ``full_flat``) without it: :func:`mark_boundary` found by a scan
-    of the grid instead of from a list of every marked cell."""
-    n = grid.shape[0]
-    count = 0
-    for phase in range(2):
-        out = np.empty(count, dtype=np.int64)
-        m = 0
-        for p in range(n):
-            if grid[p] & 1 == 0:
-                continue
-            for j in range(full_flat.shape[0]):
-                q = p + full_flat[j]
-                if 0 <= q < n and grid[q] & 1 == 0:
-                    if phase == 1:
-                        out[m] = p
-                    m += 1
-                    break
-        count = m
-    return out
+def _line_runs(grid, dims, fill, ry, rs, re, ptr):  # pragma: no cover - compiled
+    """The runs of cells with bit 1 set along the last axis of ``grid`` (C order over
+    ``dims`` (3,)): their count, and with ``fill`` each run's line ``ry`` (middle index),
+    start ``rs`` and end ``re`` (last index + 1), grouped by plane (first index) with
+    ``ptr`` (dims[0] + 1,) the start of each plane's runs."""
+    n1, n2 = dims[1], dims[2]
+    n = 0
+    for a in range(dims[0]):
+        if fill:
+            ptr[a] = n
+        for b in range(n1):
+            row = (a * n1 + b) * n2
+            c = 0
+            while c < n2:
+                if grid[row + c] & 1 == 0:
+                    c += 1
+                    continue
+                c0 = c
+                while c < n2 and grid[row + c] & 1:
+                    c += 1
+                if fill:
+                    ry[n] = b
+                    rs[n] = c0
+                    re[n] = c
+                n += 1
+    if fill:
+        ptr[dims[0]] = n
+    return n
 
 
 @njit_cached
-def dilate_row_slabs(grid, edge, row_start, row_len, slab, diff
-                     ):  # pragma: no cover - compiled
-    """:func:`dilate_rows` from the boundary cells ``edge`` (ascending flat positions),
-    one slab of ``slab`` cells (a whole number of rows) at a time: ``diff`` (int32, at least
-    ``slab + 1``) is reused per slab. A run starts and ends in one row, so each slab's
-    prefix sum starts at 0; the scratch is one slab instead of the whole grid."""
-    n = grid.shape[0]
-    lo_off = row_start.min()
-    hi_off = row_start.max()
-    first = 0
-    for f0 in range(0, n, slab):
-        f1 = min(n, f0 + slab)
-        diff[:f1 - f0 + 1] = 0
-        while first < edge.shape[0] and edge[first] + hi_off < f0:
-            first += 1
-        e = first
-        while e < edge.shape[0] and edge[e] + lo_off < f1:
-            p = edge[e]
-            for j in range(row_start.shape[0]):
-                a = p + row_start[j]
-                if f0 <= a < f1:
-                    diff[a - f0] += 1
-                    diff[a - f0 + row_len[j]] -= 1
-            e += 1
+def dilate_runs(grid, dims, sx, sy, sz, slen, sptr, diff):  # pragma: no cover - compiled
+    """OR bit 2 into every cell of ``grid`` (uint8, C order over ``dims`` (3,)) that some
+    cell with bit 1 reaches by an offset of a stencil given as runs along the last axis:
+    run ``r`` holds the offsets ``(sx[r], sy[r], sz[r] + [0, slen[r]))``, the runs sorted
+    by ``sx`` with ``sptr`` the start of each distinct ``sx`` (one past the last at the
+    end). The grid must hold every offset of every marked cell (no bounds checks).
+
+    The marked cells are taken as runs along the last axis too: a source run and a stencil
+    run cover one interval of one target line, written as +1 at its start and -1 after its
+    end into ``diff`` (int32, one plane of the grid + 1), one target plane at a time, and a
+    prefix sum over the plane marks their union. Work: source runs x stencil runs, on a
+    plane-sized scratch."""
+    n0, n1, n2 = dims[0], dims[1], dims[2]
+    none32 = np.empty(0, dtype=np.int32)
+    count = _line_runs(grid, dims, False, none32, none32, none32, np.empty(0, np.int64))
+    ry = np.empty(count, dtype=np.int32)
+    rs = np.empty(count, dtype=np.int32)
+    re = np.empty(count, dtype=np.int32)
+    ptr = np.empty(n0 + 1, dtype=np.int64)
+    _line_runs(grid, dims, True, ry, rs, re, ptr)
+    plane = n1 * n2
+    ngroups = sptr.shape[0] - 1
+    for xt in range(n0):
+        touched = False
+        for gi in range(ngroups):
+            xs = xt - sx[sptr[gi]]
+            if xs < 0 or xs >= n0 or ptr[xs] == ptr[xs + 1]:
+                continue
+            if not touched:
+                diff[:plane + 1] = 0
+                touched = True
+            for q in range(ptr[xs], ptr[xs + 1]):
+                yb = ry[q]
+                s = rs[q]
+                e = re[q]
+                for r in range(sptr[gi], sptr[gi + 1]):
+                    f = (yb + sy[r]) * n2 + sz[r]
+                    diff[f + s] += 1
+                    diff[f + e + slen[r] - 1] -= 1
+        if not touched:
+            continue
         run = 0
-        for f in range(f0, f1):
-            run += diff[f - f0]
+        off = xt * plane
+        for f in range(plane):
+            run += diff[f]
             if run > 0:
-                grid[f] |= 2
+                grid[off + f] |= 2
 
 
 @njit_cached

@@ -246,7 +246,7 @@ def unknown_box_grid(boxes: np.ndarray, box_sizes: np.ndarray, free_boxes: np.nd
     check_range(glo, ghi, 3)
     dims = ghi - glo + 1
     cells = float(np.prod(dims.astype(float)))
-    if known.nbytes + cells > budget:  # one byte a cell; the dilation scratch is a slab
+    if known.nbytes + cells > budget:  # one byte a cell; the dilation scratch is a plane
         return None
     strides = grid_strides(dims)
     grid = np.zeros(int(cells), dtype=np.uint8)
@@ -273,11 +273,14 @@ def unknown_box_grid(boxes: np.ndarray, box_sizes: np.ndarray, free_boxes: np.nd
     del known
     if radius is not None and radius > 0 and np.any(grid):
         runs = _stencil_runs(stencil)
-        if runs is not None:  # boundary cells by a scan; the run sums one slab at a time
-            edge = vk.boundary_cells(grid, full @ strides)
-            slab = int(dims[2]) * max(1, (1 << 22) // int(dims[2]))
-            vk.dilate_row_slabs(grid, edge, runs[0] @ strides, runs[1], slab,
-                                np.empty(slab + 1, dtype=np.int32))
+        if runs is not None:  # runs of cells times runs of the stencil, a plane at a time
+            starts, lengths = runs
+            order = np.lexsort((starts[:, 2], starts[:, 1], starts[:, 0]))
+            starts, lengths = starts[order], lengths[order]
+            sptr = np.flatnonzero(np.r_[True, starts[1:, 0] != starts[:-1, 0], True])
+            vk.dilate_runs(grid, dims, *(np.ascontiguousarray(starts[:, m]) for m in range(3)),
+                           np.ascontiguousarray(lengths), sptr.astype(np.int64),
+                           np.empty(int(dims[1] * dims[2]) + 1, dtype=np.int32))
         else:
             vk.dilate(grid, np.flatnonzero(grid), stencil @ strides, full @ strides)
     return grid, glo, dims
