@@ -103,7 +103,7 @@ def dense_astar(grid, lo, dims, ms, nodes, heap, dsl, st, max_nodes, max_exp, go
                 and b0 < d1 - reach and c0 < d2 - reach):
             for j in range(nu):
                 f = base + uoff[j]
-                free |= np.int64((grid[f >> 3] >> (f & 7)) & 1) << j
+                free |= np.int64((grid[np.uint64(f >> 3)] >> (f & 7)) & 1) << j
         else:
             for j in range(nu):
                 a = a0 + ust[j, 0]
@@ -126,16 +126,19 @@ def dense_astar(grid, lo, dims, ms, nodes, heap, dsl, st, max_nodes, max_exp, go
         for m in range(nm):
             if need[m] & blocked:
                 continue
-            loc = base + moff[m]  # an allowed move's target is free, hence in the box
+            # an allowed move's target is free, hence in the box; unsigned indices spare
+            # the negative-index fix-up on these loads
+            loc = np.uint64(base + moff[m])
             t = np.int64(dsl[loc]) - 1
             gt = gs + mcost[m]
             if t >= 0:
-                if npos[t] < 0 or gt >= ng[t]:
+                tu = np.uint64(t)
+                if npos[tu] < 0 or gt >= ng[tu]:
                     continue  # closed (a consistent heuristic never improves it) or no better
-                ng[t] = gt
-                f = np.floor((gt + nh[t]) * fq_inv + 0.5) * fq
-                nf[t] = f
-                npar[t] = s
+                ng[tu] = gt
+                f = np.floor((gt + nh[tu]) * fq_inv + 0.5) * fq
+                nf[tu] = f
+                npar[tu] = s
                 _heap.decrease_key(heap, npos, t, f, gt)
                 continue
             t = n

@@ -209,17 +209,17 @@ def _run(ctx, occ, walk, ms, start, goal, params, span, dense, pause_at, keep_go
     if keep_going is not None and pause_at > 0 and not 0 < params.max_expansions <= pause_at:
         first = _astar.SearchParams(params.anyangle, params.max_nodes, pause_at)
     nodes, heap, state = ctx.nodes, ctx.heap, ctx.state
-    kernel = _kernel(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state)
-    nodes, heap, slots, status = _loop(kernel, occ, walk, ms, nodes, heap, slots, sc, ufree,
-                                       first, ends, state)
-    if first is not params and status == RUN_BUDGET:
+    kernel = _kernel(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state, False)
+    nodes, heap, slots, out = _loop(kernel, occ, walk, ms, nodes, heap, slots, sc, ufree,
+                                    first, ends, state, first is not params)
+    if first is not params and out[0] == RUN_BUDGET:
         if keep_going():
-            nodes, heap, slots, status = _loop(kernel, occ, walk, ms, nodes, heap, slots, sc,
-                                               ufree, params, ends, state)
+            nodes, heap, slots, out = _loop(kernel, occ, walk, ms, nodes, heap, slots, sc,
+                                            ufree, params, ends, state, False)
         else:
-            status = RUN_STOPPED
-    path, cost, exp, n, look = _helper(finish, nodes, slots, state, True)(
-        nodes, slots, state, status == RUN_FOUND)
+            out = (RUN_STOPPED, *_helper(finish, nodes, slots, state, False)(
+                nodes, slots, state, False))
+    status, path, cost, exp, n, look = out
     if dslot is not None:  # finish cleared the touched cells: reuse the array
         _give_dense(occ, dslot)
     peak = ctx.nbytes if nodes is ctx.nodes and slots.pages is ctx.slots.pages else (
@@ -254,10 +254,10 @@ def _kernel(occ, walk, *args):
     grid, w, k = _LAST[0]  # one tuple, replaced whole: threads never see a mixed one
     if grid() is occ.grid and w is walk:
         return k
-    key = (struct_key(occ), struct_key(walk), struct_key(args[-3]))
+    key = (struct_key(occ), struct_key(walk), struct_key(args[-4]))
     k = _KERNELS.get(key)
     if k is None:
-        k = _KERNELS[key] = entry_point(_astar.search_run, (occ, walk, *args))
+        k = _KERNELS[key] = entry_point(_astar.search_call, (occ, walk, *args))
     _LAST[0] = (weakref.ref(occ.grid), walk, k)
     return k
 
@@ -270,13 +270,15 @@ def _helper(disp, *args):
     return k
 
 
-def _loop(kernel, occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state):
-    """Call the kernel until it stops asking for room; returns the final structs and
-    status."""
+def _loop(kernel, occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state,
+          pausing):
+    """Call the kernel until it stops asking for room; returns the final structs and the
+    kernel's answer (:func:`planner.search.astar.kernel.search_call`)."""
     nm = len(ms.moves)
     while True:
-        status = kernel(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state)
-        if status != RUN_GROW:
+        out = kernel(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state,
+                     pausing)
+        if out[0] != RUN_GROW:
             break
         n, npg = int(state[0]["nodes"]), int(state[0]["pages"])
         cap, pcap = len(nodes.key), len(slots.bkeys)
@@ -290,4 +292,4 @@ def _loop(kernel, occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st
                             np.full(2 * pcap, -1, np.int64), grown(slots.bkeys, pcap, npg),
                             *slots[3:])
             rehash(slots, npg)
-    return nodes, heap, slots, status
+    return nodes, heap, slots, out

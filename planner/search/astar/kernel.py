@@ -28,7 +28,15 @@ from planner.occupancy.grid import cell_free, occ_free
 from planner.occupancy.keys import mix64, pack3, unpack3
 from planner.search import _heap
 from planner.search._los import cubic_walk, is_cubic, sight
-from planner.search._nodes import PAGE, block_key, dense_index, find_slot, local, new_page
+from planner.search._nodes import (
+    PAGE,
+    block_key,
+    dense_index,
+    find_slot,
+    finish,
+    local,
+    new_page,
+)
 from planner.search.astar.dense import dense_astar
 from planner.search.heuristic import H_EUCLID, H_GAUGE, estimate, octile
 from planner.search.moves import MAX_BITS, move_allowed
@@ -362,3 +370,24 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state
     st.lookups = lookups
     st.status = status
     return status
+
+
+@njit_cached(nogil=True)  # threads search in parallel (search_many)
+def search_call(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state, pausing):
+    # pragma: no cover - compiled
+    """:func:`search_run`, and when its code is final also
+    :func:`planner.search._nodes.finish`: the one compiled call of a search that needs no
+    growth. ``pausing``: RUN_BUDGET is a pause (the caller decides whether to go on), not
+    final.
+
+    Returns
+    -------
+    tuple
+        ``(status, path, cost, expansions, nodes, lookups)``: finish's path, cost and
+        counts when final, else an empty path, inf and zeros (the state is kept).
+    """
+    status = search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state)
+    if status == RUN_GROW or (pausing and status == RUN_BUDGET):
+        return status, np.empty((0, 3), np.int64), np.inf, 0, 0, 0
+    path, cost, exp, n, look = finish(nodes, slots, state, status == RUN_FOUND)
+    return status, path, cost, exp, n, look
