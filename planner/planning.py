@@ -182,15 +182,16 @@ def plan(
     path_cells = res.cells
     checks = res.cell_checks
     seconds = res.seconds
-    raw_length = path_length(np.concatenate([s[None], lat.to_world(path_cells), g[None]]), 0.0)
+    path = np.concatenate([s[None], lat.to_world(path_cells), g[None]])
+    length = raw_length = path_length(path, 0.0)
     if shortcut and method in ("astar", "dijkstra"):
         t0 = time.perf_counter()
         before = world.cell_checks
         path_cells = search.shortcut(world, path_cells)
         checks += world.cell_checks - before
         seconds += time.perf_counter() - t0
-    path = np.concatenate([s[None], lat.to_world(path_cells), g[None]])
-    length = path_length(path, 0.0)
+        path = np.concatenate([s[None], lat.to_world(path_cells), g[None]])
+        length = path_length(path, 0.0)
     return PlanResult(
         found=True, path=path, cells=path_cells, length=length, cell_checks=checks,
         expansions=res.expansions, generated=res.generated, seconds=seconds,

@@ -368,8 +368,9 @@ def test_hash_storage_gives_same_results():
 
 @pytest.mark.parametrize("name", NAMED_LATTICES)
 def test_dense_and_paged_node_maps_agree(name, monkeypatch):
-    """The dense cell -> node array (reused and cleared between searches) and the paged map
-    give the same searches, repeated searches on one world included."""
+    """The dense cell -> node array (reused and cleared between searches; lattice methods
+    then run the dense-grid loop) and the paged map (the general loop) give the same
+    searches, repeated searches on one world included."""
     from planner.search.astar import driver as _driver
 
     world, s, g = _random_world(name, 3, n=6)
@@ -380,6 +381,8 @@ def test_dense_and_paged_node_maps_agree(name, monkeypatch):
     for a, b, c in zip(dense[0], dense[1], paged, strict=True):
         assert a.cost == b.cost == c.cost
         assert a.expansions == b.expansions == c.expansions
+        assert a.generated == b.generated == c.generated
+        assert a.cell_checks == b.cell_checks == c.cell_checks
         assert np.array_equal(a.cells, c.cells)
 
 
@@ -473,7 +476,7 @@ def test_every_lattice_shares_one_compiled_kernel():
             world.segment_free(world.lattice.to_world(s[None])[0], [0.5, 0.5, 0.5])
     # (segment_walk is left out: numba adds a specialisation per literal ``check`` flag
     # when other kernels call it, cheap and independent of the lattice.)
-    for kernel in (_astar.search_run, _los.shortcut_kernel, free_many):
+    for kernel in (_astar.search_call, _los.shortcut_kernel, free_many):
         assert len(kernel.signatures) == 1, (kernel, kernel.signatures)
 
 

@@ -9,7 +9,7 @@ locality.
 
 On a dense occupancy grid whose box fits ``planner.search.astar.driver.DENSE_SLOT_BUDGET`` the
 map is instead one int32 per grid cell (``SlotMap.dense``, one load per lookup), reused
-across the searches on that grid and cleared at the touched cells after each.
+across the searches on that grid and cleared at the touched cells after each (:func:`finish`).
 
 Both are fixed-size inside the kernels; the driver (:func:`planner.search.astar.driver.run`)
 doubles them when a kernel asks (``RUN_GROW``).
@@ -91,14 +91,6 @@ def dense_index(sm, v0, v1, v2):  # pragma: no cover - compiled
     return ((v0 - sm.lo[0]) * sm.dims[1] + (v1 - sm.lo[1])) * sm.dims[2] + (v2 - sm.lo[2])
 
 
-@njit_cached
-def clear_dense(sm, key, n):  # pragma: no cover - compiled
-    """Reset the dense slots of the first ``n`` nodes (packed cells ``key``) to none (0)."""
-    for i in range(n):
-        v0, v1, v2 = unpack3(key[i])
-        sm.dense[dense_index(sm, v0, v1, v2)] = 0
-
-
 @njit_cached(inline="always")
 def local(v0, v1, v2):  # pragma: no cover - compiled
     """Index of a cell inside its page."""
@@ -153,6 +145,41 @@ def rehash(sm, npages):  # pragma: no cover - compiled
         while btab[q] != _EMPTY:
             q = (q + 1) & bmask
         btab[q] = x
+
+
+@njit_cached
+def finish(nodes, sm, state, found):  # pragma: no cover - compiled
+    """End a search: its path and counts, and everything ready for the next search.
+
+    Returns ``(path, cost, expansions, nodes, lookups)``: the (K, 3) int64 cells from the
+    start to the goal node (``state``'s ``goal``; (0, 3) unless ``found``) and its cost
+    (m, inf unless ``found``). Then the dense slots of the search's nodes are reset to
+    none (0), or the paged map's block table emptied, and the counters of ``state`` (an
+    ``ASTAR_STATE`` (1,) array) zeroed but its ``stamp``, which keeps counting so that
+    stamped scratch needs no clearing."""
+    st = state[0]
+    n = st.nodes
+    if found:
+        path = trace_path(nodes, st.goal)
+        cost = nodes.g[st.goal]
+    else:
+        path = np.empty((0, 3), np.int64)
+        cost = np.inf
+    if sm.dense.shape[0] > 1:
+        for i in range(n):
+            v0, v1, v2 = unpack3(nodes.key[i])
+            sm.dense[dense_index(sm, v0, v1, v2)] = 0
+    else:
+        sm.btab[:] = _EMPTY
+    out = (path, cost, st.expansions, n, st.lookups)
+    st.nodes = 0
+    st.queued = 0
+    st.expansions = 0
+    st.lookups = 0
+    st.goal = 0
+    st.status = 0
+    st.pages = 0
+    return out
 
 
 @njit_cached

@@ -3,7 +3,8 @@ one list of its statuses, and the engines' kernel return codes with the status e
 
 Kernel codes (``RUN_*``) are what the compiled searches return; :data:`STATUS_OF_RUN` names
 the :attr:`SearchResult.status` of each final one. ``RUN_GROW`` is never final: the driver
-makes room and calls the kernel again.
+makes room and calls the kernel again; nor are ``RUN_BAD_START`` / ``RUN_BAD_GOAL`` (an end
+cell is not free): :func:`planner.search.search` raises the endpoint's PlanError.
 """
 
 from __future__ import annotations
@@ -13,7 +14,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 __all__ = ["STATUSES", "STATUS_OF_RUN", "SearchResult", "RUN_EXHAUSTED", "RUN_FOUND",
-           "RUN_LIMIT", "RUN_GROW", "RUN_BUDGET", "RUN_STOPPED", "RUN_BLOCKED"]
+           "RUN_LIMIT", "RUN_GROW", "RUN_BUDGET", "RUN_STOPPED", "RUN_BLOCKED", "RUN_BAD_START",
+           "RUN_BAD_GOAL"]
 
 STATUSES = ("found", "unreachable", "budget", "blocked")  # described on SearchResult.status
 
@@ -24,6 +26,8 @@ RUN_GROW = 3  # the kernel needs bigger arrays; call again after growing them
 RUN_BUDGET = 4  # the expansion budget was spent
 RUN_STOPPED = 5  # stopped at a pause: the goal is sealed in a small pocket (A* driver)
 RUN_BLOCKED = 6  # D* Lite: the start's own cell is blocked
+RUN_BAD_START = 7  # A*: the start cell is not free (never final: the caller raises)
+RUN_BAD_GOAL = 8  # A*: the goal cell is not free (never final: the caller raises)
 
 #: the :attr:`SearchResult.status` of each final kernel code
 STATUS_OF_RUN = {RUN_EXHAUSTED: "unreachable", RUN_FOUND: "found", RUN_LIMIT: "budget",

@@ -28,6 +28,7 @@ Examples
 from __future__ import annotations
 
 import math
+import os
 import time
 from typing import NamedTuple
 
@@ -51,6 +52,8 @@ from planner.search.moves import (
 )
 from planner.search.reference import search_networkx
 from planner.search.result import (
+    RUN_BAD_GOAL,
+    RUN_BAD_START,
     RUN_EXHAUSTED,
     RUN_FOUND,
     RUN_LIMIT,
@@ -167,18 +170,31 @@ def search(
         raise PlanError(f"unknown backend {backend!r}; expected numba or networkx")
     job = _prepare(world, method, neighbors, corner_cutting, max_nodes, max_expansions,
                    memory_budget, 1)
-    s = world.endpoint_cell(start_cell, "start")
-    gl = world.endpoint_cell(goal_cell, "goal")
+    compile_s = warm_up()
     if backend == "networkx":
+        s = world.endpoint_cell(start_cell, "start")
+        gl = world.endpoint_cell(goal_cell, "goal")
         if job.params.anyangle:
             raise PlanError("the networkx backend supports astar and dijkstra only")
         res = search_networkx(world, s, gl, job.ms, job.max_nodes or None)
         res.guarantee = job.guarantee
         return res
+    s, gl = _end_cell(start_cell, "start"), _end_cell(goal_cell, "goal")
     res, look = _run(world, s, gl, job.ms, job.params, job.max_nodes)
-    world.cell_checks += look
-    res.guarantee, res.compile_seconds = job.guarantee, job.compile_seconds
+    world.cell_checks += look + 2  # and the two endpoint checks the kernel made
+    res.guarantee, res.compile_seconds = job.guarantee, compile_s
     return res
+
+
+def _end_cell(cell, what: str) -> np.ndarray:
+    """A start or goal cell as (3,) int64 (PlanError for another shape or dtype); whether
+    it is free is checked by the kernel, which names it when not."""
+    if type(cell) is np.ndarray and cell.shape == (3,) and cell.dtype == np.int64:
+        return cell
+    c = as_cells(cell)
+    if len(c) != 1:
+        raise PlanError(f"{what} must be one cell (i, j, k), got shape {c.shape}")
+    return c[0]
 
 
 class _Job(NamedTuple):
@@ -188,25 +204,42 @@ class _Job(NamedTuple):
     params: SearchParams
     max_nodes: int  # the caller's node limit (0 none), for the result's reason
     guarantee: bool
-    compile_seconds: float
+
+
+_JOBS: dict[tuple, tuple] = {}  # the arguments of a call -> (lattice, its _Job)
 
 
 def _prepare(world: World, method: str, neighbors: str, corner_cutting: bool, max_nodes,
              max_expansions, memory_budget, workers: int) -> _Job:
     """Check the arguments shared by :func:`search` and :func:`search_many` and derive the
-    move set and kernel settings; ``workers`` concurrent searches share the memory budget."""
+    move set and kernel settings; ``workers`` concurrent searches share the memory budget.
+    Remembered per lattice and arguments (and the budget's environment variable): a
+    search's arguments are checked once, not on every call."""
+    lat = world.lattice
+    key = (id(lat), method, neighbors, corner_cutting, type(max_nodes), max_nodes,
+           type(max_expansions), max_expansions, type(memory_budget), memory_budget, workers,
+           os.environ.get(_budget.ENV))
+    try:
+        hit = _JOBS.get(key)
+    except TypeError:  # an unhashable argument: checked (and refused) below
+        hit = key = None
+    if hit is not None and hit[0] is lat:
+        return hit[1]
     if method not in METHODS:
         raise PlanError(f"unknown method {method!r}; expected one of {', '.join(METHODS)}")
-    compile_s = warm_up()
     max_nodes = _limit(max_nodes, "max_nodes")
     budget = _limit(memory_budget, "memory_budget") or default_memory_budget()
     budget_nodes = default_max_expansions(max(1, budget // workers))
     max_exp = _limit(max_expansions, "max_expansions") or budget_nodes
-    lat = world.lattice
     ms = move_set(lat, neighbors, corner_cutting, _HKIND[method])
     node_cap = min(max_nodes, budget_nodes) if max_nodes else budget_nodes
-    return _Job(ms, SearchParams(_ANYANGLE[method], node_cap, max_exp), max_nodes,
-                carries_guarantee(lat, neighbors, corner_cutting), compile_s)
+    job = _Job(ms, SearchParams(_ANYANGLE[method], node_cap, max_exp), max_nodes,
+               carries_guarantee(lat, neighbors, corner_cutting))
+    if key is not None:
+        if len(_JOBS) >= 256:
+            _JOBS.clear()
+        _JOBS[key] = (lat, job)
+    return job
 
 
 def _run(world: World, s: np.ndarray, gl: np.ndarray, ms, params: SearchParams,
@@ -223,15 +256,20 @@ def _run(world: World, s: np.ndarray, gl: np.ndarray, ms, params: SearchParams,
         return p is None
 
     t0 = time.perf_counter()
-    status, cells, cost, st, peak = _driver.run(chk.occupancy, chk.walk, ms, s, gl, params,
-                                               _span(world) if params.anyangle else 0.0,
-                                               pause_at=PROBE_AFTER, keep_going=goal_open)
+    status, cells, cost, counts, peak = _driver.run(chk.occupancy, chk.walk, ms, s, gl, params,
+                                                   _span(world) if params.anyangle else 0.0,
+                                                   pause_at=PROBE_AFTER, keep_going=goal_open)
     secs = time.perf_counter() - t0
-    exp, gen, look = int(st["expansions"]), int(st["nodes"]), int(st["lookups"])
+    exp, gen, look = counts
     checks = look + 2  # and the two endpoint checks
-    none = np.zeros((0, 3), np.int64)
     if status == RUN_FOUND:
         return SearchResult(True, cells, cost, checks, exp, gen, secs, peak), look
+    if status == RUN_BAD_START or status == RUN_BAD_GOAL:
+        what = "start" if status == RUN_BAD_START else "goal"
+        cell = s if status == RUN_BAD_START else gl
+        world.endpoint_cell(cell, what)  # raises the endpoint's error
+        raise PlanError(f"{what} cell {cell.tolist()} is not free")  # pragma: no cover
+    none = np.zeros((0, 3), np.int64)
     if status == RUN_STOPPED:  # the goal is sealed in a small pocket
         n, probe_look = pocket[0]
         return SearchResult(False, none, math.inf, checks + probe_look, exp, gen, secs, peak,
@@ -284,8 +322,7 @@ def search_many(
     list of SearchResult, length Q, in query order
         Their lookups are also added to ``world.cell_checks``.
     """
-    import os  # local: only search_many runs threads
-    from concurrent.futures import ThreadPoolExecutor
+    from concurrent.futures import ThreadPoolExecutor  # local: only search_many runs threads
 
     a, b = as_cells(start_cells), as_cells(goal_cells)
     if a.shape != b.shape:
@@ -297,6 +334,7 @@ def search_many(
     workers = max(1, min(_limit(workers, "workers"), len(a)))
     job = _prepare(world, method, neighbors, corner_cutting, max_nodes, max_expansions,
                    memory_budget, workers)
+    compile_s = warm_up()
     for i in range(len(a)):
         world.endpoint_cell(a[i], f"query {i}: start")
         world.endpoint_cell(b[i], f"query {i}: goal")
@@ -313,7 +351,7 @@ def search_many(
     for i, (res, look) in enumerate(done):
         world.cell_checks += look
         res.guarantee = job.guarantee
-        res.compile_seconds = job.compile_seconds if i == 0 else 0.0
+        res.compile_seconds = compile_s if i == 0 else 0.0
         out.append(res)
     return out
 
@@ -332,11 +370,12 @@ def _goal_pocket(world: World, ms, start, goal) -> tuple[int, int] | None:
     its time, well under a millisecond, is). Nothing is written to the world.
     The moves are symmetric (the same cells are checked either way), so this is exact."""
     chk = world.checker
-    status, _, _, st, _ = _driver.run(chk.occupancy, chk.walk, ms, goal, start,
-                                      SearchParams(0, 0, GOAL_PROBE), 0.0, dense=False)
+    status, _, _, (_, nodes, lookups), _ = _driver.run(
+        chk.occupancy, chk.walk, ms, goal, start, SearchParams(0, 0, GOAL_PROBE), 0.0,
+        dense=False)
     if status != RUN_EXHAUSTED:
         return None
-    return int(st["nodes"]), int(st["lookups"])
+    return nodes, lookups
 
 
 def _span(world: World) -> float:

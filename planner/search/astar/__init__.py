@@ -1,2 +1,3 @@
 """A*, Dijkstra, Theta* and Lazy Theta*: the resumable kernel with its any-angle rules
-(:mod:`~.kernel`) and the Python driver that sizes its arrays (:mod:`~.driver`)."""
+(:mod:`~.kernel`), its loop for lattice methods on dense grids (:mod:`~.dense`) and the
+Python driver that keeps and sizes its arrays (:mod:`~.driver`)."""

@@ -1,9 +1,15 @@
-"""Python driver of the resumable search kernel: allocates the structs, grows them when the
-kernel asks, and traces the path."""
+"""Python driver of the resumable search kernel: keeps each thread's kernel arrays between
+searches, grows them when the kernel asks, and traces the path.
+
+A search's fixed cost is what it pays outside the expansions, so nothing here is allocated
+per call: each thread keeps a :class:`_Context` (node table, heap, paged slot map, state,
+scratch) whose arrays the next search on that thread reuses, and a dense grid's cell -> slot
+array is pooled per grid. Arrays grown past :data:`KEEP_NODES` for a long search are dropped
+afterwards, so an idle thread never holds more than a short search's memory.
+"""
 
 from __future__ import annotations
 
-import math
 import mmap
 import threading
 import weakref
@@ -21,24 +27,77 @@ from planner.search._nodes import (
     PAGE,
     NodeTable,
     SlotMap,
-    clear_dense,
+    finish,
     new_nodes,
     new_slots,
     rehash,
-    trace_path,
 )
 from planner.search._state import new_state
 from planner.search.astar import kernel as _astar
 from planner.search.result import RUN_BUDGET, RUN_FOUND, RUN_GROW, RUN_STOPPED
 
+__all__ = ["run", "DENSE_SLOT_BUDGET", "KEEP_NODES"]
+
 #: largest dense cell -> slot array (bytes, int32 per grid cell); bigger grids use pages.
 DENSE_SLOT_BUDGET = 512 * 2**20
+#: node capacity a thread keeps between searches (larger arrays are dropped after use)
+KEEP_NODES = 1 << 16
+_CAP, _PCAP = 4096, 64  # initial node and page capacity
 
 # One dense slot array per dense occupancy grid, reused across searches (cleared after each
 # search at the cells it touched, so a search never pays for the whole box). Taken out of
 # the pool while a search uses it: concurrent searches on one world get their own.
 _POOL: dict[int, np.ndarray] = {}
 _LOCK = threading.Lock()
+_WATCHED: set[int] = set()
+
+
+class _Context:
+    """One thread's kernel arrays, reused by its next search (module docstring)."""
+
+    __slots__ = ("nodes", "heap", "slots", "state", "ufree", "ends", "sc", "sc_key", "nbytes")
+
+    def __init__(self):
+        self.nodes = new_nodes(_CAP)
+        self.heap = new_heap(_CAP)
+        self.slots = new_slots(_PCAP)
+        self.state = new_state(ASTAR_STATE)
+        self.ufree = np.empty(64, np.bool_)
+        self.ends = np.empty((2, 3), np.int64)
+        self.sc = _no_sight()
+        self.sc_key = None
+        self.nbytes = self._bytes()
+
+    def _bytes(self) -> int:
+        return (_nbytes(self.nodes) + _nbytes(self.heap) + _nbytes(self.slots[:3])
+                + self.ufree.nbytes + self.state.nbytes)
+
+    def keep(self, nodes, heap, slots) -> None:
+        """Keep the arrays a search grew, up to the kept size (module docstring)."""
+        if len(nodes.key) > KEEP_NODES:
+            nodes, heap = new_nodes(_CAP), new_heap(_CAP)
+        if len(slots.bkeys) > KEEP_NODES // 8:
+            slots = new_slots(_PCAP)
+        self.nodes, self.heap, self.slots = nodes, heap, SlotMap(*slots[:3], *self.slots[3:])
+        self.nbytes = self._bytes()
+
+
+_LOCAL = threading.local()
+
+
+def _context() -> _Context:
+    """This thread's free context (a new one when a search is already running on it, e.g.
+    the goal probe inside a paused search)."""
+    free = getattr(_LOCAL, "free", None)
+    if free is None:
+        free = _LOCAL.free = []
+    return free.pop() if free else _Context()
+
+
+def _release(ctx: _Context) -> None:
+    free = _LOCAL.free
+    if len(free) < 2:
+        free.append(ctx)
 
 
 _NO_SIGHT: list = []
@@ -51,16 +110,27 @@ def _no_sight():
     return _NO_SIGHT[0]
 
 
+def _sight(ctx: _Context, walk, span: float):
+    """The any-angle sight scratch for ``walk`` and ``span``: kept in the context while the
+    thread searches the same world."""
+    if span <= 0 or np.array_equal(walk.g, walk.g[0, 0] * np.eye(3)):
+        return _no_sight()  # cubic sight lines need no scratch
+    key = (id(walk), span)
+    if ctx.sc_key != key:
+        ctx.sc, ctx.sc_key = new_scratch(span, walk), key
+    return ctx.sc
+
+
 def _take_dense(occ) -> np.ndarray | None:
-    cells = int(np.prod(occ.dims))  # the occupancy grid holds one bit per cell
-    if occ.mode != 0 or 4 * cells > DENSE_SLOT_BUDGET:
-        return None
     key = id(occ.grid)
     with _LOCK:
         a = _POOL.pop(key, None)
-    if a is None:
-        a = _lazy_zeros(cells)
-    return a
+    if a is not None:
+        return a
+    cells = int(np.prod(occ.dims))  # the occupancy grid holds one bit per cell
+    if occ.mode != 0 or 4 * cells > DENSE_SLOT_BUDGET:
+        return None
+    return _lazy_zeros(cells)
 
 
 def _lazy_zeros(n: int) -> np.ndarray:
@@ -85,9 +155,6 @@ def _forget(key: int) -> None:
         _WATCHED.discard(key)
 
 
-_WATCHED: set[int] = set()
-
-
 def _give_dense(occ, a: np.ndarray) -> None:
     """Return a cleared dense slot array to the pool (dropped when the grid is freed)."""
     key = id(occ.grid)
@@ -99,8 +166,8 @@ def _give_dense(occ, a: np.ndarray) -> None:
         weakref.finalize(occ.grid, _forget, key)
 
 
-def run(occ, walk, ms, start, goal, params, span: float, cap: int = 4096, *,
-        dense: bool = True, pause_at: int = 0, keep_going=None):
+def run(occ, walk, ms, start, goal, params, span: float, *, dense: bool = True,
+        pause_at: int = 0, keep_going=None):
     """Run one search to completion. ``span``: longest sight line (m) the any-angle scratch
     is sized for (0 for lattice A*).
 
@@ -114,57 +181,53 @@ def run(occ, walk, ms, start, goal, params, span: float, cap: int = 4096, *,
     -------
     status : int
         A ``RUN_*`` code of :mod:`planner.search.result` (never RUN_GROW; RUN_STOPPED
-        when ``keep_going`` said stop).
+        when ``keep_going`` said stop; RUN_BAD_START / RUN_BAD_GOAL when that end is not
+        free, before any expansion).
     cells : ndarray (K, 3) int64 or None
         Path cells from start to goal when found.
     cost : float
-    st : numpy record (``planner.search._nodes.ASTAR_STATE``)
-        Final kernel state (counts).
+    counts : tuple of int
+        ``(expansions, nodes, lookups)`` of the search.
     peak : int
         Bytes of the search's own arrays at the end (their peak: they only grow).
     """
-    nodes = new_nodes(cap)
-    heap = new_heap(cap)
-    pcap = 64  # pages of the cell -> node slot map
-    dense = _take_dense(occ) if dense else None
-    slots = new_slots(pcap) if dense is None else new_slots(pcap, dense, occ.lo, occ.dims)
-    state = new_state(ASTAR_STATE)
-    # The walk scratch serves the generic line of sight; cubic sight lines need none.
-    if span > 0 and not np.array_equal(walk.g, walk.g[0, 0] * np.eye(3)):
-        sc = new_scratch(span, walk)
-    else:
-        sc = _no_sight()
-    ufree = np.empty(len(ms.union), np.bool_)
-    ends = np.empty((2, 3), np.int64)
-    ends[0], ends[1] = start, goal
+    ctx = _context()
+    out = _run(ctx, occ, walk, ms, start, goal, params, span, dense, pause_at, keep_going)
+    _release(ctx)  # not after an exception: a context left mid-search is dropped
+    return out
+
+
+def _run(ctx, occ, walk, ms, start, goal, params, span, dense, pause_at, keep_going):
+    ends = ctx.ends
+    ends[0] = start
+    ends[1] = goal
+    sc = _sight(ctx, walk, span) if span > 0 else _no_sight()
+    ufree = ctx.ufree if len(ms.union) <= len(ctx.ufree) else np.empty(len(ms.union), bool)
+    dslot = _take_dense(occ) if dense else None
+    slots = ctx.slots if dslot is None else SlotMap(*ctx.slots[:3], dslot, occ.lo, occ.dims)
     first = params
     if keep_going is not None and pause_at > 0 and not 0 < params.max_expansions <= pause_at:
-        first = params._replace(max_expansions=pause_at)
-    kernel = _kernel(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state)
-    parts = _loop(kernel, occ, walk, ms, nodes, heap, slots, sc, ufree, first, ends, state,
-                  cap, pcap)
-    nodes, heap, slots, status = parts
-    if first is not params and status == RUN_BUDGET:
+        first = _astar.SearchParams(params.anyangle, params.max_nodes, pause_at)
+    nodes, heap, state = ctx.nodes, ctx.heap, ctx.state
+    kernel = _kernel(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state, False)
+    nodes, heap, slots, out = _loop(kernel, occ, walk, ms, nodes, heap, slots, sc, ufree,
+                                    first, ends, state, first is not params)
+    if first is not params and out[0] == RUN_BUDGET:
         if keep_going():
-            parts = _loop(kernel, occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends,
-                          state, len(nodes.key), len(slots.bkeys))
-            nodes, heap, slots, status = parts
+            nodes, heap, slots, out = _loop(kernel, occ, walk, ms, nodes, heap, slots, sc,
+                                            ufree, params, ends, state, False)
         else:
-            status = RUN_STOPPED
-    peak = _nbytes(nodes) + _nbytes(heap) + _nbytes(slots) + _nbytes(sc) + ufree.nbytes
-    peak += state.nbytes
-    st = state[0]
-    path = None
-    if status == RUN_FOUND:
-        gs = int(st["goal"])
-        path, cost = _helper(trace_path, nodes, gs)(nodes, gs), float(nodes.g[gs])
-    if dense is not None:  # every touched cell holds a node: clear those, reuse the array
-        n = int(st["nodes"])
-        _helper(clear_dense, slots, nodes.key, n)(slots, nodes.key, n)
-        _give_dense(occ, dense)
-    if path is None:
-        return status, None, math.inf, st, peak
-    return status, path, cost, st, peak
+            out = (RUN_STOPPED, *_helper(finish, nodes, slots, state, False)(
+                nodes, slots, state, False))
+    status, path, cost, exp, n, look = out
+    if dslot is not None:  # finish cleared the touched cells: reuse the array
+        _give_dense(occ, dslot)
+    peak = ctx.nbytes if nodes is ctx.nodes and slots.pages is ctx.slots.pages else (
+        _nbytes(nodes) + _nbytes(heap) + _nbytes(slots[:3]) + ufree.nbytes + state.nbytes)
+    peak += (0 if sc is _no_sight() else _nbytes(sc)) + (0 if dslot is None else dslot.nbytes)
+    if nodes is not ctx.nodes or slots.pages is not ctx.slots.pages:
+        ctx.keep(nodes, heap, slots)
+    return status, (path if status == RUN_FOUND else None), cost, (exp, n, look), peak
 
 
 def _nbytes(struct) -> int:
@@ -191,32 +254,34 @@ def _kernel(occ, walk, *args):
     grid, w, k = _LAST[0]  # one tuple, replaced whole: threads never see a mixed one
     if grid() is occ.grid and w is walk:
         return k
-    key = (struct_key(occ), struct_key(walk), struct_key(args[-3]))
+    key = (struct_key(occ), struct_key(walk), struct_key(args[-4]))
     k = _KERNELS.get(key)
     if k is None:
-        k = _KERNELS[key] = entry_point(_astar.search_run, (occ, walk, *args))
+        k = _KERNELS[key] = entry_point(_astar.search_call, (occ, walk, *args))
     _LAST[0] = (weakref.ref(occ.grid), walk, k)
     return k
 
 
 def _helper(disp, *args):
-    """The compiled ``disp`` (trace_path, clear_dense) for the driver's argument types."""
+    """The compiled ``disp`` (finish) for the driver's argument types."""
     k = _HELPERS.get(disp)
     if k is None:
         k = _HELPERS[disp] = entry_point(disp, args)
     return k
 
 
-def _loop(kernel, occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state, cap,
-          pcap):
-    """Call the kernel until it stops asking for room; returns the final structs and
-    status."""
+def _loop(kernel, occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state,
+          pausing):
+    """Call the kernel until it stops asking for room; returns the final structs and the
+    kernel's answer (:func:`planner.search.astar.kernel.search_call`)."""
     nm = len(ms.moves)
     while True:
-        status = kernel(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state)
-        if status != RUN_GROW:
+        out = kernel(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state,
+                     pausing)
+        if out[0] != RUN_GROW:
             break
         n, npg = int(state[0]["nodes"]), int(state[0]["pages"])
+        cap, pcap = len(nodes.key), len(slots.bkeys)
         if n + nm > cap:
             cap *= 2
             nodes = NodeTable(*(grown(a, cap, n) for a in nodes))
@@ -227,7 +292,4 @@ def _loop(kernel, occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, st
                             np.full(2 * pcap, -1, np.int64), grown(slots.bkeys, pcap, npg),
                             *slots[3:])
             rehash(slots, npg)
-    return nodes, heap, slots, status
-
-
-__all__ = ["run", "DENSE_SLOT_BUDGET"]
+    return nodes, heap, slots, out

@@ -9,10 +9,12 @@ Lazy Theta* (``anyangle`` 2) assumes the sight line and verifies it once, when t
 expanded, falling back to its best closed lattice neighbour (SetVertex). Both use the
 Euclidean heuristic and the exact walk of :mod:`planner.search._los`.
 
-The expansion loop writes out its hot parts (the dense lookups, the safe-rule test, the
-slot lookup, the heuristic of a new node, the any-angle g) instead of calling the shared
-inline helpers (:mod:`planner.search.heuristic`, ...): with them the loop compiled to a
-markedly slower one on cubic-26 (``benchmarks/search_speed.py``).
+Lattice A* / Dijkstra on a dense grid runs the loop of :mod:`planner.search.astar.dense`,
+written for that case alone. The general loop here writes out its hot parts (the dense
+lookups, the safe-rule test, the slot lookup, the heuristic of a new node, the any-angle
+g) instead of calling the shared inline helpers (:mod:`planner.search.heuristic`, ...):
+with them the loop compiled to a markedly slower one on cubic-26
+(``benchmarks/search_speed.py``).
 """
 
 from __future__ import annotations
@@ -22,14 +24,31 @@ from typing import NamedTuple
 import numpy as np
 
 from planner._numba import njit_cached
-from planner.occupancy.grid import cell_free
+from planner.occupancy.grid import cell_free, occ_free
 from planner.occupancy.keys import mix64, pack3, unpack3
 from planner.search import _heap
 from planner.search._los import cubic_walk, is_cubic, sight
-from planner.search._nodes import PAGE, block_key, dense_index, find_slot, local, new_page
+from planner.search._nodes import (
+    PAGE,
+    block_key,
+    dense_index,
+    find_slot,
+    finish,
+    local,
+    new_page,
+)
+from planner.search.astar.dense import dense_astar
 from planner.search.heuristic import H_EUCLID, H_GAUGE, estimate, octile
 from planner.search.moves import MAX_BITS, move_allowed
-from planner.search.result import RUN_BUDGET, RUN_EXHAUSTED, RUN_FOUND, RUN_GROW, RUN_LIMIT
+from planner.search.result import (
+    RUN_BAD_GOAL,
+    RUN_BAD_START,
+    RUN_BUDGET,
+    RUN_EXHAUSTED,
+    RUN_FOUND,
+    RUN_GROW,
+    RUN_LIMIT,
+)
 
 _EMPTY = -1
 THETA, LAZY_THETA = 1, 2  # SearchParams.anyangle
@@ -88,8 +107,9 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state
         Scratch for the union stencil lookups of one expansion.
     params : SearchParams
     ends : (2, 3) int64
-        Start and goal cells. The first call (``nodes == 0``) puts the start in the
-        empty structs (:func:`search_init`): one kernel call per search instead of two.
+        Start and goal cells. The first call (``nodes == 0``) checks that both are free
+        (else it returns RUN_BAD_START or RUN_BAD_GOAL; no lookup counted) and puts the
+        start in the empty structs (:func:`search_init`): one kernel call per search.
     state : (1,) ``planner.search._nodes.ASTAR_STATE``
         The search's counters (:mod:`planner.search._state`); the code returned is also
         left in ``status``.
@@ -97,12 +117,26 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state
     Returns
     -------
     int
-        RUN_FOUND, RUN_EXHAUSTED, RUN_LIMIT, RUN_BUDGET or RUN_GROW.
+        RUN_FOUND, RUN_EXHAUSTED, RUN_LIMIT, RUN_BUDGET, RUN_GROW, RUN_BAD_START or
+        RUN_BAD_GOAL.
     """
     st = state[0]
     goal = ends[1]
     if st.nodes == 0:
-        search_init(ends[0], goal, ms, walk.g, nodes, heap, slots, st)
+        start = ends[0]
+        if not occ_free(occ, start[0], start[1], start[2]):
+            st.status = RUN_BAD_START
+            return RUN_BAD_START
+        if not occ_free(occ, goal[0], goal[1], goal[2]):
+            st.status = RUN_BAD_GOAL
+            return RUN_BAD_GOAL
+        search_init(start, goal, ms, walk.g, nodes, heap, slots, st)
+    if (params.anyangle == 0 and occ.mode == 0 and slots.dense.shape[0] > 1
+            and ms.union.shape[0] <= MAX_BITS and ms.hkind != H_EUCLID):
+        status = dense_astar(occ.grid, occ.lo, occ.dims, ms, nodes, heap, slots.dense, st,
+                             params.max_nodes, params.max_expansions, goal)
+        st.status = status
+        return status
     mode, grid, lo, dims, otable, otmask, gg, blo, bhi = occ
     lo0, lo1, lo2 = lo[0], lo[1], lo[2]
     d0, d1, d2 = dims[0], dims[1], dims[2]
@@ -336,3 +370,24 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state
     st.lookups = lookups
     st.status = status
     return status
+
+
+@njit_cached(nogil=True)  # threads search in parallel (search_many)
+def search_call(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state, pausing):
+    # pragma: no cover - compiled
+    """:func:`search_run`, and when its code is final also
+    :func:`planner.search._nodes.finish`: the one compiled call of a search that needs no
+    growth. ``pausing``: RUN_BUDGET is a pause (the caller decides whether to go on), not
+    final.
+
+    Returns
+    -------
+    tuple
+        ``(status, path, cost, expansions, nodes, lookups)``: finish's path, cost and
+        counts when final, else an empty path, inf and zeros (the state is kept).
+    """
+    status = search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state)
+    if status == RUN_GROW or (pausing and status == RUN_BUDGET):
+        return status, np.empty((0, 3), np.int64), np.inf, 0, 0, 0
+    path, cost, exp, n, look = finish(nodes, slots, state, status == RUN_FOUND)
+    return status, path, cost, exp, n, look

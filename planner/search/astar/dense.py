@@ -1,0 +1,171 @@
+"""The lattice A* / Dijkstra loop on a dense occupancy grid (numba): the A* kernel's
+(:mod:`planner.search.astar.kernel`) path for its commonest case, written for that case
+alone.
+
+It runs when the world is a dense bit grid, the cell -> slot map is dense too (one int32
+per grid cell), the move set's union stencil fits a bit mask (``MoveSet.need``) and the
+method has no any-angle rule. Per expansion it reads the union stencil once into a mask of
+free cells (without bounds tests away from the box faces), tests each move as one AND with
+the cells it needs, finds the target's node in one load of the dense slot array, and makes
+a new node's key by adding the move's key offset (packed keys are linear in the cell
+while a cell stays inside the key range). Same expansions, costs, paths and lookups as the
+general loop: one stays the reference of the other (``tests/test_search.py``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from planner._numba import njit_cached
+from planner.occupancy.keys import pack3, unpack3
+from planner.search import _heap
+from planner.search.heuristic import H_GAUGE, octile
+from planner.search.result import RUN_BUDGET, RUN_EXHAUSTED, RUN_FOUND, RUN_GROW, RUN_LIMIT
+
+__all__ = ["dense_astar"]
+
+
+@njit_cached
+def dense_astar(grid, lo, dims, ms, nodes, heap, dsl, st, max_nodes, max_exp, goal):
+    # pragma: no cover - compiled
+    """Run the search from the kernel's state ``st`` until it ends or needs room.
+
+    Parameters
+    ----------
+    grid : (ceil(n / 8),) uint8
+        The dense occupancy bits (:class:`planner.occupancy.grid.Occupancy`), box ``lo``
+        (3,) int64 and ``dims`` (3,) int64.
+    ms : MoveSet
+        With ``len(ms.union) <= 63``.
+    nodes : NodeTable
+    heap : planner.search._heap.Heap
+    dsl : (prod(dims),) int32
+        Dense cell -> node slot + 1 (0: none) over the grid's box.
+    st : ``ASTAR_STATE`` record
+        The search's counters; the start node is already in place.
+    max_nodes, max_expansions : int
+        Limits (<= 0: none).
+    goal : (3,) int64
+
+    Returns
+    -------
+    int
+        RUN_FOUND, RUN_EXHAUSTED, RUN_LIMIT, RUN_BUDGET or RUN_GROW.
+    """
+    lo0, lo1, lo2 = lo[0], lo[1], lo[2]
+    d0, d1, d2 = dims[0], dims[1], dims[2]
+    moves, mcost, ust, need, hmat = ms.moves, ms.cost, ms.union, ms.need, ms.hmat
+    oct_s = ms.octile
+    gauge = ms.hkind == H_GAUGE and oct_s <= 0.0
+    nkey, ng, nf, nh, npar, npos = nodes
+    nfac = hmat.shape[0]
+    nu = ust.shape[0]
+    nm = moves.shape[0]
+    cap = nkey.shape[0]
+    gl0, gl1, gl2 = goal[0], goal[1], goal[2]
+    gk = pack3(gl0, gl1, gl2)
+    # Each stencil cell and move as one offset into the grid (x slowest), each move as one
+    # offset of the packed key, and a margin inside which no stencil cell leaves the box.
+    uoff = np.empty(nu, np.int64)
+    reach = 0
+    for j in range(nu):
+        uoff[j] = (ust[j, 0] * d1 + ust[j, 1]) * d2 + ust[j, 2]
+        reach = max(reach, abs(ust[j, 0]), abs(ust[j, 1]), abs(ust[j, 2]))
+    moff = np.empty(nm, np.int64)
+    mkey = np.empty(nm, np.int64)
+    for m in range(nm):
+        moff[m] = (moves[m, 0] * d1 + moves[m, 1]) * d2 + moves[m, 2]
+        mkey[m] = (moves[m, 0] << 42) + (moves[m, 1] << 21) + moves[m, 2]
+    all_u = (np.int64(1) << nu) - 1
+    fq = 1e-9 * mcost.min()
+    fq_inv = 1.0 / fq
+    n = st.nodes
+    hn = st.queued
+    expansions = st.expansions
+    lookups = st.lookups
+    status = RUN_EXHAUSTED
+    while hn > 0:
+        if n + nm > cap:
+            status = RUN_GROW
+            break
+        if max_exp > 0 and expansions >= max_exp:
+            status = RUN_BUDGET
+            break
+        s, hn = _heap.pop(heap, npos, hn)
+        npos[s] = -1
+        expansions += 1
+        ks = nkey[s]
+        u0, u1, u2 = unpack3(ks)
+        a0, b0, c0 = u0 - lo0, u1 - lo1, u2 - lo2
+        base = (a0 * d1 + b0) * d2 + c0
+        free = np.int64(0)
+        if (a0 >= reach and b0 >= reach and c0 >= reach and a0 < d0 - reach
+                and b0 < d1 - reach and c0 < d2 - reach):
+            for j in range(nu):
+                f = base + uoff[j]
+                free |= np.int64((grid[np.uint64(f >> 3)] >> (f & 7)) & 1) << j
+        else:
+            for j in range(nu):
+                a = a0 + ust[j, 0]
+                b = b0 + ust[j, 1]
+                c = c0 + ust[j, 2]
+                if a >= 0 and b >= 0 and c >= 0 and a < d0 and b < d1 and c < d2:
+                    f = (a * d1 + b) * d2 + c
+                    free |= np.int64((grid[f >> 3] >> (f & 7)) & 1) << j
+        blocked = all_u & ~free
+        lookups += nu
+        if ks == gk:
+            status = RUN_FOUND
+            st.goal = s
+            break
+        if max_nodes > 0 and n >= max_nodes:
+            status = RUN_LIMIT
+            break
+        gs = ng[s]
+        e0, e1, e2 = gl0 - u0, gl1 - u1, gl2 - u2
+        for m in range(nm):
+            if need[m] & blocked:
+                continue
+            # an allowed move's target is free, hence in the box; unsigned indices spare
+            # the negative-index fix-up on these loads
+            loc = np.uint64(base + moff[m])
+            t = np.int64(dsl[loc]) - 1
+            gt = gs + mcost[m]
+            if t >= 0:
+                tu = np.uint64(t)
+                if npos[tu] < 0 or gt >= ng[tu]:
+                    continue  # closed (a consistent heuristic never improves it) or no better
+                ng[tu] = gt
+                f = np.floor((gt + nh[tu]) * fq_inv + 0.5) * fq
+                nf[tu] = f
+                npar[tu] = s
+                _heap.decrease_key(heap, npos, t, f, gt)
+                continue
+            t = n
+            n += 1
+            dsl[loc] = t + 1
+            nkey[t] = ks + mkey[m]
+            x0 = e0 - moves[m, 0]
+            x1 = e1 - moves[m, 1]
+            x2 = e2 - moves[m, 2]
+            hv = 0.0
+            if oct_s > 0.0:
+                hv = octile(oct_s, x0, x1, x2)
+            elif gauge:
+                for k in range(nfac):
+                    x = hmat[k, 0] * x0 + hmat[k, 1] * x1 + hmat[k, 2] * x2
+                    if x > hv:
+                        hv = x
+            nh[t] = hv
+            ng[t] = gt
+            # f on a 1e-9-cell grid: equal-cost paths tie exactly (float noise would
+            # otherwise decide), so the larger-g tie-break can dive; costs stay exact.
+            f = np.floor((gt + hv) * fq_inv + 0.5) * fq
+            nf[t] = f
+            npar[t] = s
+            hn = _heap.push(heap, npos, hn, t, f, gt)
+    st.nodes = n
+    st.queued = hn
+    st.expansions = expansions
+    st.lookups = lookups
+    return status
