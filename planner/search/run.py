@@ -1,5 +1,5 @@
 """Running a search: :func:`search` and :func:`search_many` (A*, Dijkstra, Theta*, Lazy
-Theta*) and :func:`shortcut`, over the kernel of :mod:`planner.search.astar`.
+Theta*, weighted Lazy Theta*) and :func:`shortcut`, over the kernel of :mod:`planner.search.astar`.
 
 Nodes are lattice cells, edges the offsets ``lattice.neighbors(neighbors)``, edge cost the
 Euclidean distance between cell centres (m). The movement rule, the radius guarantee and
@@ -58,15 +58,18 @@ from planner.search.result import (
     STATUS_OF_RUN,
     SearchResult,
 )
+from planner.search.weighted import weighted_search
 from planner.world.world import World
 
 __all__ = ["SearchResult", "search", "search_many", "shortcut", "warm_up", "move_stencils",
            "move_heuristic", "METHODS", "carries_guarantee", "default_memory_budget",
            "default_max_expansions"]
 
-METHODS = ("astar", "dijkstra", "theta", "lazy-theta")
-_ANYANGLE = {"astar": 0, "dijkstra": 0, "theta": THETA, "lazy-theta": LAZY_THETA}
-_HKIND = {"astar": H_GAUGE, "dijkstra": H_ZERO, "theta": H_EUCLID, "lazy-theta": H_EUCLID}
+METHODS = ("astar", "dijkstra", "theta", "lazy-theta", "weighted-theta")
+_ANYANGLE = {"astar": 0, "dijkstra": 0, "theta": THETA, "lazy-theta": LAZY_THETA,
+             "weighted-theta": LAZY_THETA}
+_HKIND = {"astar": H_GAUGE, "dijkstra": H_ZERO, "theta": H_EUCLID, "lazy-theta": H_EUCLID,
+          "weighted-theta": H_EUCLID}
 MEMORY_SHARE = _budget.MEMORY_SHARE  # of physical memory, the default memory budget
 
 
@@ -139,7 +142,9 @@ def search(
     start_cell, goal_cell : array_like of int, shape (3,)
         Lattice indices; both must be free (else PlanError naming which, where, and the
         nearest free cell: :meth:`World.endpoint_cell`).
-    method : {"astar", "dijkstra", "theta", "lazy-theta"}
+    method : {"astar", "dijkstra", "theta", "lazy-theta", "weighted-theta"}
+        ``weighted-theta``: Lazy Theta* with an inflated heuristic, about A*'s cost
+        (:mod:`planner.search.weighted`).
     neighbors : str
         ``lattice.neighbors`` kind: ``face``, ``full``, ``face+k``, ``full+k``.
     corner_cutting : bool
@@ -175,9 +180,10 @@ def search(
         res = search_networkx(world, s, gl, job.ms, job.max_nodes or None)
         res.guarantee = job.guarantee
         return res
-    res, look = _run(world, s, gl, job.ms, job.params, job.max_nodes)
+    res, look = _runner(method)(world, s, gl, job.ms, job.params, job.max_nodes)
     world.cell_checks += look
-    res.guarantee, res.compile_seconds = job.guarantee, job.compile_seconds
+    res.guarantee = job.guarantee
+    res.compile_seconds += job.compile_seconds  # weighted-theta: its own kernel's too
     return res
 
 
@@ -207,6 +213,19 @@ def _prepare(world: World, method: str, neighbors: str, corner_cutting: bool, ma
     node_cap = min(max_nodes, budget_nodes) if max_nodes else budget_nodes
     return _Job(ms, SearchParams(_ANYANGLE[method], node_cap, max_exp), max_nodes,
                 carries_guarantee(lat, neighbors, corner_cutting), compile_s)
+
+
+def _runner(method: str):
+    """The function running one search of ``method`` (the signature of :func:`_run`)."""
+    return _run_weighted if method == "weighted-theta" else _run
+
+
+def _run_weighted(world: World, s: np.ndarray, gl: np.ndarray, ms, params: SearchParams,
+                  max_nodes: int) -> tuple[SearchResult, int]:
+    """:func:`_run` for ``weighted-theta`` (:mod:`planner.search.weighted`)."""
+    res, look = weighted_search(world, s, gl, ms, _span(world), params.max_nodes,
+                                params.max_expansions, max_nodes)
+    return res, look
 
 
 def _run(world: World, s: np.ndarray, gl: np.ndarray, ms, params: SearchParams,
@@ -302,7 +321,7 @@ def search_many(
         world.endpoint_cell(b[i], f"query {i}: goal")
 
     def one(i: int) -> tuple[SearchResult, int]:
-        return _run(world, a[i], b[i], job.ms, job.params, job.max_nodes)
+        return _runner(method)(world, a[i], b[i], job.ms, job.params, job.max_nodes)
 
     if workers == 1:
         done = [one(i) for i in range(len(a))]
@@ -313,7 +332,7 @@ def search_many(
     for i, (res, look) in enumerate(done):
         world.cell_checks += look
         res.guarantee = job.guarantee
-        res.compile_seconds = job.compile_seconds if i == 0 else 0.0
+        res.compile_seconds += job.compile_seconds if i == 0 else 0.0
         out.append(res)
     return out
 
