@@ -55,6 +55,7 @@ def warm() -> float:
     chk = world.checker  # OMPL's state and motion checks
     chk.is_valid(np.array([2.5, 2.5, 1.2]))
     chk.check_motion(np.array([2.5, 2.5, 1.2]), np.array([3.5, 2.5, 1.2]))
+    api.plan(world, (2.5, 2.5, 1.2), (3.5, 2.5, 1.2), method="weighted-theta")  # own kernel
     _warm_explore(office)
     return time.perf_counter() - t0
 
