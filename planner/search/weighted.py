@@ -5,16 +5,20 @@ distance to the goal is below the path length: a thin tube along the whole path,
 than lattice A* (whose move-set gauge is flat along the many equal-cost lattice paths, so it
 dives) expands. Weighting the heuristic, ``f = g + w |x - goal|`` with ``w`` =
 :data:`WEIGHT` slightly above 1, makes deeper nodes win every near-tie, so the search dives
-too; everything else is Lazy Theta* (:mod:`planner.search.astar.kernel`): the same move set
-and movement rule, the same lazy parent rule and the same exact line of sight
-(:mod:`planner.search._los`).
+too; everything else is ``method="lazy-theta"``: the same move set and movement rule, the
+same lazy parent rule (a parent assumed in sight, verified on expansion, else the best
+closed lattice neighbour) and the same exact line of sight (:mod:`planner.search._los`).
+The lookups of both (the expanded cells' move cells and every sight line's cells) are
+counted in ``cell_checks``.
 
 Guarantee: a valid path from start to goal under the same rule as Theta* and Lazy Theta*
 (every segment between consecutive returned cells is a line of sight, or an allowed lattice
 move), with the radius guarantee whenever the move set carries it. Its length is *not*
-Lazy Theta*'s: an inflated heuristic gives up optimality of the search order, and no bound
-on the difference is proven. ``benchmarks/search_speed.py --anyangle`` measures the length
-ratio to Lazy Theta* and the time ratio to A* on real maps.
+Lazy Theta*'s, and it is not bounded by the lattice A* path's either: an inflated heuristic
+gives up the search order's optimality, and no bound on the difference is proven (weighted
+A*'s factor ``w`` bound does not carry over to Lazy Theta*'s parent rule).
+``benchmarks/search_speed.py --anyangle`` measures the length ratio to Lazy Theta* and the
+time ratio to A* on real maps.
 
 Unreachable goals: unlike the A* driver, no probe from the goal stops the search early when
 the goal is sealed in a small pocket; the search then ends when the start's component (or
