@@ -341,12 +341,14 @@ def weighted_table(geb: tuple[World, np.ndarray] | None, n: int, repeat: int = 3
                 res = {m: S.search(world, s, g, method=m) for m in methods}
                 for m in methods:
                     best[m] = min(best[m], res[m].seconds)
+            if not res["astar"].found:  # no path: nothing to compare
+                continue
             tl.append(best["lazy-theta"] / best["astar"])
             tw.append(best["weighted-theta"] / best["astar"])
             ew.append(res["weighted-theta"].expansions / res["astar"].expansions)
             ln.append(res["weighted-theta"].cost / res["lazy-theta"].cost)
         ln = np.array(ln)
-        print(f"{name:8s} {len(qs):7d} {np.median(tl):7.2f} {np.median(tw):6.2f} "
+        print(f"{name:8s} {len(ln):7d} {np.median(tl):7.2f} {np.median(tw):6.2f} "
               f"{np.median(ew):8.2f} {ln.max():8.4f} {np.median(ln):8.4f} "
               f"{np.mean(ln <= 1.005):6.0%}")
 
