@@ -1,5 +1,6 @@
 """Search engine speed: our A* vs a minimal C++ A* (the anchor), per lattice, Lazy Theta*
-vs A*, DA1 throughput, and numba vs networkx vs plain Python A* on cropped worlds.
+vs A*, weighted-theta vs both, DA1 throughput, and numba vs networkx vs plain Python A* on
+cropped worlds.
 
 Usage::
 
@@ -32,6 +33,7 @@ import numpy as np
 
 from planner import search as S
 from planner.lattice import Lattice
+from planner.search.run import H_WEIGHT as WEIGHT
 from planner.world import World
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -311,6 +313,46 @@ def anyangle_table(geb: tuple[World, np.ndarray] | None, n: int,
         save.write_text(json.dumps(lengths))
 
 
+def weighted_table(geb: tuple[World, np.ndarray] | None, n: int, repeat: int = 3) -> None:
+    """Any-angle at A*'s cost (issue goal: <= 2x A*): per world (DA1, geb079 at 0.08 m),
+    the median per-query time ratio of Lazy Theta* / A* and of weighted-theta / A*, and the
+    per-query length ratio weighted-theta / Lazy Theta* (goal: within 0.5% on every
+    query): its largest, median and the share within 0.5%. Kernel time, each query's
+    fastest of ``repeat`` alternating runs of the three methods."""
+    print(f"\nweighted-theta (Lazy Theta*, heuristic x{WEIGHT}) vs Lazy Theta* vs A* "
+          f"(cubic-26, same queries, fastest of {repeat} alternating runs); up to {n} per "
+          "world\ntime goal <= 2 (median of per-query ratios); length goal: "
+          "weighted / LT* <= 1.005 on every query")
+    print(f"{'world':8s} {'queries':>7s} {'LT*/A*':>7s} {'W/A*':>6s} {'W/A* exp':>8s} "
+          f"{'len max':>8s} {'len med':>8s} {'<=0.5%':>6s}")
+    cases = [("DA1", *load_warframe("DA1"))]
+    if geb is not None:
+        cases.append(("geb079", *geb))
+    methods = ("astar", "lazy-theta", "weighted-theta")
+    for name, world, scen in cases:
+        qs = scen[:: max(1, len(scen) // n)][:n]
+        for m in methods:  # compile / load every kernel outside the timed runs
+            S.search(world, qs[0, :3].astype(np.int64), qs[0, 3:6].astype(np.int64), method=m)
+        tl, tw, ew, ln = [], [], [], []
+        for q in qs:
+            s, g = q[:3].astype(np.int64), q[3:6].astype(np.int64)
+            best = dict.fromkeys(methods, math.inf)
+            for _ in range(max(1, repeat)):
+                res = {m: S.search(world, s, g, method=m) for m in methods}
+                for m in methods:
+                    best[m] = min(best[m], res[m].seconds)
+            if not res["astar"].found:  # no path: nothing to compare
+                continue
+            tl.append(best["lazy-theta"] / best["astar"])
+            tw.append(best["weighted-theta"] / best["astar"])
+            ew.append(res["weighted-theta"].expansions / res["astar"].expansions)
+            ln.append(res["weighted-theta"].cost / res["lazy-theta"].cost)
+        ln = np.array(ln)
+        print(f"{name:8s} {len(ln):7d} {np.median(tl):7.2f} {np.median(tw):6.2f} "
+              f"{np.median(ew):8.2f} {ln.max():8.4f} {np.median(ln):8.4f} "
+              f"{np.mean(ln <= 1.005):6.0%}")
+
+
 def cold_warm() -> tuple[float, float]:
     """First-call time in a fresh process (cache on disk) and the warm time after it."""
     code = (
@@ -351,7 +393,7 @@ def main(argv: list[str] | None = None) -> int:
                          "alternating; each query counts its fastest run on each side "
                          "(load on a shared machine)")
     ap.add_argument("--anyangle", type=int, default=20,
-                    help="queries per world for Lazy Theta* vs A* (0: skip)")
+                    help="queries per world for Lazy Theta* and weighted-theta vs A* (0: skip)")
     ap.add_argument("--save-lengths", type=Path, metavar="JSON",
                     help="write each query's Lazy Theta* path length here")
     ap.add_argument("--check-lengths", type=Path, metavar="JSON",
@@ -398,6 +440,7 @@ def main(argv: list[str] | None = None) -> int:
         lattice_table(geb)
     if a.anyangle:
         anyangle_table(geb, a.anyangle, a.save_lengths, a.check_lengths, a.repeat)
+        weighted_table(geb, a.anyangle, a.repeat)
 
     if a.da1:
         world, scen = load_warframe("DA1")

@@ -23,7 +23,7 @@ from planner.errors import PlannerError
 from planner.lattice import NAMED_LATTICES
 from planner.lattice.paper import NAMED_LATTICES_2D
 
-METHODS = "astar, dijkstra, theta, lazy-theta, ompl:<planner>"
+METHODS = "astar, dijkstra, theta, lazy-theta, weighted-theta, ompl:<planner>"
 # options whose values may start with "-" (negative coordinates)
 _VECTOR_OPTIONS = ("--start", "--goal", "--bounds", "--generator", "--init")
 # options of every command, accepted before or after the command name

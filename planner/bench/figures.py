@@ -28,7 +28,8 @@ from planner.lattice import Lattice
 
 __all__ = ["operating_points", "pareto_front", "plot_tradeoffs"]
 
-_MARKERS = {"astar": "o", "dijkstra": "s", "theta": "^", "lazy-theta": "D"}
+_MARKERS = {"astar": "o", "dijkstra": "s", "theta": "^", "lazy-theta": "D",
+            "weighted-theta": "v"}
 _STYLES = {"face": "--", "full": "-"}
 
 

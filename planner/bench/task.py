@@ -23,7 +23,7 @@ __all__ = ["run_task", "LATTICE_METHODS"]
 
 _WORLDS: dict = {}
 _CLEARANCE: dict = {}
-LATTICE_METHODS = ("astar", "dijkstra", "theta", "lazy-theta")
+LATTICE_METHODS = ("astar", "dijkstra", "theta", "lazy-theta", "weighted-theta")
 
 
 def _frame(map_path: str):

@@ -207,7 +207,7 @@ def _run(ctx, occ, walk, ms, start, goal, params, span, dense, pause_at, keep_go
     slots = ctx.slots if dslot is None else SlotMap(*ctx.slots[:3], dslot, occ.lo, occ.dims)
     first = params
     if keep_going is not None and pause_at > 0 and not 0 < params.max_expansions <= pause_at:
-        first = _astar.SearchParams(params.anyangle, params.max_nodes, pause_at)
+        first = params._replace(max_expansions=pause_at)
     nodes, heap, state = ctx.nodes, ctx.heap, ctx.state
     kernel = _kernel(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state, False)
     nodes, heap, slots, out = _loop(kernel, occ, walk, ms, nodes, heap, slots, sc, ufree,

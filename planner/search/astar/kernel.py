@@ -60,6 +60,7 @@ class SearchParams(NamedTuple):
     anyangle: int  # 0 lattice A* / Dijkstra, THETA, LAZY_THETA
     max_nodes: int  # stop (RUN_LIMIT) once this many nodes exist; <= 0 no limit
     max_expansions: int  # stop (RUN_BUDGET) after this many expansions; <= 0 no limit
+    h_weight: float = 1.0  # the straight-line heuristic's factor (any-angle only)
 
 
 @njit_cached
@@ -144,7 +145,7 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state
     nkey, ng, nf, nh, npar, npos = nodes
     pages, btab, bkeys, dsl, _, _ = slots
     dense = dsl.shape[0] > 1 and mode == 0  # the dense slot box is the grid's box
-    anyangle, max_nodes, max_exp = params
+    anyangle, max_nodes, max_exp, hw = params
     g = walk.g
     cubic = is_cubic(g)
     gl0, gl1, gl2 = goal[0], goal[1], goal[2]
@@ -324,7 +325,7 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state
                     x = g00 * e0 + g01 * e1 + g02 * e2
                     y = g10 * e0 + g11 * e1 + g12 * e2
                     z = g20 * e0 + g21 * e1 + g22 * e2
-                    hv = np.sqrt(x * x + y * y + z * z)
+                    hv = hw * np.sqrt(x * x + y * y + z * z)
                 nh[t] = hv
                 npos[t] = -2
             if anyangle == 0:
