@@ -231,7 +231,7 @@ def describe(res: PlanResult, world=None) -> str:
 def unknown_on_path(world, path: np.ndarray) -> int:
     """Distinct cells meeting unknown space that the polyline ``path`` ((K, 3), m) touches
     (every cell whose closed Voronoi cell a segment touches)."""
-    if not world.n_unknown or len(path) == 0:
+    if not world.has_unknown or len(path) == 0:
         return 0
     parts = [world.segment_cells(a, b) for a, b in zip(path[:-1], path[1:], strict=True)]
     cells = np.concatenate(parts) if parts else world.lattice.quantize(path[:1])

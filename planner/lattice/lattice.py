@@ -103,6 +103,7 @@ class Lattice:
                                f"{_SIDE_RANGE[1]:g} m across")
         g.setflags(write=False)
         self._g = g
+        self._volume = abs(det)
         # Refuses lattices too ill-conditioned to derive, before any large enumeration.
         b, _ = reduce_basis(g.tobytes(), g.shape[0])
         self._ginv = np.linalg.inv(g)
@@ -147,7 +148,7 @@ class Lattice:
     @property
     def cell_volume(self) -> float:
         """Volume (area in 2D) of one Voronoi cell, ``|det G|``."""
-        return float(abs(np.linalg.det(self._g)))
+        return self._volume
 
     @property
     def _geo(self) -> dict:

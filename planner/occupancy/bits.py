@@ -205,6 +205,10 @@ class BoxBits:
             int(_POPCOUNT[self.bits[i:i + (1 << 24)]].sum())
             for i in range(0, self.bits.size, 1 << 24))
 
+    def any(self) -> bool:
+        """The set is not empty."""
+        return bool(self.bits.any())
+
     def contains(self, w: np.ndarray) -> np.ndarray:
         """(N,) bool: cell ``w[n]`` ((N, 3) int64, C-contiguous) is in the set."""
         out = np.empty(len(w), dtype=np.bool_)

@@ -36,6 +36,10 @@ class SortedKeys:
         """Number of cells."""
         return len(self.keys)
 
+    def any(self) -> bool:
+        """The set is not empty."""
+        return len(self.keys) > 0
+
     def contains(self, w: np.ndarray) -> np.ndarray:
         """(N,) bool: cell ``w[n]`` ((N, 3) int64) is in the set."""
         if not len(self.keys) or not len(w):
@@ -69,6 +73,11 @@ class UnknownSpace:
         """Number of cells meeting unknown space."""
         return self._unknown.count()
 
+    @property
+    def has_unknown(self) -> bool:
+        """Some cell meets unknown space (cheaper than counting them: every plan asks)."""
+        return self._unknown.any()
+
     def is_unknown(self, indices: np.ndarray) -> np.ndarray:
         """(N,) bool: the cell meets unknown space (no lookup counted).
 
@@ -84,13 +93,13 @@ class UnknownSpace:
         """One line saying how unknown space is treated, for results and reports."""
         if self.unknown_policy == "blocked":
             return "unknown space blocked (with the robot radius)"
-        if not self.n_unknown:
+        if not self.has_unknown:
             return "no free-space information: everything in bounds not occupied is free"
         return "unknown space planned through as free"
 
     def _near_unknown(self, cell: np.ndarray) -> bool:
         """Unknown space is blocked and the cell is unknown or within the radius of it."""
-        if self.unknown_policy != "blocked" or not self.n_unknown:
+        if self.unknown_policy != "blocked" or not self.has_unknown:
             return False
         near = cell[None] + inflation_stencil(self._lattice, self.radius)
         return bool(self.is_unknown(near).any())

@@ -301,7 +301,8 @@ class World(CellSets, UnknownSpace):
         if np.any(a < lo - _BOUNDS_TOL) or np.any(a > hi + _BOUNDS_TOL):
             raise PlanError(f"{what} {_fmt(a)} is outside the map bounds {_fmt(lo)} .. {_fmt(hi)}")
         cell = self._lattice.quantize(a[None])[0]
-        self._require_free(cell, f"{what} {_fmt(a)}")
+        if not self.is_free(cell[None])[0]:  # the message only when needed
+            self._not_free(cell, f"{what} {_fmt(a)}")
         return a, cell
 
     def endpoint_cell(self, cell, what: str = "cell") -> np.ndarray:
@@ -315,10 +316,6 @@ class World(CellSets, UnknownSpace):
             centre = self._lattice.to_world(c[None])[0]
             self._not_free(c, f"{what} cell {c.tolist()} (centre {_fmt(centre)})")
         return c
-
-    def _require_free(self, cell: np.ndarray, label: str) -> None:
-        if not self.is_free(cell[None])[0]:
-            self._not_free(cell, label)
 
     def _not_free(self, cell: np.ndarray, label: str) -> None:
         """The one endpoint message: which end, where, why, and the nearest free cell."""
