@@ -82,7 +82,7 @@ _ANYANGLE = {"astar": 0, "dijkstra": 0, "theta": THETA, "lazy-theta": LAZY_THETA
              "weighted-theta": LAZY_THETA}
 _HKIND = {"astar": H_GAUGE, "dijkstra": H_ZERO, "theta": H_EUCLID, "lazy-theta": H_EUCLID,
           "weighted-theta": H_EUCLID}
-H_WEIGHT = 1.03  # weighted-theta's heuristic factor: the fastest tried within 0.5% of LT*
+H_WEIGHT = 1.03  # weighted-theta's factor: dives like A*, lengths near Lazy Theta*'s
 _WEIGHT = {"weighted-theta": H_WEIGHT}
 MEMORY_SHARE = _budget.MEMORY_SHARE  # of physical memory, the default memory budget
 
@@ -249,8 +249,8 @@ def _prepare(world: World, method: str, neighbors: str, corner_cutting: bool, ma
     max_exp = _limit(max_expansions, "max_expansions") or budget_nodes
     ms = move_set(lat, neighbors, corner_cutting, _HKIND[method])
     node_cap = min(max_nodes, budget_nodes) if max_nodes else budget_nodes
-    job = _Job(ms, SearchParams(_ANYANGLE[method], node_cap, max_exp,
-                                      _WEIGHT.get(method, 1.0)), max_nodes,
+    params = SearchParams(_ANYANGLE[method], node_cap, max_exp, _WEIGHT.get(method, 1.0))
+    job = _Job(ms, params, max_nodes,
                carries_guarantee(lat, neighbors, corner_cutting))
     if key is not None:
         if len(_JOBS) >= 256:
