@@ -294,11 +294,13 @@ def test_compare_reports_a_corrupt_scenario_file(tmp_path, capsys):
 def test_ctrl_c_during_a_build_exits_130_with_one_line():
     env = dict(os.environ, PYTHONPATH=str(REPO))
     proc = subprocess.Popen([sys.executable, "-m", "planner", "compare", "office",
-                             "--cell-volume", "0.0002", *QUERY], env=env,
+                             "--cell-volume", "0.0001", *QUERY], env=env,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     time.sleep(4)  # inside the imports, the map build or a kernel: each must end cleanly
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=120)
     text = err.decode(errors="replace")
     assert proc.returncode == 130, (proc.returncode, text[-500:])
-    assert text.strip().splitlines() == ["planner: interrupted"], text[-500:]
+    lines = text.strip().splitlines()  # progress lines may come first, nothing else
+    assert lines[-1] == "planner: interrupted", text[-500:]
+    assert all(line.startswith("progress ") for line in lines[:-1]), text[-500:]

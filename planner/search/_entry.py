@@ -8,6 +8,8 @@ instead. numba has no public API for it: :func:`entry_point` reads
 internals. A compiled entry point does not check its arguments, so it must only get
 arguments of the types it was looked up with: :func:`struct_key` names those types for the
 structs a caller does not build itself, and a caller keeps one entry point per key.
+A Ctrl-C that lands inside such a call surfaces as a SystemError caused by the
+KeyboardInterrupt; the returned function raises the KeyboardInterrupt itself.
 """
 
 from __future__ import annotations
@@ -28,7 +30,17 @@ def entry_point(disp, args: Sequence) -> Callable:
     sig = tuple(disp.typeof_pyval(a) for a in args)
     if sig not in disp.overloads:
         disp.compile(sig)
-    return disp.overloads[sig].entry_point
+    fn = disp.overloads[sig].entry_point
+
+    def call(*a):
+        try:
+            return fn(*a)
+        except SystemError as exc:  # Ctrl-C during the call arrives as the cause of this
+            if isinstance(exc.__cause__, KeyboardInterrupt):
+                raise KeyboardInterrupt from None
+            raise
+
+    return call
 
 
 def struct_key(struct: tuple) -> tuple:
