@@ -26,6 +26,22 @@ __all__ = ["dense_astar"]
 
 
 @njit_cached
+def grid_offsets(ust, moves, d1, d2):  # pragma: no cover - compiled
+    """Each stencil cell (U, 3) and move (M, 3) as one offset into a C-order grid of dims
+    (., d1, d2), and the margin (cells) inside which no stencil cell leaves the box: an
+    expansion there looks up its cells without bounds tests or index arithmetic."""
+    uoff = np.empty(ust.shape[0], np.int64)
+    reach = 0
+    for j in range(ust.shape[0]):
+        uoff[j] = (ust[j, 0] * d1 + ust[j, 1]) * d2 + ust[j, 2]
+        reach = max(reach, abs(ust[j, 0]), abs(ust[j, 1]), abs(ust[j, 2]))
+    moff = np.empty(moves.shape[0], np.int64)
+    for m in range(moves.shape[0]):
+        moff[m] = (moves[m, 0] * d1 + moves[m, 1]) * d2 + moves[m, 2]
+    return uoff, moff, reach
+
+
+@njit_cached
 def dense_astar(grid, lo, dims, ms, nodes, heap, dsl, st, max_nodes, max_exp, goal):
     # pragma: no cover - compiled
     """Run the search from the kernel's state ``st`` until it ends or needs room.
@@ -64,17 +80,10 @@ def dense_astar(grid, lo, dims, ms, nodes, heap, dsl, st, max_nodes, max_exp, go
     cap = nkey.shape[0]
     gl0, gl1, gl2 = goal[0], goal[1], goal[2]
     gk = pack3(gl0, gl1, gl2)
-    # Each stencil cell and move as one offset into the grid (x slowest), each move as one
-    # offset of the packed key, and a margin inside which no stencil cell leaves the box.
-    uoff = np.empty(nu, np.int64)
-    reach = 0
-    for j in range(nu):
-        uoff[j] = (ust[j, 0] * d1 + ust[j, 1]) * d2 + ust[j, 2]
-        reach = max(reach, abs(ust[j, 0]), abs(ust[j, 1]), abs(ust[j, 2]))
-    moff = np.empty(nm, np.int64)
+    # Each move as one offset of the packed key, besides its grid offset.
+    uoff, moff, reach = grid_offsets(ust, moves, d1, d2)
     mkey = np.empty(nm, np.int64)
     for m in range(nm):
-        moff[m] = (moves[m, 0] * d1 + moves[m, 1]) * d2 + moves[m, 2]
         mkey[m] = (moves[m, 0] << 42) + (moves[m, 1] << 21) + moves[m, 2]
     all_u = (np.int64(1) << nu) - 1
     fq = 1e-9 * mcost.min()

@@ -37,7 +37,7 @@ from planner.search._nodes import (
     local,
     new_page,
 )
-from planner.search.astar.dense import dense_astar
+from planner.search.astar.dense import dense_astar, grid_offsets
 from planner.search.heuristic import H_EUCLID, H_GAUGE, estimate, octile
 from planner.search.moves import MAX_BITS, move_allowed
 from planner.search.result import (
@@ -163,17 +163,7 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state
     nm = moves.shape[0]
     bits = nu <= MAX_BITS  # one mask test per move instead of its CSR list
     gk = pack3(goal[0], goal[1], goal[2])
-    # Dense grid: each stencil cell and move as one offset into the grid (x slowest), and a
-    # margin inside which no stencil cell can leave the box: an expansion there looks up
-    # its cells without bounds tests or index arithmetic.
-    uoff = np.empty(nu, np.int64)
-    reach = 0
-    for j in range(nu):
-        uoff[j] = (ust[j, 0] * d1 + ust[j, 1]) * d2 + ust[j, 2]
-        reach = max(reach, abs(ust[j, 0]), abs(ust[j, 1]), abs(ust[j, 2]))
-    moff = np.empty(nm, np.int64)
-    for m in range(nm):
-        moff[m] = (moves[m, 0] * d1 + moves[m, 1]) * d2 + moves[m, 2]
+    uoff, moff, reach = grid_offsets(ust, moves, d1, d2)  # dense grid: no bounds tests
     base = np.int64(0)
     fq = 1e-9 * mcost.min()
     fq_inv = 1.0 / fq
