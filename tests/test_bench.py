@@ -290,6 +290,25 @@ def test_queries_are_sampled_in_observed_free_space_only():
     assert np.all(s >= w.bounds[0]) and np.all(g <= w.bounds[1])
 
 
+def test_queries_no_lattice_connects_are_dropped():
+    from planner import build_world
+    from planner.bench.queries import sample_queries
+
+    # a wall across the whole box at x = 2 m seals the two halves from each other
+    y, z = np.meshgrid(np.arange(0.0, 2.01, 0.05), np.arange(0.0, 1.01, 0.05))
+    wall = np.stack([np.full(y.size, 2.0), y.ravel(), z.ravel()], axis=1)
+    box = np.array([[0.0, 0.0, 0.0], [4.0, 2.0, 1.0]])
+    worlds = {lat: build_world(wall, lat, cell_volume=0.001, radius=0.0, bounds=box)
+              for lat in ("cubic", "fcc")}
+    s, g, dropped = sample_queries(worlds, box, 8, seed=0, min_distance=0.2)
+    assert len(s) == 8
+    assert np.all((s[:, 0] < 2.0) == (g[:, 0] < 2.0))  # each pair on one side
+    assert dropped["start and goal connected in no lattice"] > 0
+    s, g, dropped = sample_queries(worlds, box, 8, seed=0, min_distance=0.2, neighbors=None)
+    assert np.any((s[:, 0] < 2.0) != (g[:, 0] < 2.0))  # unchecked: some pairs straddle it
+    assert "start and goal connected in no lattice" not in dropped
+
+
 def _rows(ratio_fcc: float, n: int = 30, seed: int = 0) -> list[dict]:
     rng = np.random.default_rng(seed)
     rows = []

@@ -16,6 +16,7 @@ def sample_queries(
     max_tries: int = 200,
     *,
     free=None,
+    neighbors: str | None = "full",
 ) -> tuple[np.ndarray, np.ndarray, dict]:
     """Sample ``n`` start/goal pairs in continuous space, kept only if valid everywhere.
 
@@ -40,6 +41,13 @@ def sample_queries(
         ``sample(rng, n) -> (n, 3)`` points): candidates are drawn uniformly from it
         instead of the box, so a map with free-space information is queried only where it
         was observed (and a building whose box is mostly unobserved still yields queries).
+    neighbors : str or None
+        Move set of the connectivity check: a pair is kept only if lattice A* with these
+        moves connects it in at least one world (a pair no lattice connects compares
+        nothing, and an any-angle search would spend its whole budget proving it). One
+        world that connects it is enough, so a lattice that loses a passage still shows as
+        a failure of that lattice. ``"full"`` contains the face moves, so it connects
+        whatever ``"face"`` does. None: no check.
 
     Returns
     -------
@@ -78,12 +86,36 @@ def sample_queries(
                 key = f"{what} blocked in {name}, free in another lattice"
                 dropped[key] += int(np.sum(ok & ~v & ~every))
             ok &= np.logical_and.reduce(list(valid.values()))
-        for i in np.flatnonzero(ok):
-            if len(starts) < n:
+        cand = np.flatnonzero(ok)
+        while len(cand) and len(starts) < n:
+            # only as many as still wanted: a check is a search per pair
+            take, cand = cand[:n - len(starts)], cand[n - len(starts):]
+            if neighbors is not None:
+                linked = _connected(worlds, s[take], g[take], neighbors)
+                dropped["start and goal connected in no lattice"] += int(np.sum(~linked))
+                take = take[linked]
+            for i in take:
                 starts.append(s[i])
                 goals.append(g[i])
     return (np.array(starts).reshape(-1, 3), np.array(goals).reshape(-1, 3),
             {k: v for k, v in dropped.items() if v})
+
+
+def _connected(worlds: dict, starts: np.ndarray, goals: np.ndarray, neighbors: str) -> np.ndarray:
+    """(Q,) bool: lattice A* (``neighbors`` moves) connects start i and goal i (points, m,
+    free in every world) in at least one of ``worlds``. A search that stops at its budget
+    counts as connected (not proved otherwise)."""
+    from planner.search import search_many  # lazy: numba
+
+    linked = np.zeros(len(starts), dtype=bool)
+    for w in worlds.values():
+        todo = np.flatnonzero(~linked)
+        if not len(todo):
+            break
+        q = w.lattice.quantize
+        found = search_many(w, q(starts[todo]), q(goals[todo]), neighbors=neighbors)
+        linked[todo] = [r.status != "unreachable" for r in found]
+    return linked
 
 
 def scenario_queries(path: str, n: int, seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

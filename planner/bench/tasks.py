@@ -123,8 +123,10 @@ def plan_tasks(suite: Suite, log=print, saved: dict | None = None,
                                 worlds[lat] = cached_world(world_cache, m.path, lat, cv, radius,
                                                            tuple(quat.tolist()))
                                 bar.step()
+                            nb = "full" if "full" in suite.neighbors else suite.neighbors[0]
                             s, g, dropped = sample_queries(worlds, frame.bounds, n, suite.seed,
-                                                           suite.min_distance, free=frame.free)
+                                                           suite.min_distance, free=frame.free,
+                                                           neighbors=nb)
                             costs = [None] * len(s)
                         queries = [{"id": i, "start": s[i].tolist(), "goal": g[i].tolist(),
                                     "optimal_cost": None if costs[i] is None else float(costs[i])}
