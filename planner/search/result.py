@@ -55,7 +55,8 @@ class SearchResult:
     seconds : float
         Wall time of the search (numba backend: the kernel calls; networkx: build + search).
     peak_bytes : int
-        Peak size of the search's own arrays (node table, heap, slot map, scratch).
+        Peak size of the search's own arrays (node table, heap, slot map, scratch), as
+        grown for this search alone (the same whatever ran before it).
     reason : str
         Why no path was found ("" when found).
     status : str

@@ -55,7 +55,7 @@ _WATCHED: set[int] = set()
 class _Context:
     """One thread's kernel arrays, reused by its next search (module docstring)."""
 
-    __slots__ = ("nodes", "heap", "slots", "state", "ufree", "ends", "sc", "sc_key", "nbytes")
+    __slots__ = ("nodes", "heap", "slots", "state", "ufree", "ends", "sc", "sc_key")
 
     def __init__(self):
         self.nodes = new_nodes(_CAP)
@@ -66,11 +66,6 @@ class _Context:
         self.ends = np.empty((2, 3), np.int64)
         self.sc = _no_sight()
         self.sc_key = None
-        self.nbytes = self._bytes()
-
-    def _bytes(self) -> int:
-        return (_nbytes(self.nodes) + _nbytes(self.heap) + _nbytes(self.slots[:3])
-                + self.ufree.nbytes + self.state.nbytes)
 
     def keep(self, nodes, heap, slots) -> None:
         """Keep the arrays a search grew, up to the kept size (module docstring)."""
@@ -79,7 +74,6 @@ class _Context:
         if len(slots.bkeys) > KEEP_NODES // 8:
             slots = new_slots(_PCAP)
         self.nodes, self.heap, self.slots = nodes, heap, SlotMap(*slots[:3], *self.slots[3:])
-        self.nbytes = self._bytes()
 
 
 _LOCAL = threading.local()
@@ -189,7 +183,8 @@ def run(occ, walk, ms, start, goal, params, span: float, *, dense: bool = True,
     counts : tuple of int
         ``(expansions, nodes, lookups)`` of the search.
     peak : int
-        Bytes of the search's own arrays at the end (their peak: they only grow).
+        Bytes of the search's own arrays at their peak, as grown for this search from the
+        initial capacities (the same whatever the thread searched before).
     """
     ctx = _context()
     out = _run(ctx, occ, walk, ms, start, goal, params, span, dense, pause_at, keep_going)
@@ -222,12 +217,27 @@ def _run(ctx, occ, walk, ms, start, goal, params, span, dense, pause_at, keep_go
     status, path, cost, exp, n, look = out
     if dslot is not None:  # finish cleared the touched cells: reuse the array
         _give_dense(occ, dslot)
-    peak = ctx.nbytes if nodes is ctx.nodes and slots.pages is ctx.slots.pages else (
-        _nbytes(nodes) + _nbytes(heap) + _nbytes(slots[:3]) + ufree.nbytes + state.nbytes)
-    peak += (0 if sc is _no_sight() else _nbytes(sc)) + (0 if dslot is None else dslot.nbytes)
+    peak = _fresh_bytes(n, int(state[0]["pages"]), nodes, heap, slots) + ufree.nbytes
+    peak += state.nbytes + (0 if sc is _no_sight() else _nbytes(sc))
+    peak += 0 if dslot is None else dslot.nbytes
     if nodes is not ctx.nodes or slots.pages is not ctx.slots.pages:
         ctx.keep(nodes, heap, slots)
     return status, (path if status == RUN_FOUND else None), cost, (exp, n, look), peak
+
+
+def _fresh_bytes(n: int, npg: int, nodes, heap, slots) -> int:
+    """Bytes of the node table, heap and paged slot map as this search alone would have grown
+    them from the initial capacities (``n`` nodes, ``npg`` pages): the arrays it ran in may
+    be larger, kept from an earlier search on the thread, and a search's reported memory
+    must not depend on what ran before it."""
+    cap, pcap = _CAP, _PCAP
+    while cap < n:
+        cap *= 2
+    while pcap < npg:
+        pcap *= 2
+    row = sum(a.itemsize for a in nodes) + sum(a.itemsize for a in heap)
+    page = PAGE * slots.pages.itemsize + 2 * slots.btab.itemsize + slots.bkeys.itemsize
+    return cap * row + pcap * page
 
 
 def _nbytes(struct) -> int:
