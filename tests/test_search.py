@@ -358,6 +358,23 @@ def test_no_path_and_trivial_path():
     assert not r.found and "node limit" in r.reason
 
 
+def test_searches_do_not_keep_a_freed_world_alive():
+    """The engine keeps each thread's last world bound for the next search on it; freeing
+    the world frees its arrays (and the slot array pooled for them) all the same."""
+    import gc
+    import weakref
+
+    w = _box_world(blocked=[(2, 2, 2)], n=8)
+    for method in ("astar", "lazy-theta"):
+        assert S.search(w, [0, 0, 0], [7, 7, 7], method=method).found
+    other = _box_world(blocked=[(1, 1, 1)], n=6)
+    grid = weakref.ref(w.checker.occupancy.grid)
+    del w
+    gc.collect()
+    assert grid() is None
+    assert S.search(other, [0, 0, 0], [3, 3, 3]).found  # the engine still searches
+
+
 def test_hash_storage_gives_same_results():
     world, s, g = _random_world("fcc", 7, n=6)
     w2 = World(world.lattice, world.blocked, world.bounds, dense_budget=0)
@@ -464,7 +481,7 @@ def test_every_lattice_shares_one_compiled_kernel():
     not C-contiguous and once forced a second compilation)."""
     from planner.occupancy.grid import free_many
     from planner.search import _los
-    from planner.search.astar import kernel as _astar
+    from planner.search.astar import bound
 
     for name in NAMED_LATTICES:
         for budget in ({}, {"dense_budget": 0}):
@@ -476,7 +493,7 @@ def test_every_lattice_shares_one_compiled_kernel():
             world.segment_free(world.lattice.to_world(s[None])[0], [0.5, 0.5, 0.5])
     # (segment_walk is left out: numba adds a specialisation per literal ``check`` flag
     # when other kernels call it, cheap and independent of the lattice.)
-    for kernel in (_astar.search_call, _los.shortcut_kernel, free_many):
+    for kernel in (bound.search_bound, bound.new_bound, _los.shortcut_kernel, free_many):
         assert len(kernel.signatures) == 1, (kernel, kernel.signatures)
 
 

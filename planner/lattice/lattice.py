@@ -39,10 +39,15 @@ __all__ = ["Lattice", "NAMED_LATTICES", "PAPER_DELTAS", "Quantizer", "VoronoiCel
            "named_generator"]
 
 
+_QK: list = []
+
+
 def _qk():
     """The quantizer kernels, imported on first use: importing numba is slow, and
     ``import planner`` should not pay for it."""
-    return importlib.import_module("planner.lattice.quantize")
+    if not _QK:
+        _QK.append(importlib.import_module("planner.lattice.quantize"))
+    return _QK[0]
 
 
 def __getattr__(name: str):
@@ -321,6 +326,10 @@ class Lattice:
 
         min/max per chunk: NaN propagates through both, and no (N, d) temporary is made."""
         reach = self._reach
+        if len(x) == 1:  # one point (a start or goal): Python floats, no reductions
+            r = x[0].tolist()
+            if all(math.isfinite(v) and -reach <= v <= reach for v in r):
+                return
         for s in range(0, len(x), _CHUNK):
             blk = x[s: s + _CHUNK]
             lo, hi = float(blk.min()), float(blk.max())
@@ -361,7 +370,7 @@ class Lattice:
             w = w[None, :]
         if w.ndim != 2 or w.shape[1] != self.dim:
             raise LatticeError(f"indices must have shape (N, {self.dim}), got {w.shape}")
-        if not np.issubdtype(w.dtype, np.integer):
+        if w.dtype != np.int64 and not np.issubdtype(w.dtype, np.integer):
             raise LatticeError(f"indices must be integers, got dtype {w.dtype}")
         return w @ self._g.T
 

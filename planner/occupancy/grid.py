@@ -84,6 +84,12 @@ def occ_free(occ, i, j, k):  # pragma: no cover - compiled
 
 
 @njit_cached
+def free_one(occ, i, j, k):  # pragma: no cover - compiled
+    """Cell (i, j, k) is in bounds and free (one lookup)."""
+    return occ_free(occ, i, j, k)
+
+
+@njit_cached
 def free_many(occ, w, out):  # pragma: no cover - compiled
     """out[n] = cell w[n] (N, 3) is in bounds and free."""
     for n in range(w.shape[0]):

@@ -275,7 +275,8 @@ def _run(world: World, s: np.ndarray, gl: np.ndarray, ms, params: SearchParams,
     t0 = time.perf_counter()
     status, cells, cost, counts, peak = _driver.run(chk.occupancy, chk.walk, ms, s, gl, params,
                                                    _span(world) if params.anyangle else 0.0,
-                                                   pause_at=PROBE_AFTER, keep_going=goal_open)
+                                                   owner=chk, pause_at=PROBE_AFTER,
+                                                   keep_going=goal_open)
     secs = time.perf_counter() - t0
     exp, gen, look = counts
     checks = look + 2  # and the two endpoint checks
@@ -389,7 +390,7 @@ def _goal_pocket(world: World, ms, start, goal) -> tuple[int, int] | None:
     chk = world.checker
     status, _, _, (_, nodes, lookups), _ = _driver.run(
         chk.occupancy, chk.walk, ms, goal, start, SearchParams(0, 0, GOAL_PROBE), 0.0,
-        dense=False)
+        owner=chk, dense=False)
     if status != RUN_EXHAUSTED:
         return None
     return nodes, lookups

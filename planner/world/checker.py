@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from planner._entry import entry_point
 from planner.lattice import Lattice
 from planner.lattice.quantize import Quantizer
 from planner.occupancy import grid as wk
@@ -48,6 +49,7 @@ class ValidityChecker:
         self.checks = 0
         self.states = 0
         self.motions = 0
+        self._free_one = None  # compiled entry point of grid.free_one (see cell_free)
 
     @property
     def quantizer(self) -> Quantizer:
@@ -58,7 +60,9 @@ class ValidityChecker:
 
     def __getstate__(self) -> dict:
         self.quantizer  # noqa: B018 - a worker would otherwise redo the lattice geometry
-        return self.__dict__.copy()
+        d = self.__dict__.copy()
+        d["_free_one"] = None  # a compiled entry point does not pickle
+        return d
 
     def is_valid(self, point) -> bool:
         """The cell containing ``point`` ((3,), m) is in bounds and free (one lookup)."""
@@ -76,6 +80,15 @@ class ValidityChecker:
         self.checks += int(n)
         self.motions += 1
         return bool(free)
+
+    def cell_free(self, i: int, j: int, k: int) -> bool:
+        """Cell (i, j, k) (Python ints) is in bounds and free: one lookup, called without
+        numba's typing of the occupancy struct (a start or goal check on every plan). Not
+        counted here (the world counts its own lookups)."""
+        f = self._free_one
+        if f is None:
+            f = self._free_one = entry_point(wk.free_one, (self.occupancy, 0, 0, 0))
+        return f(self.occupancy, i, j, k)
 
     def cells_free(self, cells: np.ndarray) -> np.ndarray:
         """(N,) bool: each cell of ``cells`` ((N, 3) int64, C-contiguous) in bounds and free.

@@ -27,6 +27,8 @@ ships the checker itself to its worker process).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from planner.checks import check_radius
@@ -298,10 +300,15 @@ class World(CellSets, UnknownSpace):
         """
         a = as_point(p, what, self.dim)
         lo, hi = self._bounds
-        if np.any(a < lo - _BOUNDS_TOL) or np.any(a > hi + _BOUNDS_TOL):
-            raise PlanError(f"{what} {_fmt(a)} is outside the map bounds {_fmt(lo)} .. {_fmt(hi)}")
+        x, bl, bh = a.tolist(), lo.tolist(), hi.tolist()  # floats: a plan checks two ends
+        for i in range(3):
+            if x[i] < bl[i] - _BOUNDS_TOL or x[i] > bh[i] + _BOUNDS_TOL:
+                raise PlanError(f"{what} {_fmt(a)} is outside the map bounds {_fmt(lo)} .. "
+                                f"{_fmt(hi)}")
         cell = self._lattice.quantize(a[None])[0]
-        if not self.is_free(cell[None])[0]:  # the message only when needed
+        self.cell_checks += 1
+        i, j, k = cell.tolist()
+        if not self.checker.cell_free(i, j, k):  # the message only when needed
             self._not_free(cell, f"{what} {_fmt(a)}")
         return a, cell
 
@@ -367,6 +374,10 @@ class World(CellSets, UnknownSpace):
 def as_point(p, what: str = "point", dim: int = 3) -> np.ndarray:
     """``p`` as a finite (3,) float array (m); PlanError naming ``what`` otherwise. With
     ``dim`` 2, (x, y) is accepted too and becomes (x, y, 0)."""
+    if type(p) is np.ndarray and p.shape == (3,) and p.dtype == np.float64:  # the usual case
+        x, y, z = p.tolist()
+        if math.isfinite(x) and math.isfinite(y) and math.isfinite(z):
+            return p
     try:
         a = np.asarray(p, dtype=float).reshape(-1)
     except (TypeError, ValueError):

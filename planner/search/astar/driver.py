@@ -16,9 +16,9 @@ import weakref
 
 import numpy as np
 
+from planner._entry import entry_point
 from planner.lattice import Lattice
 from planner.occupancy.walk import walk_of
-from planner.search._entry import entry_point, struct_key
 from planner.search._grow import grown
 from planner.search._heap import Heap, new_heap
 from planner.search._los import new_scratch
@@ -33,7 +33,7 @@ from planner.search._nodes import (
     rehash,
 )
 from planner.search._state import new_state
-from planner.search.astar import kernel as _astar
+from planner.search.astar.bound import new_bound, search_bound
 from planner.search.result import RUN_BUDGET, RUN_FOUND, RUN_GROW, RUN_STOPPED
 
 __all__ = ["run", "DENSE_SLOT_BUDGET", "KEEP_NODES"]
@@ -42,7 +42,9 @@ __all__ = ["run", "DENSE_SLOT_BUDGET", "KEEP_NODES"]
 DENSE_SLOT_BUDGET = 512 * 2**20
 #: node capacity a thread keeps between searches (larger arrays are dropped after use)
 KEEP_NODES = 1 << 16
-_CAP, _PCAP = 4096, 64  # initial node and page capacity
+_CAP, _PCAP = 4096, 64  # initial node and page capacity (powers of 2)
+_ROW_BYTES = sum(a.itemsize for a in (*new_nodes(1), *new_heap(1)))  # per node slot
+_PAGE_BYTES = PAGE * 4 + 2 * 8 + 8  # a page of int32 slots, its 2 table entries and key
 
 # One dense slot array per dense occupancy grid, reused across searches (cleared after each
 # search at the cells it touched, so a search never pays for the whole box). Taken out of
@@ -55,7 +57,8 @@ _WATCHED: set[int] = set()
 class _Context:
     """One thread's kernel arrays, reused by its next search (module docstring)."""
 
-    __slots__ = ("nodes", "heap", "slots", "state", "ufree", "ends", "sc", "sc_key")
+    __slots__ = ("nodes", "heap", "slots", "state", "ufree", "ends", "sc", "sc_key", "bound",
+                 "owner", "__weakref__")
 
     def __init__(self):
         self.nodes = new_nodes(_CAP)
@@ -66,17 +69,21 @@ class _Context:
         self.ends = np.empty((2, 3), np.int64)
         self.sc = _no_sight()
         self.sc_key = None
+        self.bound = None  # (its structs..., Bound, entry point): see _bound
+        self.owner = 0  # id of the owner of the bound world (see run)
 
-    def keep(self, nodes, heap, slots) -> None:
-        """Keep the arrays a search grew, up to the kept size (module docstring)."""
-        if len(nodes.key) > KEEP_NODES:
-            nodes, heap = new_nodes(_CAP), new_heap(_CAP)
-        if len(slots.bkeys) > KEEP_NODES // 8:
-            slots = new_slots(_PCAP)
-        self.nodes, self.heap, self.slots = nodes, heap, SlotMap(*slots[:3], *self.slots[3:])
+    def keep(self) -> None:
+        """Drop arrays a long search grew past the kept size (module docstring)."""
+        if len(self.nodes.key) > KEEP_NODES:
+            self.nodes, self.heap = new_nodes(_CAP), new_heap(_CAP)
+        if len(self.slots.bkeys) > KEEP_NODES // 8:
+            self.slots = new_slots(_PCAP)
+        self.bound = None
 
 
 _LOCAL = threading.local()
+_CONTEXTS: weakref.WeakSet = weakref.WeakSet()  # every thread's contexts (see _unbind)
+_OWNERS: set[int] = set()  # ids of the owners _unbind watches
 
 
 def _context() -> _Context:
@@ -85,7 +92,11 @@ def _context() -> _Context:
     free = getattr(_LOCAL, "free", None)
     if free is None:
         free = _LOCAL.free = []
-    return free.pop() if free else _Context()
+    if free:
+        return free.pop()
+    ctx = _Context()
+    _CONTEXTS.add(ctx)
+    return ctx
 
 
 def _release(ctx: _Context) -> None:
@@ -160,10 +171,14 @@ def _give_dense(occ, a: np.ndarray) -> None:
         weakref.finalize(occ.grid, _forget, key)
 
 
-def run(occ, walk, ms, start, goal, params, span: float, *, dense: bool = True,
+def run(occ, walk, ms, start, goal, params, span: float, *, owner=None, dense: bool = True,
         pause_at: int = 0, keep_going=None):
     """Run one search to completion. ``span``: longest sight line (m) the any-angle scratch
     is sized for (0 for lattice A*).
+
+    ``owner``: the object (the world's checker) that holds ``occ`` and ``walk``. With it the
+    context keeps their :class:`Bound` for the next search on them, until the owner is
+    freed; without, the next search makes it again.
 
     ``dense=False`` keeps the search off the pooled dense slot array (a short search run
     while another search on the same grid holds it). With ``keep_going`` (a callable
@@ -188,6 +203,13 @@ def run(occ, walk, ms, start, goal, params, span: float, *, dense: bool = True,
     """
     ctx = _context()
     out = _run(ctx, occ, walk, ms, start, goal, params, span, dense, pause_at, keep_going)
+    if owner is None:
+        ctx.bound = None
+    else:
+        ctx.owner = id(owner)
+        if ctx.owner not in _OWNERS:
+            _OWNERS.add(ctx.owner)
+            weakref.finalize(owner, _unbind, ctx.owner)
     _release(ctx)  # not after an exception: a context left mid-search is dropped
     return out
 
@@ -197,47 +219,56 @@ def _run(ctx, occ, walk, ms, start, goal, params, span, dense, pause_at, keep_go
     ends[0] = start
     ends[1] = goal
     sc = _sight(ctx, walk, span) if span > 0 else _no_sight()
-    ufree = ctx.ufree if len(ms.union) <= len(ctx.ufree) else np.empty(len(ms.union), bool)
+    nu = len(ms.union)
+    if nu > len(ctx.ufree):
+        ctx.ufree = np.empty(nu, np.bool_)
     dslot = _take_dense(occ) if dense else None
-    slots = ctx.slots if dslot is None else SlotMap(*ctx.slots[:3], dslot, occ.lo, occ.dims)
     first = params
     if keep_going is not None and pause_at > 0 and not 0 < params.max_expansions <= pause_at:
-        first = params._replace(max_expansions=pause_at)
-    nodes, heap, state = ctx.nodes, ctx.heap, ctx.state
-    kernel = _kernel(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state, False)
-    nodes, heap, slots, out = _loop(kernel, occ, walk, ms, nodes, heap, slots, sc, ufree,
-                                    first, ends, state, first is not params)
+        first = _paused(params, pause_at)
+    out = _loop(ctx, occ, walk, ms, sc, dslot, first, first is not params)
     if first is not params and out[0] == RUN_BUDGET:
         if keep_going():
-            nodes, heap, slots, out = _loop(kernel, occ, walk, ms, nodes, heap, slots, sc,
-                                            ufree, params, ends, state, False)
+            out = _loop(ctx, occ, walk, ms, sc, dslot, params, False)
         else:
+            nodes, state = ctx.nodes, ctx.state
+            slots = ctx.slots if dslot is None else SlotMap(*ctx.slots[:3], dslot, occ.lo,
+                                                            occ.dims)
             out = (RUN_STOPPED, *_helper(finish, nodes, slots, state, False)(
                 nodes, slots, state, False))
     status, path, cost, exp, n, look = out
     if dslot is not None:  # finish cleared the touched cells: reuse the array
         _give_dense(occ, dslot)
-    peak = _fresh_bytes(n, int(state[0]["pages"]), nodes, heap, slots) + ufree.nbytes
-    peak += state.nbytes + (0 if sc is _no_sight() else _nbytes(sc))
+    peak = _fresh_bytes(n, 0 if dslot is not None else int(ctx.state[0]["pages"]))
+    peak += max(nu, 64) + ctx.state.nbytes + (0 if sc is _no_sight() else _nbytes(sc))
     peak += 0 if dslot is None else dslot.nbytes
-    if nodes is not ctx.nodes or slots.pages is not ctx.slots.pages:
-        ctx.keep(nodes, heap, slots)
+    if len(ctx.nodes.key) > KEEP_NODES or len(ctx.slots.bkeys) > KEEP_NODES // 8:
+        ctx.keep()
     return status, (path if status == RUN_FOUND else None), cost, (exp, n, look), peak
 
 
-def _fresh_bytes(n: int, npg: int, nodes, heap, slots) -> int:
+_PAUSED: dict[tuple, object] = {}
+
+
+def _paused(params, pause_at: int):
+    """``params`` stopping at ``pause_at`` expansions (remembered: made once per settings)."""
+    key = (params, pause_at)
+    p = _PAUSED.get(key)
+    if p is None:
+        if len(_PAUSED) >= 256:
+            _PAUSED.clear()
+        p = _PAUSED[key] = params._replace(max_expansions=pause_at)
+    return p
+
+
+def _fresh_bytes(n: int, npg: int) -> int:
     """Bytes of the node table, heap and paged slot map as this search alone would have grown
     them from the initial capacities (``n`` nodes, ``npg`` pages): the arrays it ran in may
     be larger, kept from an earlier search on the thread, and a search's reported memory
     must not depend on what ran before it."""
-    cap, pcap = _CAP, _PCAP
-    while cap < n:
-        cap *= 2
-    while pcap < npg:
-        pcap *= 2
-    row = sum(a.itemsize for a in nodes) + sum(a.itemsize for a in heap)
-    page = PAGE * slots.pages.itemsize + 2 * slots.btab.itemsize + slots.bkeys.itemsize
-    return cap * row + pcap * page
+    cap = _CAP if n <= _CAP else 1 << (n - 1).bit_length()
+    pcap = _PCAP if npg <= _PCAP else 1 << (npg - 1).bit_length()
+    return cap * _ROW_BYTES + pcap * _PAGE_BYTES
 
 
 def _nbytes(struct) -> int:
@@ -247,29 +278,44 @@ def _nbytes(struct) -> int:
     return n
 
 
-# Compiled entry points (planner.search._entry): the kernel's per world struct types, and
-# the helpers, whose arguments the driver alone builds.
-_KERNELS: dict[tuple, object] = {}
+# Compiled entry points (planner._entry): the kernel's per Bound type and parameter types,
+# and the helpers, whose arguments the driver alone builds.
 _HELPERS: dict[object, object] = {}
+_NO_DENSE = new_slots(1).dense  # the paged slot map's placeholder dense array
+_CALLS: dict[object, object] = {}  # Bound type -> entry point of search_bound
 
 
-_LAST: list = [(lambda: None, None, None)]  # (grid ref, walk, kernel) of the last search
+def _unbind(owner_id: int) -> None:
+    """The owner ``owner_id`` of a world's structs was freed: drop every context's
+    :class:`Bound` of them (it holds the world's arrays, and the dense slot array pooled for
+    them, which would otherwise outlive the world)."""
+    _OWNERS.discard(owner_id)
+    for ctx in list(_CONTEXTS):
+        if ctx.owner == owner_id:
+            ctx.bound, ctx.owner = None, 0
 
 
-def _kernel(occ, walk, *args):
-    """The compiled search kernel for these arguments. The driver builds all but the
-    world's structs ``occ`` and ``walk`` (and ``params``, of Python ints), always of the same
-    types; the last world's are remembered by identity (its occupancy grid by a weak
-    reference: a dropped world is not kept alive)."""
-    grid, w, k = _LAST[0]  # one tuple, replaced whole: threads never see a mixed one
-    if grid() is occ.grid and w is walk:
-        return k
-    key = (struct_key(occ), struct_key(walk), struct_key(args[-4]))
-    k = _KERNELS.get(key)
-    if k is None:
-        k = _KERNELS[key] = entry_point(_astar.search_call, (occ, walk, *args))
-    _LAST[0] = (weakref.ref(occ.grid), walk, k)
-    return k
+def _bound(ctx: _Context, occ, walk, ms, sc, dslot, params):
+    """``(b, f)``: the context's :class:`Bound` of these structs and its arrays, and ``f``
+    the compiled :func:`search_bound` for its type and ``params``'s field types. Made again
+    only when one of them is another object than last time (another world or move set,
+    grown arrays)."""
+    dense = _NO_DENSE if dslot is None else dslot
+    ptypes = tuple(map(type, params))  # the entry point takes exactly these
+    bd = ctx.bound
+    if (bd is not None and bd[0] is occ and bd[1] is walk and bd[2] is ms and bd[3] is sc
+            and bd[4] is dense and bd[5] is ctx.nodes and bd[6] is ctx.slots
+            and bd[7] is ctx.ufree and bd[8] == ptypes):
+        return bd[9], bd[10]
+    slots = ctx.slots if dslot is None else SlotMap(*ctx.slots[:3], dslot, occ.lo, occ.dims)
+    b = new_bound(occ, walk, ms, ctx.nodes, ctx.heap, slots, sc, ctx.ufree, ctx.ends,
+                  ctx.state)
+    key = (b._type, ptypes)
+    call = _CALLS.get(key)
+    if call is None:
+        call = _CALLS[key] = entry_point(search_bound, (b, params, False))
+    ctx.bound = (occ, walk, ms, sc, dense, ctx.nodes, ctx.slots, ctx.ufree, ptypes, b, call)
+    return b, call
 
 
 def _helper(disp, *args):
@@ -280,26 +326,25 @@ def _helper(disp, *args):
     return k
 
 
-def _loop(kernel, occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state,
-          pausing):
-    """Call the kernel until it stops asking for room; returns the final structs and the
-    kernel's answer (:func:`planner.search.astar.kernel.search_call`)."""
+def _loop(ctx: _Context, occ, walk, ms, sc, dslot, params, pausing):
+    """Call the kernel until it stops asking for room, growing the context's arrays; returns
+    the kernel's answer (:func:`planner.search.astar.kernel.search_call`)."""
     nm = len(ms.moves)
     while True:
-        out = kernel(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state,
-                     pausing)
+        b, call = _bound(ctx, occ, walk, ms, sc, dslot, params)
+        out = call(b, params, pausing)
         if out[0] != RUN_GROW:
-            break
+            return out
+        state, nodes, slots = ctx.state, ctx.nodes, ctx.slots
         n, npg = int(state[0]["nodes"]), int(state[0]["pages"])
         cap, pcap = len(nodes.key), len(slots.bkeys)
         if n + nm > cap:
             cap *= 2
-            nodes = NodeTable(*(grown(a, cap, n) for a in nodes))
-            heap = Heap(*(grown(a, cap, n) for a in heap))
+            ctx.nodes = NodeTable(*(grown(a, cap, n) for a in nodes))
+            ctx.heap = Heap(*(grown(a, cap, n) for a in ctx.heap))
         if npg + nm > pcap or 2 * (npg + nm) > len(slots.btab):
             pcap *= 2
-            slots = SlotMap(grown(slots.pages, pcap * PAGE, npg * PAGE),
-                            np.full(2 * pcap, -1, np.int64), grown(slots.bkeys, pcap, npg),
-                            *slots[3:])
-            rehash(slots, npg)
-    return nodes, heap, slots, out
+            ctx.slots = SlotMap(grown(slots.pages, pcap * PAGE, npg * PAGE),
+                                np.full(2 * pcap, -1, np.int64), grown(slots.bkeys, pcap, npg),
+                                *slots[3:])
+            rehash(ctx.slots, npg)

@@ -35,10 +35,10 @@ import time
 
 import numpy as np
 
+from planner._entry import entry_point
 from planner.errors import PlanError
 from planner.occupancy.keys import unpack
 from planner.occupancy.walk import as_cells
-from planner.search._entry import entry_point
 from planner.search._grow import grown
 from planner.search._heap import Heap, new_heap
 from planner.search._state import new_state
@@ -301,7 +301,7 @@ class DStarLite:
         ``a`` is a :class:`dr.ReplanState` of them (one object to unbox instead of ~45
         arrays), made again when one was replaced (the planner's grew: ``_room`` clears
         it; or the world's occupancy struct or ``start`` is another object); ``f`` the
-        compiled entry point of its signature (:mod:`planner.search._entry`: numba's
+        compiled entry point of its signature (:mod:`planner._entry`: numba's
         dispatcher would type the arguments on every call; here they are fixed:
         :meth:`plan` passes C-contiguous (K, 3) int64 cells and (K,) bool states)."""
         occ = self.world.occupancy

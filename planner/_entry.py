@@ -1,4 +1,4 @@
-"""Calling a compiled search kernel without numba's per-call argument typing.
+"""Calling a compiled kernel without numba's per-call argument typing.
 
 numba's dispatcher types every argument of every call to pick the compiled version. For a
 kernel taking several ``NamedTuple`` structs that typing (done in Python for named tuples)
@@ -6,8 +6,8 @@ costs more than a short search itself; the engines call the compiled function di
 instead. numba has no public API for it: :func:`entry_point` reads
 ``dispatcher.overloads[signature].entry_point``, the one place the package relies on numba
 internals. A compiled entry point does not check its arguments, so it must only get
-arguments of the types it was looked up with: :func:`struct_key` names those types for the
-structs a caller does not build itself, and a caller keeps one entry point per key.
+arguments of the types it was looked up with: a caller keeps one entry point per argument
+types (per world's structs, per :class:`planner.search.astar.bound.Bound` type).
 A Ctrl-C that lands inside such a call surfaces as a SystemError caused by the
 KeyboardInterrupt; the returned function raises the KeyboardInterrupt itself.
 """
@@ -16,9 +16,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 
-import numpy as np
-
-__all__ = ["entry_point", "struct_key"]
+__all__ = ["entry_point"]
 
 
 def entry_point(disp, args: Sequence) -> Callable:
@@ -41,10 +39,3 @@ def entry_point(disp, args: Sequence) -> Callable:
             raise
 
     return call
-
-
-def struct_key(struct: tuple) -> tuple:
-    """What numba's type of a ``NamedTuple`` of arrays and scalars depends on: its class and,
-    per field, the array's dtype, dimensions and layout or the scalar's Python type."""
-    return (type(struct), *((a.dtype.str, a.ndim, a.flags.c_contiguous, a.flags.writeable)
-                            if isinstance(a, np.ndarray) else type(a) for a in struct))
