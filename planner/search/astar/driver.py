@@ -231,9 +231,7 @@ def _run(ctx, occ, walk, ms, start, goal, params, span, dense, pause_at, keep_go
         if keep_going():
             out = _loop(ctx, occ, walk, ms, sc, dslot, params, False)
         else:
-            nodes, state = ctx.nodes, ctx.state
-            slots = ctx.slots if dslot is None else SlotMap(*ctx.slots[:3], dslot, occ.lo,
-                                                            occ.dims)
+            nodes, state, slots = ctx.nodes, ctx.state, _slots(ctx, occ, dslot)
             out = (RUN_STOPPED, *_helper(finish, nodes, slots, state, False)(
                 nodes, slots, state, False))
     status, path, cost, exp, n, look = out
@@ -282,7 +280,7 @@ def _nbytes(struct) -> int:
 # and the helpers, whose arguments the driver alone builds.
 _HELPERS: dict[object, object] = {}
 _NO_DENSE = new_slots(1).dense  # the paged slot map's placeholder dense array
-_CALLS: dict[object, object] = {}  # Bound type -> entry point of search_bound
+_CALLS: dict[object, object] = {}  # (Bound type, params' field types) -> search_bound
 
 
 def _unbind(owner_id: int) -> None:
@@ -307,15 +305,20 @@ def _bound(ctx: _Context, occ, walk, ms, sc, dslot, params):
             and bd[4] is dense and bd[5] is ctx.nodes and bd[6] is ctx.slots
             and bd[7] is ctx.ufree and bd[8] == ptypes):
         return bd[9], bd[10]
-    slots = ctx.slots if dslot is None else SlotMap(*ctx.slots[:3], dslot, occ.lo, occ.dims)
-    b = new_bound(occ, walk, ms, ctx.nodes, ctx.heap, slots, sc, ctx.ufree, ctx.ends,
-                  ctx.state)
+    b = new_bound(occ, walk, ms, ctx.nodes, ctx.heap, _slots(ctx, occ, dslot), sc, ctx.ufree,
+                  ctx.ends, ctx.state)
     key = (b._type, ptypes)
     call = _CALLS.get(key)
     if call is None:
         call = _CALLS[key] = entry_point(search_bound, (b, params, False))
     ctx.bound = (occ, walk, ms, sc, dense, ctx.nodes, ctx.slots, ctx.ufree, ptypes, b, call)
     return b, call
+
+
+def _slots(ctx: _Context, occ, dslot) -> SlotMap:
+    """The context's slot map, on the dense slot array ``dslot`` of ``occ``'s box when one
+    was taken."""
+    return ctx.slots if dslot is None else SlotMap(*ctx.slots[:3], dslot, occ.lo, occ.dims)
 
 
 def _helper(disp, *args):
