@@ -19,13 +19,26 @@ import resource
 
 from planner.errors import MapError, PlannerError
 
-__all__ = ["ENV", "MEMORY_SHARE", "default_memory_budget", "memory_budget", "parse_size",
-           "require", "gb"]
+__all__ = ["ENV", "MEMORY_SHARE", "default_memory_budget", "env_token", "memory_budget",
+           "parse_size", "require", "gb"]
 
 ENV = "PLANNER_MEMORY_BUDGET"
 MEMORY_SHARE = 0.125  # of physical memory: a step's peak is a few times its estimate
 _UNITS = {"": 1, "b": 1, "k": 2**10, "m": 2**20, "g": 2**30, "t": 2**40}
 _SIZE = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:e[+-]?[0-9]+)?)\s*([kmgt]?)(?:i?b)?\s*$", re.I)
+
+
+_ENV_KEY = os.environ.encodekey(ENV) if hasattr(os.environ, "encodekey") else None
+
+
+def env_token() -> object:
+    """A value that changes when ``PLANNER_MEMORY_BUDGET`` does (callers that remember a
+    budget key on it). ``os.environ.get`` decodes the key and value on every call, which is
+    a tenth of a short search's fixed cost; the mapping's raw store answers the same."""
+    data = getattr(os.environ, "_data", None)
+    if data is None or _ENV_KEY is None:  # pragma: no cover - another os.environ
+        return os.environ.get(ENV)
+    return data.get(_ENV_KEY)
 
 
 def gb(nbytes: float) -> str:

@@ -234,7 +234,7 @@ def _prepare(world: World, method: str, neighbors: str, corner_cutting: bool, ma
     lat = world.lattice
     key = (id(lat), method, neighbors, corner_cutting, type(max_nodes), max_nodes,
            type(max_expansions), max_expansions, type(memory_budget), memory_budget, workers,
-           os.environ.get(_budget.ENV))
+           _budget.env_token())
     try:
         hit = _JOBS.get(key)
     except TypeError:  # an unhashable argument: checked (and refused) below

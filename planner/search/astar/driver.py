@@ -127,9 +127,7 @@ def _sight(ctx: _Context, walk, span: float):
 
 
 def _take_dense(occ) -> np.ndarray | None:
-    key = id(occ.grid)
-    with _LOCK:
-        a = _POOL.pop(key, None)
+    a = _POOL.pop(id(occ.grid), None)  # one dict operation: atomic under the GIL
     if a is not None:
         return a
     cells = int(np.prod(occ.dims))  # the occupancy grid holds one bit per cell
@@ -163,12 +161,13 @@ def _forget(key: int) -> None:
 def _give_dense(occ, a: np.ndarray) -> None:
     """Return a cleared dense slot array to the pool (dropped when the grid is freed)."""
     key = id(occ.grid)
-    with _LOCK:
-        _POOL[key] = a
-        new = key not in _WATCHED
-        _WATCHED.add(key)
-    if new:
-        weakref.finalize(occ.grid, _forget, key)
+    _POOL[key] = a
+    if key not in _WATCHED:
+        with _LOCK:  # one finalizer per grid, whichever thread returns its array first
+            new = key not in _WATCHED
+            _WATCHED.add(key)
+        if new:
+            weakref.finalize(occ.grid, _forget, key)
 
 
 def run(occ, walk, ms, start, goal, params, span: float, *, owner=None, dense: bool = True,
