@@ -326,10 +326,10 @@ class Lattice:
 
         min/max per chunk: NaN propagates through both, and no (N, d) temporary is made."""
         reach = self._reach
-        if len(x) == 1:  # one point (a start or goal): Python floats, no reductions
-            r = x[0].tolist()
-            if all(math.isfinite(v) and -reach <= v <= reach for v in r):
-                return
+        if len(x) == 1 and x.shape[1] == 3:  # a start or goal: Python floats, no reductions
+            a, b, c = x[0].tolist()
+            if -reach <= a <= reach and -reach <= b <= reach and -reach <= c <= reach:
+                return  # NaN fails every comparison, an infinity the bound
         for s in range(0, len(x), _CHUNK):
             blk = x[s: s + _CHUNK]
             lo, hi = float(blk.min()), float(blk.max())
@@ -365,6 +365,9 @@ class Lattice:
         -------
         ndarray, shape (N, d), float64
         """
+        w = indices
+        if type(w) is np.ndarray and w.dtype == np.int64 and w.ndim == 2 and w.shape[1] == self.dim:
+            return w @ self._g.T  # the usual case (a path's cells), checked at once
         w = np.asarray(indices)
         if w.ndim == 1 and w.shape[0] == self.dim:
             w = w[None, :]

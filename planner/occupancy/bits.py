@@ -13,7 +13,7 @@ free set of a dense world this way; :class:`BoxBits` bundles an array with its b
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -192,6 +192,7 @@ class BoxBits:
     lo: np.ndarray
     dims: np.ndarray
     bits: np.ndarray
+    _any: bool | None = field(default=None, repr=False, compare=False)
 
     @classmethod
     def empty(cls, lo: np.ndarray, dims: np.ndarray) -> BoxBits:
@@ -206,8 +207,15 @@ class BoxBits:
             for i in range(0, self.bits.size, 1 << 24))
 
     def any(self) -> bool:
-        """The set is not empty."""
-        return bool(self.bits.any())
+        """The set is not empty. Remembered until :meth:`update` or :meth:`changed`: every
+        plan asks, and a scan costs time proportional to the box."""
+        if self._any is None:
+            self._any = bool(np.count_nonzero(self.bits))
+        return self._any
+
+    def changed(self) -> None:
+        """Forget what :meth:`any` remembered; call after writing :attr:`bits` directly."""
+        self._any = None
 
     def contains(self, w: np.ndarray) -> np.ndarray:
         """(N,) bool: cell ``w[n]`` ((N, 3) int64, C-contiguous) is in the set."""
@@ -226,6 +234,7 @@ class BoxBits:
         """Add (``value`` True) or remove cells ``w`` (N, 3) int64 in the box; returns the
         (N,) bool mask of those whose membership changed."""
         changed = np.empty(len(w), dtype=np.bool_)
+        self._any = None
         set_cells(self.bits, self.lo, self.dims, np.ascontiguousarray(w, np.int64),
                   bool(value), changed)
         return changed

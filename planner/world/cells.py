@@ -92,6 +92,7 @@ class CellSets:
             u = self._unknown
             u.update(w, True)
             np.bitwise_and(u.bits, self.in_bounds_bits(u.lo, u.dims).bits, out=u.bits)
+            u.changed()
             return
         self._unknown = SortedKeys(unique_keys(np.concatenate([self._unknown.keys,
                                                               pack(w[self.in_bounds(w)])])))
@@ -112,6 +113,7 @@ class CellSets:
             if unknown:  # in bounds only, as the free cells
                 inside = self.in_bounds_bits(target.lo, target.dims)
                 np.bitwise_and(target.bits, inside.bits, out=target.bits)
+            target.changed()  # bits written directly: any() asks again
             return
         flat = np.flatnonzero(grid & mask)
         w = np.stack(np.unravel_index(flat, tuple(int(x) for x in dims)), axis=1) + lo

@@ -146,6 +146,8 @@ def load_world(path: str | os.PathLike):
     free, unknown = world.free_bits, world.unknown_bits
     np.bitwise_and(free.bits, np.invert(d["blocked_bits"]), out=free.bits)
     unknown.bits[:] = d["unknown_bits"]
+    free.changed()
+    unknown.changed()
     world.source_sha256 = str(d["source_sha256"])
     world.saved_path = str(p)
     return world

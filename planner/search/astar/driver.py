@@ -217,7 +217,8 @@ def _run(ctx, occ, walk, ms, start, goal, params, span, dense, pause_at, keep_go
     ends = ctx.ends
     ends[0] = start
     ends[1] = goal
-    sc = _sight(ctx, walk, span) if span > 0 else _no_sight()
+    nos = _no_sight()
+    sc = _sight(ctx, walk, span) if span > 0 else nos
     nu = len(ms.union)
     if nu > len(ctx.ufree):
         ctx.ufree = np.empty(nu, np.bool_)
@@ -237,24 +238,26 @@ def _run(ctx, occ, walk, ms, start, goal, params, span, dense, pause_at, keep_go
     if dslot is not None:  # finish cleared the touched cells: reuse the array
         _give_dense(occ, dslot)
     peak = _fresh_bytes(n, 0 if dslot is not None else int(ctx.state[0]["pages"]))
-    peak += max(nu, 64) + ctx.state.nbytes + (0 if sc is _no_sight() else _nbytes(sc))
+    peak += max(nu, 64) + ctx.state.nbytes + (0 if sc is nos else _nbytes(sc))
     peak += 0 if dslot is None else dslot.nbytes
     if len(ctx.nodes.key) > KEEP_NODES or len(ctx.slots.bkeys) > KEEP_NODES // 8:
         ctx.keep()
     return status, (path if status == RUN_FOUND else None), cost, (exp, n, look), peak
 
 
-_PAUSED: dict[tuple, object] = {}
+_PAUSED: dict[tuple, tuple] = {}
 
 
 def _paused(params, pause_at: int):
-    """``params`` stopping at ``pause_at`` expansions (remembered: made once per settings)."""
-    key = (params, pause_at)
-    p = _PAUSED.get(key)
-    if p is None:
-        if len(_PAUSED) >= 256:
-            _PAUSED.clear()
-        p = _PAUSED[key] = params._replace(max_expansions=pause_at)
+    """``params`` stopping at ``pause_at`` expansions (remembered: made once per settings
+    object; keyed by identity, since hashing the settings costs more than the lookup)."""
+    hit = _PAUSED.get((id(params), pause_at))
+    if hit is not None and hit[0] is params:
+        return hit[1]
+    if len(_PAUSED) >= 256:
+        _PAUSED.clear()
+    p = params._replace(max_expansions=pause_at)
+    _PAUSED[(id(params), pause_at)] = (params, p)  # holds params: its id stays its own
     return p
 
 
