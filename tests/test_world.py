@@ -335,3 +335,29 @@ def test_posed_scans_plan_in_ray_cast_free_space(tmp_path, capsys):
     assert res["found"] and res["unknown_cells"] == 0
     assert main([*common, "--start", "1,1,1", "--goal", "4.6,2,1"]) == 2
     assert "blocked by unknown space" in capsys.readouterr().err
+
+
+def test_a_world_knows_it_meets_unknown_space_after_every_change(tmp_path):
+    """``has_unknown`` (asked by every plan, and remembered) follows the cells added to the
+    unknown set: one by one, from an inflation grid, and through a saved file."""
+    def empty_world():
+        return planner.World(Lattice.named("cubic", 1.0), np.zeros((0, 3), np.int64),
+                             [[0, 0, 0], [7, 7, 7]])
+
+    w = empty_world()
+    assert not w.has_unknown
+    note = w.unknown_note
+    w.add_unknown(np.array([[3, 3, 3]]))
+    assert w.has_unknown and w.n_unknown == 1 and w.unknown_note != note
+
+    w = empty_world()
+    assert not w.has_unknown
+    grid = np.zeros(8 * 8 * 8, np.uint8)
+    grid[(2 * 8 + 2) * 8 + 2] = 1
+    w.block_marked(grid, np.zeros(3, np.int64), np.full(3, 8, np.int64), 1, unknown=True)
+    assert w.has_unknown and w.is_unknown([[2, 2, 2]])[0]
+
+    out = tmp_path / "w.npz"
+    planner.world.file.save_world(w, out)
+    back = planner.build_world(out)
+    assert back.has_unknown and back.n_unknown == 1
