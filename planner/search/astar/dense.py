@@ -148,6 +148,17 @@ def dense_astar(grid, lo, dims, ms, nodes, heap, dsl, st, max_nodes, max_exp, go
     mkey = np.empty(nm, np.int64)
     for m in range(nm):
         mkey[m] = (moves[m, 0] << 42) + (moves[m, 1] << 21) + moves[m, 2]
+    # The gauge's facets that can hold a new node's maximum: a move changes each facet's
+    # value by at most hmd, so a facet below the expanded node's best by more than 2 hmd
+    # never wins at a neighbour (found once per expansion, at its first new node; the
+    # value of a new node is still the full formula, over fewer facets).
+    hmd = 0.0
+    for k in range(nfac if gauge else 0):
+        for m in range(nm):
+            hmd = max(hmd, abs(hmat[k, 0] * moves[m, 0] + hmat[k, 1] * moves[m, 1]
+                               + hmat[k, 2] * moves[m, 2]))
+    fval = np.empty(nfac, np.float64)
+    cand = np.empty(nfac, np.int64)
     fq = 1e-9 * mcost.min()
     fq_inv = 1.0 / fq
     n = st.nodes
@@ -163,9 +174,10 @@ def dense_astar(grid, lo, dims, ms, nodes, heap, dsl, st, max_nodes, max_exp, go
             status = RUN_BUDGET
             break
         s, hn = _heap.pop(heap, npos, hn)
-        npos[s] = -1
+        su = np.uint64(s)  # unsigned node indices: no negative-index fix-up on each access
+        npos[su] = -1
         expansions += 1
-        ks = nkey[s]
+        ks = nkey[su]
         u0, u1, u2 = unpack3(ks)
         a0, b0, c0 = u0 - lo0, u1 - lo1, u2 - lo2
         base = (a0 * d1 + b0) * d2 + c0
@@ -204,8 +216,9 @@ def dense_astar(grid, lo, dims, ms, nodes, heap, dsl, st, max_nodes, max_exp, go
         if max_nodes > 0 and n >= max_nodes:
             status = RUN_LIMIT
             break
-        gs = ng[s]
+        gs = ng[su]
         e0, e1, e2 = gl0 - u0, gl1 - u1, gl2 - u2
+        ncand = -1
         for m in range(nm):
             if need2[m] & blocked:
                 continue
@@ -227,9 +240,10 @@ def dense_astar(grid, lo, dims, ms, nodes, heap, dsl, st, max_nodes, max_exp, go
                 _heap.decrease_key(heap, npos, np.int64(v) - 1, f, gt)
                 continue
             t = n
+            tn = np.uint64(t)
             n += 1
             dsl[loc] = t + 1
-            nkey[t] = ks + mkey[m]
+            nkey[tn] = ks + mkey[m]
             x0 = e0 - moves[m, 0]
             x1 = e1 - moves[m, 1]
             x2 = e2 - moves[m, 2]
@@ -237,17 +251,31 @@ def dense_astar(grid, lo, dims, ms, nodes, heap, dsl, st, max_nodes, max_exp, go
             if oct_s > 0.0:
                 hv = octile(oct_s, x0, x1, x2)
             elif gauge:
-                for k in range(nfac):
+                if ncand < 0:
+                    best = -np.inf
+                    for k in range(nfac):
+                        x = hmat[k, 0] * e0 + hmat[k, 1] * e1 + hmat[k, 2] * e2
+                        fval[k] = x
+                        best = max(best, x)
+                    # the margin's last term outweighs any rounding of these sums
+                    thr = best - 2.0 * hmd - 1e-9 * (1.0 + abs(best))
+                    ncand = 0
+                    for k in range(nfac):
+                        if fval[k] >= thr:
+                            cand[ncand] = k
+                            ncand += 1
+                for i in range(ncand):
+                    k = cand[i]
                     x = hmat[k, 0] * x0 + hmat[k, 1] * x1 + hmat[k, 2] * x2
                     if x > hv:
                         hv = x
-            nh[t] = hv
-            ng[t] = gt
+            nh[tn] = hv
+            ng[tn] = gt
             # f on a 1e-9-cell grid: equal-cost paths tie exactly (float noise would
             # otherwise decide), so the larger-g tie-break can dive; costs stay exact.
             f = np.floor((gt + hv) * fq_inv + 0.5) * fq
-            nf[t] = f
-            npar[t] = s
+            nf[tn] = f
+            npar[tn] = s
             hn = _heap.push(heap, npos, hn, t, f, gt)
     st.nodes = n
     st.queued = hn
