@@ -401,9 +401,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--no-anchor", dest="anchor", action="store_false",
                     help="skip the A* vs C++ anchor table")
     ap.add_argument("--repeat", type=int, default=3,
-                    help="runs of each side (ours / the anchor, A* / Lazy Theta*), "
-                         "alternating; each query counts its fastest run on each side "
-                         "(load on a shared machine)")
+                    help="runs of each side (ours / the anchor, A* / Lazy Theta*, each "
+                         "lattice), alternating; each query counts its fastest run on each "
+                         "side (load on a shared machine)")
     ap.add_argument("--anyangle", type=int, default=20,
                     help="queries per world for Lazy Theta* and weighted-theta vs A* (0: skip)")
     ap.add_argument("--save-lengths", type=Path, metavar="JSON",
