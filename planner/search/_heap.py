@@ -13,7 +13,9 @@ unspecified order. A* keys its entries (f, g); D* Lite (k1, tie-break) with the 
 (:mod:`planner.search.dstar.kernel`).
 
 All functions are ``inline="always"``: a non-inlined call with array arguments pays
-reference counting on every call inside the search loop.
+reference counting on every call inside the search loop. Inside, heap indices are
+unsigned: numba then adds no negative-index fix-up to each load and store (the sifts run
+markedly faster).
 """
 
 from __future__ import annotations
@@ -23,6 +25,8 @@ from typing import NamedTuple
 import numpy as np
 
 from planner._numba import njit_cached
+
+_U0, _U1 = np.uint64(0), np.uint64(1)
 
 __all__ = ["Heap", "new_heap", "push", "pop", "decrease_key", "change_key", "remove",
            "sift_up", "sift_down"]
@@ -46,7 +50,7 @@ def _put(h, pos, i, x, xf, xg):  # pragma: no cover - compiled
     h.slot[i] = x
     h.f[i] = xf
     h.g[i] = xg
-    pos[x] = i
+    pos[np.uint64(x)] = i
 
 
 @njit_cached(inline="always")
@@ -55,12 +59,13 @@ def _before(af, ag, bf, bg):  # pragma: no cover - compiled
 
 
 @njit_cached(inline="always")
-def sift_up(h, pos, i):  # pragma: no cover - compiled
-    """Move entry ``i`` up to its place (after a push or a key decrease)."""
+def sift_up(h, pos, i0):  # pragma: no cover - compiled
+    """Move entry ``i0`` up to its place (after a push or a key decrease)."""
     slot, hf, hg = h.slot, h.f, h.g
+    i = np.uint64(i0)
     x, xf, xg = slot[i], hf[i], hg[i]
-    while i > 0:
-        parent = (i - 1) >> 1
+    while i > _U0:
+        parent = (i - _U1) >> _U1
         if not _before(xf, xg, hf[parent], hg[parent]):
             break
         _put(h, pos, i, slot[parent], hf[parent], hg[parent])
@@ -69,16 +74,19 @@ def sift_up(h, pos, i):  # pragma: no cover - compiled
 
 
 @njit_cached(inline="always")
-def sift_down(h, pos, i, n):  # pragma: no cover - compiled
-    """Move entry ``i`` of a heap of ``n`` entries down to its place."""
+def sift_down(h, pos, i0, n0):  # pragma: no cover - compiled
+    """Move entry ``i0`` of a heap of ``n0`` entries down to its place."""
     slot, hf, hg = h.slot, h.f, h.g
+    i = np.uint64(i0)
+    n = np.uint64(n0)
     x, xf, xg = slot[i], hf[i], hg[i]
     while True:
-        c = 2 * i + 1
+        c = i + i + _U1
         if c >= n:
             break
-        if c + 1 < n and _before(hf[c + 1], hg[c + 1], hf[c], hg[c]):
-            c += 1
+        d = c + _U1
+        if d < n and _before(hf[d], hg[d], hf[c], hg[c]):
+            c = d
         if not _before(hf[c], hg[c], xf, xg):
             break
         _put(h, pos, i, slot[c], hf[c], hg[c])
@@ -89,7 +97,7 @@ def sift_down(h, pos, i, n):  # pragma: no cover - compiled
 @njit_cached(inline="always")
 def push(h, pos, n, x, xf, xg):  # pragma: no cover - compiled
     """Add slot ``x`` with key ``xf`` / tie-breaker ``xg`` to a heap of ``n``; returns n + 1."""
-    _put(h, pos, n, x, xf, xg)
+    _put(h, pos, np.uint64(n), x, xf, xg)
     sift_up(h, pos, n)
     return n + 1
 
@@ -101,15 +109,16 @@ def pop(h, pos, n):  # pragma: no cover - compiled
     s = h.slot[0]
     n -= 1
     if n > 0:
-        _put(h, pos, 0, h.slot[n], h.f[n], h.g[n])
-        sift_down(h, pos, 0, n)
+        u = np.uint64(n)
+        _put(h, pos, _U0, h.slot[u], h.f[u], h.g[u])
+        sift_down(h, pos, _U0, n)
     return s, n
 
 
 @njit_cached(inline="always")
 def decrease_key(h, pos, x, xf, xg):  # pragma: no cover - compiled
     """Lower the key of slot ``x`` (in the heap) to ``xf`` with tie-breaker ``xg``."""
-    i = pos[x]
+    i = np.uint64(pos[np.uint64(x)])
     h.f[i] = xf
     h.g[i] = xg
     sift_up(h, pos, i)
@@ -118,11 +127,11 @@ def decrease_key(h, pos, x, xf, xg):  # pragma: no cover - compiled
 @njit_cached(inline="always")
 def change_key(h, pos, n, x, xf, xg):  # pragma: no cover - compiled
     """Set the key of slot ``x`` (in a heap of ``n``) to ``xf`` / ``xg``, up or down."""
-    i = pos[x]
+    i = np.uint64(pos[np.uint64(x)])
     h.f[i] = xf
     h.g[i] = xg
     sift_up(h, pos, i)
-    sift_down(h, pos, pos[x], n)
+    sift_down(h, pos, pos[np.uint64(x)], n)
 
 
 @njit_cached(inline="always")

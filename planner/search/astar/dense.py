@@ -6,7 +6,9 @@ It runs when the world is a dense bit grid, the cell -> slot map is dense too (o
 per grid cell), the move set's union stencil fits a bit mask (``MoveSet.need``) and the
 method has no any-angle rule. Per expansion it reads the union stencil once into a mask of
 free cells (without bounds tests away from the box faces), tests each move as one AND with
-the cells it needs, finds the target's node in one load of the dense slot array, and makes
+the cells it needs (the stencil read as a few bit windows, one per row of cells along the
+grid's fastest axis), finds the target's node and whether it is closed in one load of the
+dense slot array (a closed node's entry is negated), and makes
 a new node's key by adding the move's key offset (packed keys are linear in the cell
 while a cell stays inside the key range). Same expansions, costs, paths and lookups as the
 general loop: one stays the reference of the other (``tests/test_search.py``).
@@ -42,6 +44,63 @@ def grid_offsets(ust, moves, d1, d2):  # pragma: no cover - compiled
 
 
 @njit_cached
+def stencil_rows(ust, need, d1, d2):  # pragma: no cover - compiled
+    """The union stencil (U, 3) as runs of cells along the grid's fastest axis, read as
+    one bit window each instead of one lookup per cell.
+
+    Returns ``(roff, rshift, rmask, ubit, need2, all2, ok)``: per row (R,) its first cell's grid
+    offset (int64, C-order grid of dims (., d1, d2)), the bit where its window starts in the
+    free mask and the window's mask; per stencil cell (U,) its bit in that mask; each move's
+    ``need`` (M,) and the mask of every stencil cell, with the bits renumbered so. A row
+    spans at most 9 cells (its window then fits two bytes); ``ok`` False when the rows do
+    not fit (more than 63 bits or a longer row): then the bits keep the stencil's order
+    and each cell is read alone."""
+    nu = ust.shape[0]
+    row = np.full(nu, -1, np.int64)
+    cmin = np.empty(nu, np.int64)
+    span = np.empty(nu, np.int64)
+    nr = 0
+    for j in range(nu):
+        if row[j] >= 0:
+            continue
+        lo_c = ust[j, 2]
+        hi_c = ust[j, 2]
+        for i in range(j, nu):
+            if ust[i, 0] == ust[j, 0] and ust[i, 1] == ust[j, 1]:
+                row[i] = nr
+                lo_c = min(lo_c, ust[i, 2])
+                hi_c = max(hi_c, ust[i, 2])
+        cmin[nr] = lo_c
+        span[nr] = hi_c - lo_c + 1
+        nr += 1
+    roff = np.empty(nr, np.int64)
+    rshift = np.empty(nr, np.int64)
+    rmask = np.empty(nr, np.int64)
+    at = 0
+    for r in range(nr):
+        rshift[r] = at
+        rmask[r] = (np.int64(1) << span[r]) - 1
+        at += span[r]
+    ubit = np.empty(nu, np.int64)
+    all2 = np.int64(0)
+    for j in range(nu):
+        r = row[j]
+        roff[r] = (ust[j, 0] * d1 + ust[j, 1]) * d2 + cmin[r]
+        ubit[j] = rshift[r] + ust[j, 2] - cmin[r]
+        all2 |= np.int64(1) << ubit[j]
+    if at > 63 or span[:nr].max() > 9:  # no windows: the stencil's own bit order
+        for j in range(nu):
+            ubit[j] = j
+        return roff, rshift, rmask, ubit, need.copy(), (np.int64(1) << nu) - 1, False
+    need2 = np.zeros(need.shape[0], np.int64)
+    for m in range(need.shape[0]):
+        for j in range(nu):
+            if (need[m] >> j) & 1:
+                need2[m] |= np.int64(1) << ubit[j]
+    return roff, rshift, rmask, ubit, need2, all2, True
+
+
+@njit_cached
 def dense_astar(grid, lo, dims, ms, nodes, heap, dsl, st, max_nodes, max_exp, goal):
     # pragma: no cover - compiled
     """Run the search from the kernel's state ``st`` until it ends or needs room.
@@ -56,7 +115,8 @@ def dense_astar(grid, lo, dims, ms, nodes, heap, dsl, st, max_nodes, max_exp, go
     nodes : NodeTable
     heap : planner.search._heap.Heap
     dsl : (prod(dims),) int32
-        Dense cell -> node slot + 1 (0: none) over the grid's box.
+        Dense cell -> node slot + 1 (0: none) over the grid's box; this loop stores
+        -(slot + 1) at a node it closes (:func:`planner.search._nodes.finish` clears both).
     st : ``ASTAR_STATE`` record
         The search's counters; the start node is already in place.
     max_nodes, max_expansions : int
@@ -82,10 +142,23 @@ def dense_astar(grid, lo, dims, ms, nodes, heap, dsl, st, max_nodes, max_exp, go
     gk = pack3(gl0, gl1, gl2)
     # Each move as one offset of the packed key, besides its grid offset.
     uoff, moff, reach = grid_offsets(ust, moves, d1, d2)
+    roff, rshift, rmask, ubit, need2, all_u, rows = stencil_rows(ust, need, d1, d2)
+    nr = roff.shape[0]
+    last = np.uint64(grid.shape[0] - 1)
     mkey = np.empty(nm, np.int64)
     for m in range(nm):
         mkey[m] = (moves[m, 0] << 42) + (moves[m, 1] << 21) + moves[m, 2]
-    all_u = (np.int64(1) << nu) - 1
+    # The gauge's facets that can hold a new node's maximum: a move changes each facet's
+    # value by at most hmd, so a facet below the expanded node's best by more than 2 hmd
+    # never wins at a neighbour (found once per expansion, at its first new node; the
+    # value of a new node is still the full formula, over fewer facets).
+    hmd = 0.0
+    for k in range(nfac if gauge else 0):
+        for m in range(nm):
+            hmd = max(hmd, abs(hmat[k, 0] * moves[m, 0] + hmat[k, 1] * moves[m, 1]
+                               + hmat[k, 2] * moves[m, 2]))
+    fval = np.empty(nfac, np.float64)
+    cand = np.empty(nfac, np.int64)
     fq = 1e-9 * mcost.min()
     fq_inv = 1.0 / fq
     n = st.nodes
@@ -101,18 +174,31 @@ def dense_astar(grid, lo, dims, ms, nodes, heap, dsl, st, max_nodes, max_exp, go
             status = RUN_BUDGET
             break
         s, hn = _heap.pop(heap, npos, hn)
-        npos[s] = -1
+        su = np.uint64(s)  # unsigned node indices: no negative-index fix-up on each access
+        npos[su] = -1
         expansions += 1
-        ks = nkey[s]
+        ks = nkey[su]
         u0, u1, u2 = unpack3(ks)
         a0, b0, c0 = u0 - lo0, u1 - lo1, u2 - lo2
         base = (a0 * d1 + b0) * d2 + c0
+        # closed: the slot map holds -(slot + 1), so a neighbour's one load of it tells
+        # closed from open (no load of its heap position)
+        dsl[np.uint64(base)] = -(s + 1)
         free = np.int64(0)
         if (a0 >= reach and b0 >= reach and c0 >= reach and a0 < d0 - reach
                 and b0 < d1 - reach and c0 < d2 - reach):
-            for j in range(nu):
-                f = base + uoff[j]
-                free |= np.int64((grid[np.uint64(f >> 3)] >> (f & 7)) & 1) << j
+            if rows:
+                # each row of stencil cells along the fastest axis as one window of the
+                # bit grid: two byte loads instead of a load per cell
+                for r in range(nr):
+                    f = np.uint64(base + roff[r])
+                    i = f >> np.uint64(3)
+                    w = np.int64(grid[i]) | (np.int64(grid[min(i + np.uint64(1), last)]) << 8)
+                    free |= ((w >> np.int64(f & np.uint64(7))) & rmask[r]) << rshift[r]
+            else:
+                for j in range(nu):
+                    f = base + uoff[j]
+                    free |= np.int64((grid[np.uint64(f >> 3)] >> (f & 7)) & 1) << j
         else:
             for j in range(nu):
                 a = a0 + ust[j, 0]
@@ -120,7 +206,7 @@ def dense_astar(grid, lo, dims, ms, nodes, heap, dsl, st, max_nodes, max_exp, go
                 c = c0 + ust[j, 2]
                 if a >= 0 and b >= 0 and c >= 0 and a < d0 and b < d1 and c < d2:
                     f = (a * d1 + b) * d2 + c
-                    free |= np.int64((grid[f >> 3] >> (f & 7)) & 1) << j
+                    free |= np.int64((grid[f >> 3] >> (f & 7)) & 1) << ubit[j]
         blocked = all_u & ~free
         lookups += nu
         if ks == gk:
@@ -130,30 +216,34 @@ def dense_astar(grid, lo, dims, ms, nodes, heap, dsl, st, max_nodes, max_exp, go
         if max_nodes > 0 and n >= max_nodes:
             status = RUN_LIMIT
             break
-        gs = ng[s]
+        gs = ng[su]
         e0, e1, e2 = gl0 - u0, gl1 - u1, gl2 - u2
+        ncand = -1
         for m in range(nm):
-            if need[m] & blocked:
+            if need2[m] & blocked:
                 continue
             # an allowed move's target is free, hence in the box; unsigned indices spare
             # the negative-index fix-up on these loads
             loc = np.uint64(base + moff[m])
-            t = np.int64(dsl[loc]) - 1
+            v = dsl[loc]
+            if v < 0:
+                continue  # closed: a consistent heuristic never improves it
             gt = gs + mcost[m]
-            if t >= 0:
-                tu = np.uint64(t)
-                if npos[tu] < 0 or gt >= ng[tu]:
-                    continue  # closed (a consistent heuristic never improves it) or no better
+            if v > 0:
+                tu = np.uint64(v - 1)
+                if gt >= ng[tu]:
+                    continue  # no better
                 ng[tu] = gt
                 f = np.floor((gt + nh[tu]) * fq_inv + 0.5) * fq
                 nf[tu] = f
                 npar[tu] = s
-                _heap.decrease_key(heap, npos, t, f, gt)
+                _heap.decrease_key(heap, npos, np.int64(v) - 1, f, gt)
                 continue
             t = n
+            tn = np.uint64(t)
             n += 1
             dsl[loc] = t + 1
-            nkey[t] = ks + mkey[m]
+            nkey[tn] = ks + mkey[m]
             x0 = e0 - moves[m, 0]
             x1 = e1 - moves[m, 1]
             x2 = e2 - moves[m, 2]
@@ -161,17 +251,31 @@ def dense_astar(grid, lo, dims, ms, nodes, heap, dsl, st, max_nodes, max_exp, go
             if oct_s > 0.0:
                 hv = octile(oct_s, x0, x1, x2)
             elif gauge:
-                for k in range(nfac):
+                if ncand < 0:
+                    best = -np.inf
+                    for k in range(nfac):
+                        x = hmat[k, 0] * e0 + hmat[k, 1] * e1 + hmat[k, 2] * e2
+                        fval[k] = x
+                        best = max(best, x)
+                    # the margin's last term outweighs any rounding of these sums
+                    thr = best - 2.0 * hmd - 1e-9 * (1.0 + abs(best))
+                    ncand = 0
+                    for k in range(nfac):
+                        if fval[k] >= thr:
+                            cand[ncand] = k
+                            ncand += 1
+                for i in range(ncand):
+                    k = cand[i]
                     x = hmat[k, 0] * x0 + hmat[k, 1] * x1 + hmat[k, 2] * x2
                     if x > hv:
                         hv = x
-            nh[t] = hv
-            ng[t] = gt
+            nh[tn] = hv
+            ng[tn] = gt
             # f on a 1e-9-cell grid: equal-cost paths tie exactly (float noise would
             # otherwise decide), so the larger-g tie-break can dive; costs stay exact.
             f = np.floor((gt + hv) * fq_inv + 0.5) * fq
-            nf[t] = f
-            npar[t] = s
+            nf[tn] = f
+            npar[tn] = s
             hn = _heap.push(heap, npos, hn, t, f, gt)
     st.nodes = n
     st.queued = hn
