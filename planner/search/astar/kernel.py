@@ -10,9 +10,10 @@ expanded, falling back to its best closed lattice neighbour (SetVertex). Both us
 Euclidean heuristic and the exact walk of :mod:`planner.search._los`.
 
 Lattice A* / Dijkstra on a dense grid runs the loop of :mod:`planner.search.astar.dense`,
-written for that case alone. The general loop here writes out its hot parts (the dense
-lookups, the safe-rule test, the slot lookup, the heuristic of a new node, the any-angle
-g) instead of calling the shared inline helpers (:mod:`planner.search.heuristic`, ...):
+written for that case alone, and Lazy Theta* on a dense cubic grid that of
+:mod:`planner.search.astar.dense_theta`. The general loop here writes out its hot parts
+(the dense lookups, the safe-rule test, the slot lookup, the heuristic of a new node, the
+any-angle g) instead of calling the shared inline helpers (:mod:`planner.search.heuristic`, ...):
 with them the loop compiled to a markedly slower one on cubic-26
 (``benchmarks/search_speed.py``).
 """
@@ -38,6 +39,7 @@ from planner.search._nodes import (
     new_page,
 )
 from planner.search.astar.dense import dense_astar, grid_offsets
+from planner.search.astar.dense_theta import dense_lazy_theta
 from planner.search.heuristic import H_EUCLID, H_GAUGE, estimate, octile
 from planner.search.moves import MAX_BITS, move_allowed
 from planner.search.result import (
@@ -136,6 +138,12 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state
             and ms.union.shape[0] <= MAX_BITS and ms.hkind != H_EUCLID):
         status = dense_astar(occ.grid, occ.lo, occ.dims, ms, nodes, heap, slots.dense, st,
                              params.max_nodes, params.max_expansions, goal)
+        st.status = status
+        return status
+    if (params.anyangle == LAZY_THETA and occ.mode == 0 and slots.dense.shape[0] > 1
+            and ms.union.shape[0] <= MAX_BITS and is_cubic(walk.g)):
+        status = dense_lazy_theta(occ, ms, nodes, heap, slots.dense, st, params.max_nodes,
+                                  params.max_expansions, goal, walk.g[0, 0], params.h_weight)
         st.status = status
         return status
     mode, grid, lo, dims, otable, otmask, gg, blo, bhi = occ
