@@ -4,10 +4,11 @@ written for that case alone, as :mod:`planner.search.astar.dense` is for lattice
 
 It runs when the world is a dense bit grid, the cell -> slot map is dense too, the move
 set's union stencil fits a bit mask and the lattice is cubic (its sight lines are the
-integer walk :func:`planner.search._los.cubic_walk`). Per expansion it reads the union
-stencil once into a mask of free cells, verifies the assumed sight line to the parent
-(falling back to the best closed lattice neighbour, SetVertex), and per allowed move finds
-the target's node in one load of the dense slot array. Same expansions, costs, paths and
+integer walk :func:`planner.search._los.dense_walk`, given the grid's arrays: the box's
+longest side at most ``DDA_MAX``). Per expansion it reads the union stencil once into a
+mask of free cells, verifies the assumed sight line to the parent (falling back to the
+best closed lattice neighbour, SetVertex), and per allowed move finds the target's node
+in one load of the dense slot array. Same expansions, costs, paths and
 lookups as the general loop, which stays its reference (``tests/test_anyangle.py``).
 """
 
@@ -18,7 +19,7 @@ import numpy as np
 from planner._numba import njit_cached
 from planner.occupancy.keys import pack3, unpack3
 from planner.search import _heap
-from planner.search._los import cubic_walk
+from planner.search._los import dense_walk
 from planner.search.astar.dense import grid_offsets
 from planner.search.result import RUN_BUDGET, RUN_EXHAUSTED, RUN_FOUND, RUN_GROW, RUN_LIMIT
 
@@ -33,7 +34,7 @@ def dense_lazy_theta(occ, ms, nodes, heap, dsl, st, max_nodes, max_exp, goal, ce
     Parameters
     ----------
     occ : Occupancy
-        Dense (mode 0).
+        Dense (mode 0), no side of its box longer than ``planner.search._los.DDA_MAX``.
     ms : MoveSet
         With ``len(ms.union) <= 63``.
     nodes : NodeTable
@@ -113,7 +114,7 @@ def dense_lazy_theta(occ, ms, nodes, heap, dsl, st, max_nodes, max_exp, goal, ce
             # Verify the assumed sight line, walked from s (a blocked cell is likelier
             # near s: its parent saw s's generator).
             p0, p1, p2 = unpack3(nkey[ps])
-            ok, c = cubic_walk(occ, u0, u1, u2, p0, p1, p2)
+            ok, c = dense_walk(grid, lo, dims, u0, u1, u2, p0, p1, p2)
             lookups += c
             if not ok:
                 # SetVertex: the best closed neighbour that an allowed move reaches (one
