@@ -149,8 +149,14 @@ def dense_lazy_theta(occ, ms, nodes, heap, dsl, st, max_nodes, max_exp, goal, ce
             # an allowed move's target is free, hence in the box
             loc = np.uint64(base + moff[m])
             t = np.int64(dsl[loc]) - 1
-            if t >= 0 and npos[np.uint64(t)] == -1:
-                continue  # closed: a consistent heuristic never improves it
+            if t >= 0:
+                tu = np.uint64(t)
+                if npos[tu] == -1:
+                    continue  # closed: a consistent heuristic never improves it
+                if npar[tu] == ps:
+                    # its g came through this parent, the sum below to the bit (a closed
+                    # node's g stays): not less, so no square root
+                    continue
             v0 = u0 + moves[m, 0]
             v1 = u1 + moves[m, 1]
             v2 = u2 + moves[m, 2]
@@ -178,7 +184,6 @@ def dense_lazy_theta(occ, ms, nodes, heap, dsl, st, max_nodes, max_exp, goal, ce
                 npar[t] = ps
                 hn = _heap.push(heap, npos, hn, t, f, gt)
                 continue
-            tu = np.uint64(t)
             if gt < ng[tu]:
                 ng[tu] = gt
                 f = np.floor((gt + nh[tu]) * fq_inv + 0.5) * fq
