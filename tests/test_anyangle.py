@@ -126,11 +126,12 @@ def test_cli_plans_with_it(tmp_path, capsys):
     assert len(err) == 1 and "weighted-theta" in err[0]
 
 
-@pytest.mark.parametrize("method", ["lazy-theta", "weighted-theta"])
+@pytest.mark.parametrize("method", ["lazy-theta", "weighted-theta", "theta"])
 def test_dense_loop_matches_the_general_loop(method):
     """Lazy Theta* on a dense cubic grid runs its own loop (planner.search.astar.
-    dense_theta); the same world stored as a hash set runs the general loop: same path,
-    cost, expansions, nodes and lookups, with sight lines that fail (SetVertex) among them."""
+    dense_theta), Theta* the general loop with the dense grid's walk; the same world stored
+    as a hash set runs the general loop with the general walk: same path, cost,
+    expansions, nodes and lookups, with sight lines that fail among them."""
     for seed in range(30):
         world, s, g = _random_world("cubic", seed, n=14, frac=0.2)
         hashed = World(world.lattice, world.blocked, world.bounds, dense_budget=0)

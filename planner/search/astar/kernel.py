@@ -28,7 +28,7 @@ from planner._numba import njit_cached
 from planner.occupancy.grid import cell_free, occ_free
 from planner.occupancy.keys import mix64, pack3, unpack3
 from planner.search import _heap
-from planner.search._los import DDA_MAX, cubic_walk, is_cubic, sight
+from planner.search._los import DDA_MAX, cubic_walk, dense_walk, is_cubic, sight
 from planner.search._nodes import (
     PAGE,
     block_key,
@@ -157,6 +157,9 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state
     anyangle, max_nodes, max_exp, hw = params
     g = walk.g
     cubic = is_cubic(g)
+    # sight lines between free cells of a dense grid stay inside its box: the walk on the
+    # grid's arrays
+    cubic_dense = cubic and mode == 0 and max(d0, max(d1, d2)) <= DDA_MAX
     gl0, gl1, gl2 = goal[0], goal[1], goal[2]
     g00, g01, g02 = g[0, 0], g[0, 1], g[0, 2]
     g10, g11, g12 = g[1, 0], g[1, 1], g[1, 2]
@@ -224,7 +227,9 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state
         # (its parent saw s's generator), so the walk stops sooner.
         if anyangle == LAZY_THETA and npar[s] != s:
             p0, p1, p2 = unpack3(nkey[npar[s]])
-            if cubic:
+            if cubic_dense:
+                ok, c = dense_walk(grid, lo, dims, u0, u1, u2, p0, p1, p2)
+            elif cubic:
                 ok, c = cubic_walk(occ, u0, u1, u2, p0, p1, p2)
             else:
                 ok, c = sight(occ, walk, sc, st, u0, u1, u2, p0, p1, p2)
@@ -346,7 +351,9 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state
                     g1 = ng[s] + mcost[m]
                     if gt >= ng[t] and g1 >= ng[t]:
                         continue  # neither parent improves t: its sight line is moot
-                    if cubic:
+                    if cubic_dense:
+                        ok, c = dense_walk(grid, lo, dims, v0, v1, v2, p0, p1, p2)
+                    elif cubic:
                         ok, c = cubic_walk(occ, v0, v1, v2, p0, p1, p2)
                     else:
                         ok, c = sight(occ, walk, sc, st, p0, p1, p2, v0, v1, v2)
