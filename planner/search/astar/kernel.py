@@ -10,9 +10,10 @@ expanded, falling back to its best closed lattice neighbour (SetVertex). Both us
 Euclidean heuristic and the exact walk of :mod:`planner.search._los`.
 
 Lattice A* / Dijkstra on a dense grid runs the loop of :mod:`planner.search.astar.dense`,
-written for that case alone. The general loop here writes out its hot parts (the dense
-lookups, the safe-rule test, the slot lookup, the heuristic of a new node, the any-angle
-g) instead of calling the shared inline helpers (:mod:`planner.search.heuristic`, ...):
+written for that case alone, and Lazy Theta* on a dense cubic grid that of
+:mod:`planner.search.astar.dense_theta`. The general loop here writes out its hot parts
+(the dense lookups, the safe-rule test, the slot lookup, the heuristic of a new node, the
+any-angle g) instead of calling the shared inline helpers (:mod:`planner.search.heuristic`, ...):
 with them the loop compiled to a markedly slower one on cubic-26
 (``benchmarks/search_speed.py``).
 """
@@ -27,7 +28,7 @@ from planner._numba import njit_cached
 from planner.occupancy.grid import cell_free, occ_free
 from planner.occupancy.keys import mix64, pack3, unpack3
 from planner.search import _heap
-from planner.search._los import cubic_walk, is_cubic, sight
+from planner.search._los import DDA_MAX, cubic_walk, dense_walk, is_cubic, sight
 from planner.search._nodes import (
     PAGE,
     block_key,
@@ -38,6 +39,7 @@ from planner.search._nodes import (
     new_page,
 )
 from planner.search.astar.dense import dense_astar, grid_offsets
+from planner.search.astar.dense_theta import dense_lazy_theta
 from planner.search.heuristic import H_EUCLID, H_GAUGE, estimate, octile
 from planner.search.moves import MAX_BITS, move_allowed
 from planner.search.result import (
@@ -138,6 +140,13 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state
                              params.max_nodes, params.max_expansions, goal)
         st.status = status
         return status
+    if (params.anyangle == LAZY_THETA and occ.mode == 0 and slots.dense.shape[0] > 1
+            and ms.union.shape[0] <= MAX_BITS and is_cubic(walk.g)
+            and occ.dims.max() <= DDA_MAX):
+        status = dense_lazy_theta(occ, ms, nodes, heap, slots.dense, st, params.max_nodes,
+                                  params.max_expansions, goal, walk.g[0, 0], params.h_weight)
+        st.status = status
+        return status
     mode, grid, lo, dims, otable, otmask, gg, blo, bhi = occ
     lo0, lo1, lo2 = lo[0], lo[1], lo[2]
     d0, d1, d2 = dims[0], dims[1], dims[2]
@@ -148,6 +157,9 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state
     anyangle, max_nodes, max_exp, hw = params
     g = walk.g
     cubic = is_cubic(g)
+    # sight lines between free cells of a dense grid stay inside its box: the walk on the
+    # grid's arrays
+    cubic_dense = cubic and mode == 0 and max(d0, max(d1, d2)) <= DDA_MAX
     gl0, gl1, gl2 = goal[0], goal[1], goal[2]
     g00, g01, g02 = g[0, 0], g[0, 1], g[0, 2]
     g10, g11, g12 = g[1, 0], g[1, 1], g[1, 2]
@@ -215,7 +227,9 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state
         # (its parent saw s's generator), so the walk stops sooner.
         if anyangle == LAZY_THETA and npar[s] != s:
             p0, p1, p2 = unpack3(nkey[npar[s]])
-            if cubic:
+            if cubic_dense:
+                ok, c = dense_walk(grid, lo, dims, u0, u1, u2, p0, p1, p2)
+            elif cubic:
                 ok, c = cubic_walk(occ, u0, u1, u2, p0, p1, p2)
             else:
                 ok, c = sight(occ, walk, sc, st, u0, u1, u2, p0, p1, p2)
@@ -337,7 +351,9 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state
                     g1 = ng[s] + mcost[m]
                     if gt >= ng[t] and g1 >= ng[t]:
                         continue  # neither parent improves t: its sight line is moot
-                    if cubic:
+                    if cubic_dense:
+                        ok, c = dense_walk(grid, lo, dims, v0, v1, v2, p0, p1, p2)
+                    elif cubic:
                         ok, c = cubic_walk(occ, v0, v1, v2, p0, p1, p2)
                     else:
                         ok, c = sight(occ, walk, sc, st, p0, p1, p2, v0, v1, v2)

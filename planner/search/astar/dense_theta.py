@@ -1,0 +1,197 @@
+"""The Lazy Theta* loop on a dense occupancy grid and the cubic lattice (numba): the A*
+kernel's (:mod:`planner.search.astar.kernel`) any-angle path for its commonest case,
+written for that case alone, as :mod:`planner.search.astar.dense` is for lattice A*.
+
+It runs when the world is a dense bit grid, the cell -> slot map is dense too, the move
+set's union stencil fits a bit mask and the lattice is cubic (its sight lines are the
+integer walk :func:`planner.search._los.dense_walk`, given the grid's arrays: the box's
+longest side at most ``DDA_MAX``). Per expansion it reads the union stencil once into a
+mask of free cells, verifies the assumed sight line to the parent (falling back to the
+best closed lattice neighbour, SetVertex), and per allowed move finds the target's node
+in one load of the dense slot array. Same expansions, costs, paths and
+lookups as the general loop, which stays its reference (``tests/test_anyangle.py``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from planner._numba import njit_cached
+from planner.occupancy.keys import pack3, unpack3
+from planner.search import _heap
+from planner.search._los import dense_walk
+from planner.search.astar.dense import grid_offsets
+from planner.search.result import RUN_BUDGET, RUN_EXHAUSTED, RUN_FOUND, RUN_GROW, RUN_LIMIT
+
+__all__ = ["dense_lazy_theta"]
+
+
+@njit_cached
+def dense_lazy_theta(occ, ms, nodes, heap, dsl, st, max_nodes, max_exp, goal, cell, hw):
+    # pragma: no cover - compiled
+    """Run Lazy Theta* from the kernel's state ``st`` until it ends or needs room.
+
+    Parameters
+    ----------
+    occ : Occupancy
+        Dense (mode 0), no side of its box longer than ``planner.search._los.DDA_MAX``.
+    ms : MoveSet
+        With ``len(ms.union) <= 63``.
+    nodes : NodeTable
+    heap : planner.search._heap.Heap
+    dsl : (prod(occ.dims),) int32
+        Dense cell -> node slot + 1 (0: none) over the grid's box.
+    st : ``ASTAR_STATE`` record
+        The search's counters; the start node is already in place.
+    max_nodes, max_exp : int
+        Limits (<= 0: none).
+    goal : (3,) int64
+    cell : float
+        The cubic generator's diagonal (m): cell ``w`` lies at ``cell * w``.
+    hw : float
+        The straight-line heuristic's factor.
+
+    Returns
+    -------
+    int
+        RUN_FOUND, RUN_EXHAUSTED, RUN_LIMIT, RUN_BUDGET or RUN_GROW.
+    """
+    grid, lo, dims = occ.grid, occ.lo, occ.dims
+    lo0, lo1, lo2 = lo[0], lo[1], lo[2]
+    d0, d1, d2 = dims[0], dims[1], dims[2]
+    moves, mcost, ust, need = ms.moves, ms.cost, ms.union, ms.need
+    nkey, ng, nf, nh, npar, npos = nodes
+    nu = ust.shape[0]
+    nm = moves.shape[0]
+    cap = nkey.shape[0]
+    gl0, gl1, gl2 = goal[0], goal[1], goal[2]
+    gk = pack3(gl0, gl1, gl2)
+    uoff, moff, reach = grid_offsets(ust, moves, d1, d2)
+    mkey = np.empty(nm, np.int64)
+    for m in range(nm):
+        mkey[m] = (moves[m, 0] << 42) + (moves[m, 1] << 21) + moves[m, 2]
+    all_u = (np.int64(1) << nu) - 1
+    fq = 1e-9 * mcost.min()
+    fq_inv = 1.0 / fq
+    n = st.nodes
+    hn = st.queued
+    expansions = st.expansions
+    lookups = st.lookups
+    status = RUN_EXHAUSTED
+    while hn > 0:
+        if n + nm > cap:
+            status = RUN_GROW
+            break
+        if max_exp > 0 and expansions >= max_exp:
+            status = RUN_BUDGET
+            break
+        s, hn = _heap.pop(heap, npos, hn)
+        npos[s] = -1
+        expansions += 1
+        ks = nkey[s]
+        u0, u1, u2 = unpack3(ks)
+        a0, b0, c0 = u0 - lo0, u1 - lo1, u2 - lo2
+        base = (a0 * d1 + b0) * d2 + c0
+        free = np.int64(0)
+        if (a0 >= reach and b0 >= reach and c0 >= reach and a0 < d0 - reach
+                and b0 < d1 - reach and c0 < d2 - reach):
+            for j in range(nu):
+                f = base + uoff[j]
+                free |= np.int64((grid[np.uint64(f >> 3)] >> (f & 7)) & 1) << j
+        else:
+            for j in range(nu):
+                a = a0 + ust[j, 0]
+                b = b0 + ust[j, 1]
+                c = c0 + ust[j, 2]
+                if a >= 0 and b >= 0 and c >= 0 and a < d0 and b < d1 and c < d2:
+                    f = (a * d1 + b) * d2 + c
+                    free |= np.int64((grid[f >> 3] >> (f & 7)) & 1) << j
+        blocked = all_u & ~free
+        lookups += nu
+        ps = npar[s]
+        p0, p1, p2 = u0, u1, u2
+        if ps != s:
+            # Verify the assumed sight line, walked from s (a blocked cell is likelier
+            # near s: its parent saw s's generator).
+            p0, p1, p2 = unpack3(nkey[ps])
+            ok, c = dense_walk(grid, lo, dims, u0, u1, u2, p0, p1, p2)
+            lookups += c
+            if not ok:
+                # SetVertex: the best closed neighbour that an allowed move reaches (one
+                # exists: the node that generated s).
+                best = np.inf
+                bp = np.int64(-1)
+                for m in range(nm):
+                    if need[m] & blocked:
+                        continue
+                    t = np.int64(dsl[np.uint64(base + moff[m])]) - 1
+                    if t < 0 or npos[t] != -1:
+                        continue
+                    gv = ng[t] + mcost[m]
+                    if gv < best:
+                        best = gv
+                        bp = t
+                npar[s] = bp
+                ng[s] = best
+                ps = bp
+                p0, p1, p2 = unpack3(nkey[ps])
+        if ks == gk:
+            status = RUN_FOUND
+            st.goal = s
+            break
+        if max_nodes > 0 and n >= max_nodes:
+            status = RUN_LIMIT
+            break
+        gp = ng[ps]
+        for m in range(nm):
+            if need[m] & blocked:
+                continue
+            # an allowed move's target is free, hence in the box
+            loc = np.uint64(base + moff[m])
+            t = np.int64(dsl[loc]) - 1
+            if t >= 0:
+                tu = np.uint64(t)
+                if npos[tu] == -1:
+                    continue  # closed: a consistent heuristic never improves it
+                if npar[tu] == ps:
+                    # its g came through this parent, the sum below to the bit (a closed
+                    # node's g stays): not less, so no square root
+                    continue
+            v0 = u0 + moves[m, 0]
+            v1 = u1 + moves[m, 1]
+            v2 = u2 + moves[m, 2]
+            # g through s's parent: the general loop's |G (v - p)| with G = cell * I (its
+            # zero off-diagonal terms add exact zeros), so the same floats
+            x = cell * (v0 - p0)
+            y = cell * (v1 - p1)
+            z = cell * (v2 - p2)
+            gt = gp + np.sqrt(x * x + y * y + z * z)
+            if t < 0:
+                t = n
+                n += 1
+                dsl[loc] = t + 1
+                nkey[t] = ks + mkey[m]
+                x = cell * (gl0 - v0)
+                y = cell * (gl1 - v1)
+                z = cell * (gl2 - v2)
+                hv = hw * np.sqrt(x * x + y * y + z * z)
+                nh[t] = hv
+                ng[t] = gt
+                # f on a 1e-9-cell grid: equal-cost paths tie exactly (float noise would
+                # otherwise decide), so the larger-g tie-break can dive; costs stay exact.
+                f = np.floor((gt + hv) * fq_inv + 0.5) * fq
+                nf[t] = f
+                npar[t] = ps
+                hn = _heap.push(heap, npos, hn, t, f, gt)
+                continue
+            if gt < ng[tu]:
+                ng[tu] = gt
+                f = np.floor((gt + nh[tu]) * fq_inv + 0.5) * fq
+                nf[tu] = f
+                npar[tu] = ps
+                _heap.decrease_key(heap, npos, t, f, gt)
+    st.nodes = n
+    st.queued = hn
+    st.expansions = expansions
+    st.lookups = lookups
+    return status
