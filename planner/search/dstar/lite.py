@@ -116,6 +116,8 @@ class DStarLite:
         self._mark = (0, 0)  # lookups, expansions at the last plan
         self._seconds = 0.0  # engine time of update() lookups since the last plan
         self._pending: list[tuple[np.ndarray, np.ndarray | bool]] = []  # since then
+        self._kept: list[tuple[np.ndarray, bool]] = []  # blocked, not repaired (_keep)
+        self._kept_n = 0  # cells in _kept
         self._state = None  # (occupancy, its ReplanState, entry point): see _call
         self._fl = {True: np.ones(1024, np.bool_), False: np.zeros(1024, np.bool_)}
         self._peak = 0
@@ -254,6 +256,16 @@ class DStarLite:
             told nothing, not the Python that prepares the call or builds this result.
         """
         st, pend = self._st, self._pending
+        self._pending = []
+        if self._kept_n + sum(len(p[0]) for p in pend) <= _KEEP_MAX and int(
+                st["path_valid"]) and all(b is True or (b is not False and b.all())
+                                          for _, b in pend):
+            kept = self._keep(pend)
+            if kept is not None:
+                return kept
+        if self._kept:  # repaired now, before the new changes
+            pend = self._kept + pend
+            self._kept, self._kept_n = [], 0
         if len(pend) == 1 and isinstance(pend[0][1], bool):
             cells = pend[0][0]
             state = self._flags(len(cells), pend[0][1])
@@ -263,7 +275,6 @@ class DStarLite:
                                     for c, b in pend])
         else:
             cells, state = _NONE, _NONE_B
-        self._pending = []
         if len(cells):
             self._collect_room(len(cells))
             st["phase"] = dr.PH_COLLECT
@@ -287,6 +298,26 @@ class DStarLite:
         why = ("start cell is blocked" if STATUS_OF_RUN[done] == "blocked"
                else f"goal unreachable: explored {self.nodes} cells")
         return self._result(None, math.inf, why, done)
+
+    def _keep(self, pend: list) -> SearchResult | None:
+        """The stored path from the start on, when the changes ``pend`` (all blocked)
+        leave it a shortest path (:mod:`planner.search.dstar.rest`): they stay pending,
+        unrepaired, with those kept before. None when it cannot be kept."""
+        cells = pend[0][0] if len(pend) == 1 else (
+            np.concatenate([p[0] for p in pend]) if pend else _NONE)
+        st = self._st
+        st["phase"] = dr.PH_KEEP
+        call, arg = self._call()
+        t0 = time.perf_counter()
+        call(arg, cells, self._flags(len(cells), True))
+        self._seconds += time.perf_counter() - t0
+        if not st["kept"]:
+            return None
+        if len(cells):  # copied: the caller may reuse its array
+            self._kept.append((cells.copy() if cells is pend[0][0] else cells, True))
+            self._kept_n += len(cells)
+        j, k = int(st["path_from"]), int(st["path_to"])
+        return self._result(self._sc.path[j:k].copy(), float(self._fs[1]), "", RUN_FOUND)
 
     def _flags(self, k: int, value: bool) -> np.ndarray:
         """``np.full(k, value)`` as a view of an array kept for the purpose."""
@@ -327,4 +358,5 @@ class DStarLite:
 
 _NONE = np.zeros((0, 3), np.int64)
 _COMPACT_MIN = 1 << 14  # nodes: below this the node table fits in cache anyway
+_KEEP_MAX = 1 << 15  # unrepaired cells: then a repair (bounds its batch's scratch)
 _NONE_B = np.zeros(0, np.bool_)
