@@ -260,8 +260,9 @@ class DStarLite:
             ever created. ``seconds``, as A*'s, is the engine's own time: the compiled
             calls (and growing arrays between them) and the lookups of an ``update``
             told nothing, not the Python that prepares the call or builds this result.
-            A plan that keeps the stored path (module docstring) makes no cell check and
-            no expansion.
+            A plan that keeps the stored path (module docstring) makes no cell check of
+            its own (an :meth:`update` told nothing still counts its lookups here) and no
+            expansion.
         """
         st, pend = self._st, self._pending
         self._pending = []
