@@ -1,5 +1,7 @@
 """Where a D* Lite replan's work goes while exploring: per replan, the scan's changed cells,
-the cached nodes whose stencil holds one (collected and repaired), how many of those died
+how many replans kept the stored path (:mod:`planner.search.dstar.rest`), and over the
+others the cached nodes whose stencil holds a changed cell (collected and repaired, the
+kept scans' cells included), how many of those died
 (their own cell blocked), and the first plan's expansions against A* forwards and
 backwards on the same map state.
 
@@ -30,9 +32,10 @@ def profile(name: str, lattice: str, query: int) -> dict:
 
     def counted_plan(self):
         r = plan(self)
-        n = int(self._st["collected"])
+        kept = r.cell_checks == 0  # kept the stored path: nothing collected (a repair
+        n = 0 if kept else int(self._st["collected"])  # looks the start's cell up)
         dead = int((self._nd.mask[self._sc.ss[:n]] == 0).sum()) if n else 0
-        rows.append((n, dead))
+        rows.append((n, dead, kept))
         return r
 
     def with_backward(search_fn, world, cur, goal, neighbors):
@@ -49,9 +52,15 @@ def profile(name: str, lattice: str, query: int) -> dict:
     finally:
         DStarLite.plan, ex._scratch_astar = plan, scratch
     c = np.array(rows[1:])
+    rep = c[c[:, 2] == 0]  # the replans that repaired
     return {"replans": r.replans, "changed": np.median(r.changed[1:]),
-            "collected": np.median(c[:, 0]), "died": np.median(c[:, 1]),
+            "kept": int(c[:, 2].sum()),
+            "collected": _median(rep[:, 0]), "died": _median(rep[:, 1]),
             "dstar_first": int(r.dstar_expansions[0]), **first}
+
+
+def _median(x: np.ndarray) -> float:
+    return float(np.median(x)) if len(x) else float("nan")
 
 
 def main(argv=None) -> None:
@@ -62,11 +71,13 @@ def main(argv=None) -> None:
     a = ap.parse_args(argv)
     print(f"{a.map} query {a.query}: medians over the replans after the first; first plan "
           "expansions of D* Lite and of A* forwards / backwards on the same map state")
-    print(f"{'lattice':8s} {'replans':>7s} {'changed':>8s} {'collected':>9s} {'died':>6s} "
+    print(f"{'lattice':8s} {'replans':>7s} {'changed':>8s} {'kept':>5s} {'collected':>9s} "
+          f"{'died':>6s} "
           f"{'D* first':>9s} {'A* fwd':>7s} {'A* back':>8s}")
     for lat in a.lattices:
         p = profile(a.map, lat, a.query)
-        print(f"{lat:8s} {p['replans']:7d} {p['changed']:8.0f} {p['collected']:9.0f} "
+        print(f"{lat:8s} {p['replans']:7d} {p['changed']:8.0f} {p['kept']:5d} "
+              f"{p['collected']:9.0f} "
               f"{p['died']:6.0f} {p['dstar_first']:9d} {p['forward']:7d} {p['backward']:8d}")
 
 

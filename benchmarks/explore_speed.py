@@ -19,7 +19,12 @@ over replans (after the first plan) of incremental / from-scratch time (both clo
 cell checks, the ratio of the totals, mismatches (costs that differ: the run fails if
 any) and contacts (moves that touched an obstacle the sensor had not seen); D*chk, A*chk,
 D*ms, A*ms are the medians over the same replans of each search's cell checks and
-milliseconds. The first plan of a run also loads the compiled kernels; it is left out of
+milliseconds. "kept" counts the replans (after the first) that kept the stored path
+without repairing (:mod:`planner.search.dstar.rest`: the scan blocked no cell the path
+rests on; such a replan makes no cell check, a repair at least the start's) and "rep t"
+is the median time ratio over the others, the replans that repaired (the kept scans'
+cells included) and searched; "1st t" the first plan's time ratio (in "tot t", not in
+the medians). The first plan of a run also loads the compiled kernels; it is left out of
 the medians. No timed assertions: figures only.
 """
 
@@ -76,7 +81,8 @@ def main(argv: list[str] | None = None) -> int:
     a = p.parse_args(argv)
     head = (f"{'map':<12} {'lattice':<7} {'status':<11} {'moves':>5} {'dist m':>7} "
             f"{'replans':>7} {'D*chk':>6} {'A*chk':>6} {'D*ms':>6} {'A*ms':>6} "
-            f"{'med t':>6} {'med wall':>8} {'med chk':>7} {'tot t':>6} {'tot chk':>7} "
+            f"{'med t':>6} {'med wall':>8} {'med chk':>7} {'kept':>5} {'rep t':>6} "
+            f"{'1st t':>6} {'tot t':>6} {'tot chk':>7} "
             f"{'mism':>4} {'cont':>4} {'run s':>6}")
     print(f"sensor {a.sensor_range} m, fov 360 x +-{a.vertical} deg every {a.resolution} "
           f"deg, {a.neighbors} moves; ratios = D* Lite (repair + search) / A* from scratch")
@@ -94,11 +100,16 @@ def main(argv: list[str] | None = None) -> int:
             med = [float(np.median(a[k])) for a in (r.dstar_checks, r.astar_checks,
                                                      1e3 * r.dstar_seconds,
                                                      1e3 * r.astar_seconds)]
+            kept = r.dstar_checks[k] == 0
+            rep = (r.dstar_seconds[k] / r.astar_seconds[k])[~kept]
+            rep_t = float(np.median(rep)) if len(rep) else float("nan")
             print(f"{label:<12} {lat:<7} {r.status:<11} {len(r.trajectory) - 1:>5} "
                   f"{r.distance:>7.2f} {r.replans:>7} {med[0]:>6.0f} {med[1]:>6.0f} "
                   f"{med[2]:>6.3f} {med[3]:>6.3f} {q['median_time_ratio']:>6.3f} "
                   f"{q['median_wall_ratio']:>8.3f} "
-                  f"{q['median_checks_ratio']:>7.4f} {q['total_time_ratio']:>6.3f} "
+                  f"{q['median_checks_ratio']:>7.4f} {int(kept.sum()):>5} {rep_t:>6.3f} "
+                  f"{r.dstar_seconds[0] / r.astar_seconds[0]:>6.2f} "
+                  f"{q['total_time_ratio']:>6.3f} "
                   f"{q['total_checks_ratio']:>7.4f} {r.mismatches:>4} {r.contacts:>4} "
                   f"{secs:>6.1f}", flush=True)
             bad += r.mismatches

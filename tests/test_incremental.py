@@ -179,3 +179,24 @@ def test_bad_input_is_one_clear_error():
     with pytest.raises(PlanError, match="dense"):
         DStarLite(World(Lattice.named("cubic", 1.0), [], [[0, 0, 0], [4, 4, 4]],
                         dense_budget=0), [0, 0, 0], [4, 4, 4])
+
+
+def test_blocked_cells_off_the_path_keep_it_until_one_lands_on_it():
+    # Cells blocked away from the stored path leave it a shortest path: the replan keeps
+    # it without repairing (no lookup, no expansion); the first change under the path
+    # repairs every pending cell at once and the cost is A*'s again.
+    world = World(Lattice.named("cubic", 1.0), [], [[0, 0, 0], [12, 6, 2]])
+    d = DStarLite(world, [0, 3, 1], [12, 3, 1])
+    r = d.plan()
+    assert abs(r.cost - 12.0) <= 1e-12
+    d.move_start(r.cells[1])
+    d.update(world.set_cells([[6, 0, 0], [6, 6, 2], [9, 0, 1]], True), blocked=True)
+    kept = d.plan()
+    assert kept.expansions == 0 and kept.cell_checks == 0
+    assert np.array_equal(kept.cells, r.cells[1:]) and abs(kept.cost - 11.0) <= 1e-12
+    d.update(world.set_cells([[6, 3, 1]], True), blocked=True)  # on the path
+    again = d.plan()
+    assert abs(again.cost - _astar_cost(world, d.start, [12, 3, 1], "full")) <= 1e-9
+    assert world.is_free(again.cells).all() and not (again.cells == [6, 3, 1]).all(1).any()
+    d.update(world.set_cells([[6, 0, 0]], False), blocked=False)  # a freed cell repairs
+    assert abs(d.plan().cost - _astar_cost(world, d.start, [12, 3, 1], "full")) <= 1e-9

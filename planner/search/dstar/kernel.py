@@ -43,11 +43,12 @@ from planner.search.result import RUN_BLOCKED, RUN_FOUND, RUN_GROW
 #: the kernel state (:mod:`planner.search._state`): the common counters, then the stored
 #: path (:mod:`planner.search.dstar.replan`: its id, whether it is still valid, its length,
 #: the start's row in it), the replan's phase, its collected nodes, the room it asks for
-#: (nodes, repair scratch), whether the start's own cell is still to be checked, and the
-#: replan's path: rows [path_from, path_to) of the path buffer
+#: (nodes, repair scratch), whether the start's own cell is still to be checked, the
+#: replan's path: rows [path_from, path_to) of the path buffer, and whether the last call
+#: kept the stored path without repairing (:mod:`planner.search.dstar.rest`)
 REPLAN_STATE = state_dtype("path_id", "path_valid", "path_len", "path_at", "phase",
                            "collected", "need_nodes", "need_scratch", "check_start",
-                           "path_from", "path_to")
+                           "path_from", "path_to", "kept")
 _TOL = 1e-9  # relative: "rhs(s) = c + g_old" tested with slack (a spare recompute is safe)
 _BIAS = 4 * _TOL  # relative: an underconsistent node's key ahead of the ties (_key1)
 
@@ -83,6 +84,7 @@ class DBox(NamedTuple):
     reach: np.ndarray  # (prod(dims) / 8,) uint8 bit set: in a cached stencil (only grows)
     ext: np.ndarray  # (3,) int64 largest |union-stencil offset| per axis
     inv: np.ndarray  # (M,) int64 the move back: moves[inv[m]] = -moves[m]
+    rest: np.ndarray  # (prod(dims) / 8,) uint8 bit set: a cell the stored path rests on
 
 
 def new_box(lo: np.ndarray, dims: np.ndarray, ms) -> DBox:
@@ -93,7 +95,8 @@ def new_box(lo: np.ndarray, dims: np.ndarray, ms) -> DBox:
     back = {tuple(m): i for i, m in enumerate((-moves).tolist())}
     inv = np.array([back[tuple(m)] for m in moves.tolist()], np.int64)
     return DBox(np.full(int(np.prod(dims)), -1, np.int32), np.asarray(lo, np.int64).copy(),
-                dims, np.zeros((int(np.prod(dims)) + 7) // 8, np.uint8), ext, inv)
+                dims, np.zeros((int(np.prod(dims)) + 7) // 8, np.uint8), ext, inv,
+                np.zeros((int(np.prod(dims)) + 7) // 8, np.uint8))
 
 
 #: one node's record: the fields of :class:`DNodes` and padding to a cache line

@@ -9,6 +9,10 @@ Kernels and data layout: :mod:`planner.search.dstar.kernel`; the changes' repair
 the one compiled call a replan makes: :mod:`planner.search.dstar.replan`. :meth:`update`
 only takes the changed cells; :meth:`plan` repairs, searches and extracts the path, and
 reuses the previous path from the new start on while nothing it was read from changed.
+When the changes only block cells and none lies under the stored path (its cells and its
+moves' safe-rule cells), that path is still a shortest one: :meth:`plan` keeps it without
+repairing and leaves the cells pending until a change reaches the path
+(:mod:`planner.search.dstar.rest`).
 
 Cell checks count every occupancy lookup actually made, as A* does: a node's edges cost one
 lookup of its own cell plus one per union-stencil offset (A* skips the own cell, which it
@@ -107,6 +111,7 @@ class DStarLite:
                                np.empty((4097, 3), i8), np.empty(4097, np.float64))
         self._state_array = new_state(dk.REPLAN_STATE)  # (1,): what the compiled call takes
         self._st = self._state_array[0]  # its record: a view, read and written from here
+        self._sv = self._state_array.view(np.int64)  # the same by field index (_PHASE...)
         self._fs = np.zeros(2)  # km, the last path's cost
         self._last = self.start.copy()
         g = dk.node(self._bx, self._nd, self._st, *(int(x) for x in self.goal), True)
@@ -116,6 +121,8 @@ class DStarLite:
         self._mark = (0, 0)  # lookups, expansions at the last plan
         self._seconds = 0.0  # engine time of update() lookups since the last plan
         self._pending: list[tuple[np.ndarray, np.ndarray | bool]] = []  # since then
+        self._kept: list[tuple[np.ndarray, bool]] = []  # blocked, not repaired (_keep)
+        self._kept_n = 0  # cells in _kept
         self._state = None  # (occupancy, its ReplanState, entry point): see _call
         self._fl = {True: np.ones(1024, np.bool_), False: np.zeros(1024, np.bool_)}
         self._peak = 0
@@ -158,7 +165,7 @@ class DStarLite:
     @property
     def nodes(self) -> int:
         """Nodes created so far."""
-        return int(self._st["nodes"])
+        return int(self._sv[_NODES])
 
     @property
     def peak_bytes(self) -> int:
@@ -221,7 +228,8 @@ class DStarLite:
         blocked cell drop the moves it serves without a lookup; nodes near a newly freed
         cell look their stencil up again; edges that flipped repair their end nodes.
         Batches taken before one plan are repaired together, with the start and ``km``
-        of that plan (as D* Lite's main loop: move, scan, update, compute).
+        of that plan (as D* Lite's main loop: move, scan, update, compute), and with the
+        blocked cells of plans that kept the stored path (module docstring).
         """
         c = changed_cells
         if not (type(c) is np.ndarray and c.dtype == np.int64 and c.ndim == 2
@@ -252,8 +260,19 @@ class DStarLite:
             ever created. ``seconds``, as A*'s, is the engine's own time: the compiled
             calls (and growing arrays between them) and the lookups of an ``update``
             told nothing, not the Python that prepares the call or builds this result.
+            A plan that keeps the stored path (module docstring) makes no cell check of
+            its own (an :meth:`update` told nothing still counts its lookups here) and no
+            expansion.
         """
         st, pend = self._st, self._pending
+        self._pending = []
+        if self._sv[_PATH_VALID] and self._blocks_only(pend):
+            kept = self._keep(pend)
+            if kept is not None:
+                return kept
+        if self._kept:  # repaired now, before the new changes
+            pend = self._kept + pend
+            self._kept, self._kept_n = [], 0
         if len(pend) == 1 and isinstance(pend[0][1], bool):
             cells = pend[0][0]
             state = self._flags(len(cells), pend[0][1])
@@ -263,7 +282,6 @@ class DStarLite:
                                     for c, b in pend])
         else:
             cells, state = _NONE, _NONE_B
-        self._pending = []
         if len(cells):
             self._collect_room(len(cells))
             st["phase"] = dr.PH_COLLECT
@@ -287,6 +305,35 @@ class DStarLite:
         why = ("start cell is blocked" if STATUS_OF_RUN[done] == "blocked"
                else f"goal unreachable: explored {self.nodes} cells")
         return self._result(None, math.inf, why, done)
+
+    def _keep(self, pend: list) -> SearchResult | None:
+        """The stored path from the start on, when the changes ``pend`` (all blocked)
+        leave it a shortest path (:mod:`planner.search.dstar.rest`): they stay pending,
+        unrepaired, with those kept before. None when it cannot be kept."""
+        cells = pend[0][0] if len(pend) == 1 else (
+            np.concatenate([p[0] for p in pend]) if pend else _NONE)
+        sv = self._sv
+        sv[_PHASE] = dr.PH_KEEP
+        call, arg = self._call()
+        t0 = time.perf_counter()
+        done = call(arg, cells, self._flags(len(cells), True))
+        self._seconds += time.perf_counter() - t0
+        if done != RUN_FOUND:
+            return None
+        if len(cells):  # copied: the caller may reuse its array
+            self._kept.append((cells.copy() if cells is pend[0][0] else cells, True))
+            self._kept_n += len(cells)
+        return self._result(self._sc.path[sv[_PATH_FROM]:sv[_PATH_TO]].copy(),
+                            float(self._fs[1]), "", RUN_FOUND)
+
+    def _blocks_only(self, pend: list) -> bool:
+        """Whether the changes ``pend`` only block cells, few enough to keep pending."""
+        n = self._kept_n
+        for c, b in pend:
+            if b is False or (b is not True and not b.all()):
+                return False
+            n += len(c)
+        return n <= _KEEP_MAX
 
     def _flags(self, k: int, value: bool) -> np.ndarray:
         """``np.full(k, value)`` as a view of an array kept for the purpose."""
@@ -314,7 +361,7 @@ class DStarLite:
         return self._state[2], state
 
     def _result(self, cells, cost, why, code) -> SearchResult:
-        look, exp = int(self._st["lookups"]), int(self._st["expansions"])
+        look, exp = int(self._sv[_LOOKUPS]), int(self._sv[_EXPANSIONS])
         checks, expansions = look - self._mark[0], exp - self._mark[1]
         self._mark = (look, exp)
         self.world.cell_checks += checks
@@ -327,4 +374,10 @@ class DStarLite:
 
 _NONE = np.zeros((0, 3), np.int64)
 _COMPACT_MIN = 1 << 14  # nodes: below this the node table fits in cache anyway
+_KEEP_MAX = 1 << 15  # unrepaired cells: then a repair (bounds its batch's scratch)
 _NONE_B = np.zeros(0, np.bool_)
+# field indices of the state record, read through an int64 view (``_sv``): a record's
+# field by name costs microseconds, as much as a kept replan's compiled call
+_PATH_VALID, _PHASE, _PATH_FROM, _PATH_TO, _LOOKUPS, _EXPANSIONS, _NODES = (
+    dk.REPLAN_STATE.names.index(f) for f in ("path_valid", "phase", "path_from", "path_to",
+                                             "lookups", "expansions", "nodes"))

@@ -28,9 +28,10 @@ from planner.search.dstar.kernel import (
     node,
     update_vertex,
 )
+from planner.search.dstar.rest import keep_path, mark_path
 from planner.search.result import RUN_BLOCKED, RUN_EXHAUSTED, RUN_FOUND, RUN_GROW
 
-PH_COLLECT, PH_APPLY, PH_SEARCH, PH_PATH = 0, 1, 2, 3
+PH_COLLECT, PH_APPLY, PH_SEARCH, PH_PATH, PH_KEEP = 0, 1, 2, 3, 4
 
 
 class DScratch(NamedTuple):
@@ -87,7 +88,9 @@ def replan(occ, ms, bx, nd, heap, sc, st, fs, start, cells, blocked):
     ``blocked`` (K,) what each became), repair their edges, ComputeShortestPath, extract
     the path. ``st``: the planner's state record
     (:data:`~planner.search.dstar.kernel.REPLAN_STATE`); ``fs``: [km, path cost]. The caller
-    sets ``st.phase`` (PH_COLLECT, or PH_SEARCH without changes) and ``st.check_start``; on
+    sets ``st.phase`` (PH_COLLECT, or PH_SEARCH without changes, or PH_KEEP: only
+    :func:`~planner.search.dstar.rest.keep_path`, its answer in ``st.kept``) and
+    ``st.check_start``; on
     RUN_GROW it makes room for ``st.need_nodes`` nodes, ``st.need_scratch`` repair scratch
     and a path of every node, and calls again.
     RUN_FOUND: the path is ``sc.path[st.path_from:st.path_to]``; RUN_EXHAUSTED: no path;
@@ -102,6 +105,10 @@ def _replan(occ, ms, bx, nd, heap, sc, st, fs, start, cells, blocked):
     nm = ms.moves.shape[0]
     st.need_nodes = 0
     st.need_scratch = 0
+    if st.phase == PH_KEEP:  # only keeps the stored path, or says it cannot
+        st.kept = keep_path(bx, st, fs, start, cells, blocked, sc.path, sc.step)
+        return RUN_FOUND if st.kept else RUN_EXHAUSTED
+    st.kept = 0
     if st.phase == PH_COLLECT:
         st.collected = collect(occ, ms, sc.affect, bx, nd, st, cells, blocked, sc.ss, sc.old,
                            sc.redo)
@@ -152,6 +159,8 @@ def extract(occ, ms, ufree, bx, nd, st, start, out, step):  # pragma: no cover -
     st.path_id += 1  # a new path: marks of older ones no longer count
     pid = st.path_id
     st.path_valid = 0
+    mark_path(ms, bx, out, st.path_len, False)  # the old path's cells (rest.py)
+    st.path_len = 0
     s = node(bx, nd, st, start[0], start[1], start[2], False)
     if s < 0 or nd.rhs[s] == np.inf:  # the start may stay overconsistent (fig. 4)
         return 0, 0, np.inf
@@ -176,6 +185,7 @@ def extract(occ, ms, ufree, bx, nd, st, start, out, step):  # pragma: no cover -
     st.path_valid = 1
     st.path_len = k
     st.path_at = 0
+    mark_path(ms, bx, out, k, True)
     return 0, k, cost
 
 

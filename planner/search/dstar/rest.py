@@ -1,0 +1,79 @@
+"""D* Lite's stored path as the cells it rests on (numba), and the replan that keeps it.
+
+A path's cost depends only on its moves, and a move exists while its own cell, its end
+cell and the cells of its safe rule (:mod:`planner.search.moves`) are free. When a scan
+only *blocks* cells (costs only rise) and none of them is one of those cells of the stored
+path, the rest of that path from the robot's cell costs what it did, and every other path
+costs at least what it did: the stored path is still a shortest one. Such a replan keeps
+it and leaves the scan's cells pending (:class:`planner.search.dstar.lite.DStarLite` keeps
+them); the first replan that cannot keep the path (a pending cell under it, a freed cell,
+the robot off it) repairs every pending cell in one batch, then searches. A pending cell
+never reaches a search: nothing is looked up or expanded while one is pending.
+
+The cells are bits of ``DBox.rest`` (one bit per cell of the index box), set when a path
+is extracted and cleared when the next one replaces it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from planner._numba import njit_cached
+from planner.search.dstar.kernel import _box
+
+
+@njit_cached(inline="always")
+def _bit(bx, v0, v1, v2, value):  # pragma: no cover - compiled
+    b = _box(bx, v0, v1, v2)
+    if b >= 0:
+        if value:
+            bx.rest[b >> 3] |= np.uint8(1 << (b & 7))
+        else:
+            bx.rest[b >> 3] &= np.uint8(~(1 << (b & 7)) & 0xFF)
+
+
+@njit_cached
+def mark_path(ms, bx, path, k, value):  # pragma: no cover - compiled
+    """Set (``value``) or clear the rest bits of the path ``path[:k]`` ((>= k, 3) int64):
+    each cell, and each move's safe-rule cells."""
+    nm = ms.moves.shape[0]
+    for i in range(k):
+        p0, p1, p2 = path[i, 0], path[i, 1], path[i, 2]
+        _bit(bx, p0, p1, p2, value)
+        if i + 1 == k:
+            break
+        d0, d1, d2 = path[i + 1, 0] - p0, path[i + 1, 1] - p1, path[i + 1, 2] - p2
+        for m in range(nm):
+            if ms.moves[m, 0] == d0 and ms.moves[m, 1] == d1 and ms.moves[m, 2] == d2:
+                for e in ms.idx[ms.ptr[m]:ms.ptr[m + 1]]:
+                    _bit(bx, p0 + ms.union[e, 0], p1 + ms.union[e, 1], p2 + ms.union[e, 2],
+                         value)
+                break
+
+
+@njit_cached
+def keep_path(bx, st, fs, start, cells, blocked, path, step):  # pragma: no cover - compiled
+    """True when the stored path from ``start`` on is still a shortest path after the
+    changes ``cells`` ((K, 3) int64; ``blocked`` (K,) bool what each became) that the
+    planner has not repaired (module docstring): then the replan's path is set (rows
+    ``[st.path_from, st.path_to)``, cost ``fs[1]``). Reads one bit per cell, no lookup."""
+    if st.path_valid != 1:
+        return False
+    for i in range(cells.shape[0]):
+        if not blocked[i]:
+            return False
+        b = _box(bx, cells[i, 0], cells[i, 1], cells[i, 2])
+        if b >= 0 and (bx.rest[b >> 3] >> (b & 7)) & 1:
+            return False
+    k = st.path_len
+    for j in range(st.path_at, k):
+        if path[j, 0] == start[0] and path[j, 1] == start[1] and path[j, 2] == start[2]:
+            cost = 0.0
+            for i in range(j + 1, k):
+                cost += step[i]
+            st.path_at = j
+            st.path_from = j
+            st.path_to = k
+            fs[1] = cost
+            return True
+    return False
