@@ -100,6 +100,23 @@ def write_path(path: str, res, world, start, goal) -> None:
             tmp.write_text(json.dumps(rec, indent=1))
 
 
+#: longest 3D path (points) measured in Python floats: below 8 segments numpy sums the
+#: segment lengths in order, so this gives the same float with a few numpy calls fewer
+_SHORT = 8
+
+
+def _short_length(rows: list) -> float:
+    """:func:`path_length` of a few (x, y, z) rows, in numpy's order of operations (each
+    segment's squares summed left to right, then the segments): the identical float."""
+    tot = 0.0
+    a0, a1, a2 = rows[0]
+    for b0, b1, b2 in rows[1:]:
+        d0, d1, d2 = b0 - a0, b1 - a1, b2 - a2
+        tot += math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+        a0, a1, a2 = b0, b1, b2
+    return tot
+
+
 def path_length(path: np.ndarray, empty: float = math.nan) -> float:
     """Length (m) of a polyline ``path`` of shape (K, d); ``empty`` when K < 2.
 
@@ -108,6 +125,9 @@ def path_length(path: np.ndarray, empty: float = math.nan) -> float:
     >>> path_length(np.zeros((1, 3)), empty=0.0)
     0.0
     """
+    if (type(path) is np.ndarray and 2 <= len(path) <= _SHORT and path.ndim == 2
+            and path.shape[1] == 3 and path.dtype == np.float64):
+        return _short_length(path.tolist())
     p = np.asarray(path, dtype=float)
     if len(p) < 2:
         return float(empty)

@@ -16,6 +16,8 @@ general loop: one stays the reference of the other (``tests/test_search.py``).
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from planner._numba import njit_cached
@@ -24,7 +26,7 @@ from planner.search import _heap
 from planner.search.heuristic import H_GAUGE, octile
 from planner.search.result import RUN_BUDGET, RUN_EXHAUSTED, RUN_FOUND, RUN_GROW, RUN_LIMIT
 
-__all__ = ["dense_astar"]
+__all__ = ["DenseTables", "dense_astar", "dense_tables"]
 
 
 @njit_cached
@@ -100,8 +102,59 @@ def stencil_rows(ust, need, d1, d2):  # pragma: no cover - compiled
     return roff, rshift, rmask, ubit, need2, all2, True
 
 
+class DenseTables(NamedTuple):
+    """What :func:`dense_astar` needs of a move set on a grid of dims (., d1, d2) besides the
+    move set itself: made once per move set and grid (:func:`dense_tables`, kept in the
+    driver's ``Bound``) instead of on every search, where it cost more than a short search.
+    Also the loop's per-search scratch, so that a search allocates nothing but its path."""
+
+    uoff: np.ndarray  # (U,) int64 grid offset of each stencil cell (grid_offsets)
+    moff: np.ndarray  # (M,) int64 grid offset of each move
+    reach: int  # margin (cells) inside which no stencil cell leaves the box
+    roff: np.ndarray  # (R,) int64 stencil rows (stencil_rows)
+    rshift: np.ndarray  # (R,) int64
+    rmask: np.ndarray  # (R,) int64
+    ubit: np.ndarray  # (U,) int64
+    need2: np.ndarray  # (M,) int64
+    all_u: int  # mask of every stencil cell
+    rows: bool  # the rows fit their windows
+    mkey: np.ndarray  # (M,) int64 each move as an offset of the packed key
+    hmd: float  # largest change of a gauge facet's value along one move (0: no gauge)
+    fval: np.ndarray  # (F,) float64 scratch: facet values at the expanded node
+    cand: np.ndarray  # (F,) int64 scratch: facets that can hold a new node's maximum
+
+
 @njit_cached
-def dense_astar(grid, lo, dims, ms, nodes, heap, dsl, st, max_nodes, max_exp, goal):
+def dense_tables(ms, dims, used):  # pragma: no cover - compiled
+    """:class:`DenseTables` of move set ``ms`` on a grid of dims ``dims`` (3,) int64; empty
+    unless ``used`` (the kernel may run :func:`dense_astar` on them)."""
+    moves, ust, hmat = ms.moves, ms.union, ms.hmat
+    d1, d2 = dims[1], dims[2]
+    nm = moves.shape[0]
+    nfac = hmat.shape[0]
+    if not used:
+        e = np.empty(0, np.int64)
+        return DenseTables(e, e, 0, e, e, e, e, e, np.int64(0), False, e, 0.0,
+                           np.empty(0, np.float64), e)
+    uoff, moff, reach = grid_offsets(ust, moves, d1, d2)
+    roff, rshift, rmask, ubit, need2, all_u, rows = stencil_rows(ust, ms.need, d1, d2)
+    mkey = np.empty(nm, np.int64)
+    for m in range(nm):
+        mkey[m] = (moves[m, 0] << 42) + (moves[m, 1] << 21) + moves[m, 2]
+    # The gauge's facets that can hold a new node's maximum: a move changes each facet's
+    # value by at most hmd (see dense_astar).
+    gauge = ms.hkind == H_GAUGE and ms.octile <= 0.0
+    hmd = 0.0
+    for k in range(nfac if gauge else 0):
+        for m in range(nm):
+            hmd = max(hmd, abs(hmat[k, 0] * moves[m, 0] + hmat[k, 1] * moves[m, 1]
+                               + hmat[k, 2] * moves[m, 2]))
+    return DenseTables(uoff, moff, reach, roff, rshift, rmask, ubit, need2, all_u, rows, mkey,
+                       hmd, np.empty(nfac, np.float64), np.empty(nfac, np.int64))
+
+
+@njit_cached
+def dense_astar(grid, lo, dims, ms, nodes, heap, dsl, st, max_nodes, max_exp, goal, dt):
     # pragma: no cover - compiled
     """Run the search from the kernel's state ``st`` until it ends or needs room.
 
@@ -122,6 +175,8 @@ def dense_astar(grid, lo, dims, ms, nodes, heap, dsl, st, max_nodes, max_exp, go
     max_nodes, max_expansions : int
         Limits (<= 0: none).
     goal : (3,) int64
+    dt : DenseTables
+        Of ``ms`` on this grid (:func:`dense_tables`).
 
     Returns
     -------
@@ -130,7 +185,7 @@ def dense_astar(grid, lo, dims, ms, nodes, heap, dsl, st, max_nodes, max_exp, go
     """
     lo0, lo1, lo2 = lo[0], lo[1], lo[2]
     d0, d1, d2 = dims[0], dims[1], dims[2]
-    moves, mcost, ust, need, hmat = ms.moves, ms.cost, ms.union, ms.need, ms.hmat
+    moves, mcost, ust, hmat = ms.moves, ms.cost, ms.union, ms.hmat
     oct_s = ms.octile
     gauge = ms.hkind == H_GAUGE and oct_s <= 0.0
     nkey, ng, nf, nh, npar, npos = nodes
@@ -140,25 +195,17 @@ def dense_astar(grid, lo, dims, ms, nodes, heap, dsl, st, max_nodes, max_exp, go
     cap = nkey.shape[0]
     gl0, gl1, gl2 = goal[0], goal[1], goal[2]
     gk = pack3(gl0, gl1, gl2)
-    # Each move as one offset of the packed key, besides its grid offset.
-    uoff, moff, reach = grid_offsets(ust, moves, d1, d2)
-    roff, rshift, rmask, ubit, need2, all_u, rows = stencil_rows(ust, need, d1, d2)
+    uoff, moff, reach = dt.uoff, dt.moff, dt.reach
+    roff, rshift, rmask, ubit, need2, all_u, rows = (dt.roff, dt.rshift, dt.rmask, dt.ubit,
+                                                     dt.need2, dt.all_u, dt.rows)
     nr = roff.shape[0]
     last = np.uint64(grid.shape[0] - 1)
-    mkey = np.empty(nm, np.int64)
-    for m in range(nm):
-        mkey[m] = (moves[m, 0] << 42) + (moves[m, 1] << 21) + moves[m, 2]
+    mkey = dt.mkey
     # The gauge's facets that can hold a new node's maximum: a move changes each facet's
     # value by at most hmd, so a facet below the expanded node's best by more than 2 hmd
     # never wins at a neighbour (found once per expansion, at its first new node; the
     # value of a new node is still the full formula, over fewer facets).
-    hmd = 0.0
-    for k in range(nfac if gauge else 0):
-        for m in range(nm):
-            hmd = max(hmd, abs(hmat[k, 0] * moves[m, 0] + hmat[k, 1] * moves[m, 1]
-                               + hmat[k, 2] * moves[m, 2]))
-    fval = np.empty(nfac, np.float64)
-    cand = np.empty(nfac, np.int64)
+    hmd, fval, cand = dt.hmd, dt.fval, dt.cand
     fq = 1e-9 * mcost.min()
     fq_inv = 1.0 / fq
     n = st.nodes

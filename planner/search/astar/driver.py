@@ -45,6 +45,8 @@ KEEP_NODES = 1 << 16
 _CAP, _PCAP = 4096, 64  # initial node and page capacity (powers of 2)
 _ROW_BYTES = sum(a.itemsize for a in (*new_nodes(1), *new_heap(1)))  # per node slot
 _PAGE_BYTES = PAGE * 4 + 2 * 8 + 8  # a page of int32 slots, its 2 table entries and key
+_SHORT_BYTES = _CAP * _ROW_BYTES + _PCAP * _PAGE_BYTES  # _fresh_bytes of a short search
+_STATE_BYTES = new_state(ASTAR_STATE).nbytes
 
 # One dense slot array per dense occupancy grid, reused across searches (cleared after each
 # search at the cells it touched, so a search never pays for the whole box). Taken out of
@@ -57,8 +59,8 @@ _WATCHED: set[int] = set()
 class _Context:
     """One thread's kernel arrays, reused by its next search (module docstring)."""
 
-    __slots__ = ("nodes", "heap", "slots", "state", "ufree", "ends", "sc", "sc_key", "bound",
-                 "owner", "__weakref__")
+    __slots__ = ("nodes", "heap", "slots", "state", "ufree", "ends", "end0", "end1", "sc",
+                 "sc_key", "bound", "owner", "__weakref__")
 
     def __init__(self):
         self.nodes = new_nodes(_CAP)
@@ -67,9 +69,10 @@ class _Context:
         self.state = new_state(ASTAR_STATE)
         self.ufree = np.empty(64, np.bool_)
         self.ends = np.empty((2, 3), np.int64)
+        self.end0, self.end1 = self.ends  # its rows: ``row[...] = cell`` is the fastest copy
         self.sc = _no_sight()
         self.sc_key = None
-        self.bound = None  # (its structs..., Bound, entry point): see _bound
+        self.bound = None  # (its structs..., params, their types, Bound, entry point): _bound
         self.owner = 0  # id of the owner of the bound world (see run)
 
     def keep(self) -> None:
@@ -214,9 +217,8 @@ def run(occ, walk, ms, start, goal, params, span: float, *, owner=None, dense: b
 
 
 def _run(ctx, occ, walk, ms, start, goal, params, span, dense, pause_at, keep_going):
-    ends = ctx.ends
-    ends[0] = start
-    ends[1] = goal
+    ctx.end0[...] = start
+    ctx.end1[...] = goal
     nos = _no_sight()
     sc = _sight(ctx, walk, span) if span > 0 else nos
     nu = len(ms.union)
@@ -237,9 +239,11 @@ def _run(ctx, occ, walk, ms, start, goal, params, span, dense, pause_at, keep_go
     status, path, cost, exp, n, look = out
     if dslot is not None:  # finish cleared the touched cells: reuse the array
         _give_dense(occ, dslot)
-    peak = _fresh_bytes(n, 0 if dslot is not None else int(ctx.state[0]["pages"]))
-    peak += max(nu, 64) + ctx.state.nbytes + (0 if sc is nos else _nbytes(sc))
-    peak += 0 if dslot is None else dslot.nbytes
+    if dslot is not None:
+        peak = (_SHORT_BYTES if n <= _CAP else _fresh_bytes(n, 0)) + dslot.nbytes
+    else:
+        peak = _fresh_bytes(n, int(ctx.state[0]["pages"]))
+    peak += max(nu, 64) + _STATE_BYTES + (0 if sc is nos else _nbytes(sc))
     if len(ctx.nodes.key) > KEEP_NODES or len(ctx.slots.bkeys) > KEEP_NODES // 8:
         ctx.keep()
     return status, (path if status == RUN_FOUND else None), cost, (exp, n, look), peak
@@ -301,19 +305,26 @@ def _bound(ctx: _Context, occ, walk, ms, sc, dslot, params):
     only when one of them is another object than last time (another world or move set,
     grown arrays)."""
     dense = _NO_DENSE if dslot is None else dslot
-    ptypes = tuple(map(type, params))  # the entry point takes exactly these
     bd = ctx.bound
     if (bd is not None and bd[0] is occ and bd[1] is walk and bd[2] is ms and bd[3] is sc
             and bd[4] is dense and bd[5] is ctx.nodes and bd[6] is ctx.slots
-            and bd[7] is ctx.ufree and bd[8] == ptypes):
-        return bd[9], bd[10]
+            and bd[7] is ctx.ufree):
+        if bd[8] is params:  # the same settings object: no need to compare their types
+            return bd[10], bd[11]
+        ptypes = tuple(map(type, params))  # the entry point takes exactly these
+        if bd[9] == ptypes:
+            ctx.bound = (*bd[:8], params, *bd[9:])
+            return bd[10], bd[11]
+    else:
+        ptypes = tuple(map(type, params))
     b = new_bound(occ, walk, ms, ctx.nodes, ctx.heap, _slots(ctx, occ, dslot), sc, ctx.ufree,
                   ctx.ends, ctx.state)
     key = (b._type, ptypes)
     call = _CALLS.get(key)
     if call is None:
         call = _CALLS[key] = entry_point(search_bound, (b, params, False))
-    ctx.bound = (occ, walk, ms, sc, dense, ctx.nodes, ctx.slots, ctx.ufree, ptypes, b, call)
+    ctx.bound = (occ, walk, ms, sc, dense, ctx.nodes, ctx.slots, ctx.ufree, params, ptypes, b,
+                 call)
     return b, call
 
 

@@ -86,7 +86,7 @@ def search_init(start, goal, ms, g, nodes, heap, slots, st):  # pragma: no cover
 
 
 @njit_cached(nogil=True)  # threads search in parallel (search_many)
-def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state):
+def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state, dt):
     # pragma: no cover - compiled
     """A* / Dijkstra / Theta* / Lazy Theta* over lattice cells, resumable.
 
@@ -116,6 +116,9 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state
     state : (1,) ``planner.search._nodes.ASTAR_STATE``
         The search's counters (:mod:`planner.search._state`); the code returned is also
         left in ``status``.
+    dt : planner.search.astar.dense.DenseTables
+        The dense loop's tables of ``ms`` on ``occ``'s grid (made once per move set and
+        world, not per search).
 
     Returns
     -------
@@ -137,7 +140,7 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state
     if (params.anyangle == 0 and occ.mode == 0 and slots.dense.shape[0] > 1
             and ms.union.shape[0] <= MAX_BITS and ms.hkind != H_EUCLID):
         status = dense_astar(occ.grid, occ.lo, occ.dims, ms, nodes, heap, slots.dense, st,
-                             params.max_nodes, params.max_expansions, goal)
+                             params.max_nodes, params.max_expansions, goal, dt)
         st.status = status
         return status
     if (params.anyangle == LAZY_THETA and occ.mode == 0 and slots.dense.shape[0] > 1
@@ -380,12 +383,13 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state
 
 
 @njit_cached(nogil=True)  # threads search in parallel (search_many)
-def search_call(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state, pausing):
+def search_call(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state, pausing,
+                dt):
     # pragma: no cover - compiled
     """:func:`search_run`, and when its code is final also
     :func:`planner.search._nodes.finish`: the one compiled call of a search that needs no
     growth. ``pausing``: RUN_BUDGET is a pause (the caller decides whether to go on), not
-    final.
+    final. ``dt``: as in :func:`search_run`.
 
     Returns
     -------
@@ -393,7 +397,7 @@ def search_call(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, stat
         ``(status, path, cost, expansions, nodes, lookups)``: finish's path, cost and
         counts when final, else an empty path, inf and zeros (the state is kept).
     """
-    status = search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state)
+    status = search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state, dt)
     if status == RUN_GROW or (pausing and status == RUN_BUDGET):
         return status, np.empty((0, 3), np.int64), np.inf, 0, 0, 0
     path, cost, exp, n, look = finish(nodes, slots, state, status == RUN_FOUND)
