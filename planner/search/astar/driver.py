@@ -45,7 +45,6 @@ KEEP_NODES = 1 << 16
 _CAP, _PCAP = 4096, 64  # initial node and page capacity (powers of 2)
 _ROW_BYTES = sum(a.itemsize for a in (*new_nodes(1), *new_heap(1)))  # per node slot
 _PAGE_BYTES = PAGE * 4 + 2 * 8 + 8  # a page of int32 slots, its 2 table entries and key
-_SHORT_BYTES = _CAP * _ROW_BYTES + _PCAP * _PAGE_BYTES  # _fresh_bytes of a short search
 _STATE_BYTES = new_state(ASTAR_STATE).nbytes
 
 # One dense slot array per dense occupancy grid, reused across searches (cleared after each
@@ -240,7 +239,7 @@ def _run(ctx, occ, walk, ms, start, goal, params, span, dense, pause_at, keep_go
     if dslot is not None:  # finish cleared the touched cells: reuse the array
         _give_dense(occ, dslot)
     if dslot is not None:
-        peak = (_SHORT_BYTES if n <= _CAP else _fresh_bytes(n, 0)) + dslot.nbytes
+        peak = _fresh_bytes(n, 0) + dslot.nbytes
     else:
         peak = _fresh_bytes(n, int(ctx.state[0]["pages"]))
     peak += max(nu, 64) + _STATE_BYTES + (0 if sc is nos else _nbytes(sc))
