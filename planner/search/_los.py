@@ -242,9 +242,27 @@ def cubic_walk(occ, p0, p1, p2, q0, q1, q2):  # pragma: no cover - compiled
 
 @njit_cached(inline="always")
 def is_cubic(g):  # pragma: no cover - compiled
-    """The generator is a multiple of the identity (the cubic lattice)."""
-    return (g[0, 1] == 0.0 and g[0, 2] == 0.0 and g[1, 0] == 0.0 and g[1, 2] == 0.0
-            and g[2, 0] == 0.0 and g[2, 1] == 0.0 and g[0, 0] == g[1, 1] == g[2, 2])
+    """The generator is a cubic lattice's: orthogonal columns of one length, so a multiple
+    of the identity, possibly turned (the benchmark suite's rotated worlds) or reflected.
+    A similarity maps each cube Voronoi cell onto its image, so a segment between cell
+    centres touches the same cells in index space as on the unturned lattice, and the
+    integer walk applies. Tolerance: 1e-12 of the squared cell edge (rounding of a turned
+    generator)."""
+    e = g[0, 0] * g[0, 0] + g[1, 0] * g[1, 0] + g[2, 0] * g[2, 0]
+    tol = 1e-12 * e
+    for i in range(3):
+        for j in range(i, 3):
+            d = g[0, i] * g[0, j] + g[1, i] * g[1, j] + g[2, i] * g[2, j]
+            if abs(d - (e if i == j else 0.0)) > tol:
+                return False
+    return True
+
+
+@njit_cached(inline="always")
+def cubic_edge(g):  # pragma: no cover - compiled
+    """A cubic generator's cell edge (m): the length of its first column (``|g[0, 0]|``
+    exactly when it is unturned)."""
+    return math.sqrt(g[0, 0] * g[0, 0] + g[1, 0] * g[1, 0] + g[2, 0] * g[2, 0])
 
 
 @njit_cached

@@ -47,7 +47,8 @@ def dense_lazy_theta(occ, ms, nodes, heap, dsl, st, max_nodes, max_exp, goal, ce
         Limits (<= 0: none).
     goal : (3,) int64
     cell : float
-        The cubic generator's diagonal (m): cell ``w`` lies at ``cell * w``.
+        The cubic generator's cell edge (m, :func:`planner.search._los.cubic_edge`): a
+        move ``e`` between cells is ``cell * |e|`` long, turned generator or not.
     hw : float
         The straight-line heuristic's factor.
 
@@ -161,7 +162,8 @@ def dense_lazy_theta(occ, ms, nodes, heap, dsl, st, max_nodes, max_exp, goal, ce
             v1 = u1 + moves[m, 1]
             v2 = u2 + moves[m, 2]
             # g through s's parent: the general loop's |G (v - p)| with G = cell * I (its
-            # zero off-diagonal terms add exact zeros), so the same floats
+            # zero off-diagonal terms add exact zeros), so the same floats; a turned cubic
+            # G gives the same length up to rounding
             x = cell * (v0 - p0)
             y = cell * (v1 - p1)
             z = cell * (v2 - p2)

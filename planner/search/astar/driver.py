@@ -21,7 +21,7 @@ from planner.lattice import Lattice
 from planner.occupancy.walk import walk_of
 from planner.search._grow import grown
 from planner.search._heap import Heap, new_heap
-from planner.search._los import new_scratch
+from planner.search._los import is_cubic, new_scratch
 from planner.search._nodes import (
     ASTAR_STATE,
     PAGE,
@@ -120,7 +120,7 @@ def _no_sight():
 def _sight(ctx: _Context, walk, span: float):
     """The any-angle sight scratch for ``walk`` and ``span``: kept in the context while the
     thread searches the same world."""
-    if span <= 0 or np.array_equal(walk.g, walk.g[0, 0] * np.eye(3)):
+    if span <= 0 or is_cubic(walk.g):
         return _no_sight()  # cubic sight lines need no scratch
     key = (id(walk), span)
     if ctx.sc_key != key:

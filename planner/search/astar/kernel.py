@@ -28,7 +28,7 @@ from planner._numba import njit_cached
 from planner.occupancy.grid import cell_free, occ_free
 from planner.occupancy.keys import mix64, pack3, unpack3
 from planner.search import _heap
-from planner.search._los import DDA_MAX, cubic_walk, dense_walk, is_cubic, sight
+from planner.search._los import DDA_MAX, cubic_edge, cubic_walk, dense_walk, is_cubic, sight
 from planner.search._nodes import (
     PAGE,
     block_key,
@@ -147,7 +147,7 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state
             and ms.union.shape[0] <= MAX_BITS and is_cubic(walk.g)
             and occ.dims.max() <= DDA_MAX):
         status = dense_lazy_theta(occ, ms, nodes, heap, slots.dense, st, params.max_nodes,
-                                  params.max_expansions, goal, walk.g[0, 0], params.h_weight)
+                                  params.max_expansions, goal, cubic_edge(walk.g), params.h_weight)
         st.status = status
         return status
     mode, grid, lo, dims, otable, otmask, gg, blo, bhi = occ
