@@ -57,6 +57,25 @@ def dense_lazy_theta(occ, ms, nodes, heap, dsl, st, max_nodes, max_exp, goal, ce
     int
         RUN_FOUND, RUN_EXHAUSTED, RUN_LIMIT, RUN_BUDGET or RUN_GROW.
     """
+    moves = ms.moves
+    nm = moves.shape[0]
+    uoff, moff, reach = grid_offsets(ms.union, moves, occ.dims[1], occ.dims[2])
+    mkey = np.empty(nm, np.int64)
+    for m in range(nm):
+        mkey[m] = (moves[m, 0] << 42) + (moves[m, 1] << 21) + moves[m, 2]
+    return _loop(occ, ms, nodes, heap, dsl, st, max_nodes, max_exp, goal, cell, hw, uoff, moff,
+                 reach, mkey, 1e-9 * ms.cost.min())
+
+
+# Without the runtime's reference counting, as the dense A* loop (planner.search.astar.dense):
+# each heap operation inlined here would otherwise incref / decref the heap arrays it binds.
+@njit_cached(_nrt=False)
+def _loop(occ, ms, nodes, heap, dsl, st, max_nodes, max_exp, goal, cell, hw, uoff, moff, reach,
+          mkey, fq):  # pragma: no cover - compiled
+    """:func:`dense_lazy_theta`'s loop, given its tables: ``uoff`` (U,) and ``moff`` (M,) the
+    stencil's and the moves' grid offsets and ``reach`` their margin (cells)
+    (:func:`planner.search.astar.dense.grid_offsets`), ``mkey`` (M,) each move as an offset
+    of the packed key, ``fq`` the f grid (1e-9 of the shortest move, m)."""
     grid, lo, dims = occ.grid, occ.lo, occ.dims
     lo0, lo1, lo2 = lo[0], lo[1], lo[2]
     d0, d1, d2 = dims[0], dims[1], dims[2]
@@ -67,12 +86,7 @@ def dense_lazy_theta(occ, ms, nodes, heap, dsl, st, max_nodes, max_exp, goal, ce
     cap = nkey.shape[0]
     gl0, gl1, gl2 = goal[0], goal[1], goal[2]
     gk = pack3(gl0, gl1, gl2)
-    uoff, moff, reach = grid_offsets(ust, moves, d1, d2)
-    mkey = np.empty(nm, np.int64)
-    for m in range(nm):
-        mkey[m] = (moves[m, 0] << 42) + (moves[m, 1] << 21) + moves[m, 2]
     all_u = (np.int64(1) << nu) - 1
-    fq = 1e-9 * mcost.min()
     fq_inv = 1.0 / fq
     n = st.nodes
     hn = st.queued
