@@ -196,10 +196,17 @@ def search(
         res = search_networkx(world, s, gl, job.ms, job.max_nodes or None)
         res.guarantee = job.guarantee
         return res
-    s, gl = _end_cell(start_cell, "start"), _end_cell(goal_cell, "goal")
+    s, gl = start_cell, goal_cell  # as _end_cell, the usual case written out
+    if not (type(s) is np.ndarray and s.shape == _SHAPE3 and s.dtype is _I8):
+        s = _end_cell(s, "start")
+    if not (type(gl) is np.ndarray and gl.shape == _SHAPE3 and gl.dtype is _I8):
+        gl = _end_cell(gl, "goal")
     res, look = _run(world, s, gl, job, compile_s)
     world.cell_checks += look + 2  # and the two endpoint checks the kernel made
     return res
+
+
+_SHAPE3, _I8 = (3,), np.dtype(np.int64)
 
 
 def _end_cell(cell, what: str) -> np.ndarray:
@@ -294,12 +301,11 @@ def _run(world: World, s: np.ndarray, gl: np.ndarray, job: _Job,
         return p is None
 
     t0 = _clock()
-    status, cells, cost, counts, peak = _driver.run(chk.occupancy, chk.walk, ms, s, gl, params,
-                                                   _span(world) if params.anyangle else 0.0,
-                                                   owner=chk, pause_at=PROBE_AFTER,
-                                                   keep_going=goal_open)
+    out, peak = _driver.run(chk.occupancy, chk.walk, ms, s, gl, params,
+                            _span(world) if params.anyangle else 0.0, chk, True, PROBE_AFTER,
+                            goal_open)
     secs = _clock() - t0
-    exp, gen, look = counts
+    status, cells, cost, exp, gen, look = out
     if status == RUN_FOUND:
         return SearchResult(True, cells, cost, look + 2, exp, gen, secs, peak, "", {}, "found",
                             job.guarantee, compile_s), look
@@ -310,7 +316,7 @@ def _run(world: World, s: np.ndarray, gl: np.ndarray, job: _Job,
         cell = s if status == RUN_BAD_START else gl
         world.endpoint_cell(cell, what)  # raises the endpoint's error
         raise PlanError(f"{what} cell {cell.tolist()} is not free")  # pragma: no cover
-    none = np.zeros((0, 3), np.int64)
+    none = cells  # the kernel's empty path
     if status == RUN_STOPPED:  # the goal is sealed in a small pocket
         n, probe_look = pocket[0]
         why = (f"goal unreachable: its free space is {n} cells, closed off from the start")
@@ -410,7 +416,7 @@ def _goal_pocket(world: World, ms, start, goal) -> tuple[int, int] | None:
     its time, well under a millisecond, is). Nothing is written to the world.
     The moves are symmetric (the same cells are checked either way), so this is exact."""
     chk = world.checker
-    status, _, _, (_, nodes, lookups), _ = _driver.run(
+    (status, _, _, _, nodes, lookups), _ = _driver.run(
         chk.occupancy, chk.walk, ms, goal, start, SearchParams(0, 0, GOAL_PROBE), 0.0,
         owner=chk, dense=False)
     if status != RUN_EXHAUSTED:

@@ -40,7 +40,7 @@ from planner.search._nodes import (
 )
 from planner.search._state import new_state
 from planner.search.astar.bound import new_bound, search_bound
-from planner.search.result import RUN_BUDGET, RUN_FOUND, RUN_GROW, RUN_STOPPED
+from planner.search.result import RUN_BUDGET, RUN_GROW, RUN_STOPPED
 
 __all__ = ["run", "DENSE_SLOT_BUDGET", "KEEP_NODES"]
 
@@ -195,7 +195,7 @@ def _give_dense(grid, a: np.ndarray) -> None:
             weakref.finalize(grid, _forget, key)
 
 
-def run(occ, walk, ms, start, goal, params, span: float, *, owner=None, dense: bool = True,
+def run(occ, walk, ms, start, goal, params, span: float, owner=None, dense: bool = True,
         pause_at: int = 0, keep_going=None):
     """Run one search to completion. ``span``: longest sight line (m) the any-angle scratch
     is sized for (0 for lattice A*).
@@ -212,20 +212,21 @@ def run(occ, walk, ms, start, goal, params, span: float, *, owner=None, dense: b
 
     Returns
     -------
-    status : int
-        A ``RUN_*`` code of :mod:`planner.search.result` (never RUN_GROW; RUN_STOPPED
-        when ``keep_going`` said stop; RUN_BAD_START / RUN_BAD_GOAL when that end is not
-        free, before any expansion).
-    cells : ndarray (K, 3) int64 or None
-        Path cells from start to goal when found.
-    cost : float
-    counts : tuple of int
-        ``(expansions, nodes, lookups)`` of the search.
+    out : tuple
+        ``(status, cells, cost, expansions, nodes, lookups)``. ``status``: a ``RUN_*`` code
+        of :mod:`planner.search.result` (never RUN_GROW; RUN_STOPPED when ``keep_going``
+        said stop; RUN_BAD_START / RUN_BAD_GOAL when that end is not free, before any
+        expansion); ``cells``: the (K, 3) int64 path cells from start to goal when found
+        (else empty); ``cost`` (m, inf when not found); the search's counts.
     peak : int
         Bytes of the search's own arrays at their peak, as grown for this search from the
         initial capacities (the same whatever the thread searched before).
     """
-    ctx = _context()
+    try:
+        free = _LOCAL.free
+    except AttributeError:
+        free = _LOCAL.free = []
+    ctx = free.pop() if free else _context()  # this thread's free context
     f = ctx.fast
     if (f is not None and f[0] is occ and f[1] is ms and f[2] is params and f[3] == id(owner)
             and f[4] is walk and dense and span <= 0 and f[5] == pause_at
@@ -237,10 +238,9 @@ def run(occ, walk, ms, start, goal, params, span: float, *, owner=None, dense: b
         out = f[8](f[7], f[9], f[10])
         status = out[0]
         if status != RUN_GROW and not (f[10] and status == RUN_BUDGET):
-            _release(ctx)
-            n = out[4]
-            peak = f[11] if n <= _CAP else _fresh_bytes(n, 0) + f[12]
-            return status, (out[1] if status == RUN_FOUND else None), out[2], out[3:], peak
+            if len(free) < 2:
+                free.append(ctx)  # _release
+            return out, (f[11] if out[4] <= _CAP else _fresh_bytes(out[4], 0) + f[12])
         out = _run(ctx, occ, walk, ms, start, goal, params, span, owner, dense, pause_at,
                    keep_going, out)
     else:
@@ -288,11 +288,10 @@ def _run(ctx, occ, walk, ms, start, goal, params, span, owner, dense, pause_at, 
             nodes, state, slots = ctx.nodes, ctx.state, _slots(ctx, occ, dslot)
             out = (RUN_STOPPED, *_helper(finish, nodes, slots, state, False)(
                 nodes, slots, state, False))
-    status, path, cost, exp, n, look = out
+    n = out[4]
     # finish cleared the touched cells of the dense array: the context keeps it for reuse
     rest = (0 if dslot is None else dslot.nbytes) + max(nu, 64) + _STATE_BYTES
     rest += 0 if sc is nos else _nbytes(sc)
-    peak = _fresh_bytes(n, 0) + rest
     if len(ctx.nodes.key) > KEEP_NODES or len(ctx.slots.bkeys) > KEEP_NODES // 8:
         ctx.keep()
     bd = ctx.bound
@@ -301,7 +300,7 @@ def _run(ctx, occ, walk, ms, start, goal, params, span, owner, dense, pause_at, 
                     first, pausing, _fresh_bytes(0, 0) + rest, rest)
     else:
         ctx.fast = None
-    return status, (path if status == RUN_FOUND else None), cost, (exp, n, look), peak
+    return out, _fresh_bytes(n, 0) + rest
 
 
 _PAUSED: dict[tuple, tuple] = {}
