@@ -212,8 +212,6 @@ _SHAPE3, _I8 = (3,), np.dtype(np.int64)
 def _end_cell(cell, what: str) -> np.ndarray:
     """A start or goal cell as (3,) int64 (PlanError for another shape or dtype); whether
     it is free is checked by the kernel, which names it when not."""
-    if type(cell) is np.ndarray and cell.shape == (3,) and cell.dtype == np.int64:
-        return cell
     c = as_cells(cell)
     if len(c) != 1:
         raise PlanError(f"{what} must be one cell (i, j, k), got shape {c.shape}")
@@ -249,16 +247,6 @@ def _prepare(world: World, method: str, neighbors: str, corner_cutting: bool, ma
             and last[5] is max_expansions and last[6] is memory_budget and last[7] == workers
             and last[8] is env):
         return last[9]
-    job = _job(lat, env, method, neighbors, corner_cutting, max_nodes, max_expansions,
-               memory_budget, workers)
-    _LAST[0] = (lat, method, neighbors, corner_cutting, max_nodes, max_expansions,
-                memory_budget, workers, env, job)
-    return job
-
-
-def _job(lat: Lattice, env, method, neighbors, corner_cutting, max_nodes, max_expansions,
-         memory_budget, workers: int) -> _Job:
-    """:func:`_prepare` for arguments other than the last call's."""
     key = (id(lat), method, neighbors, corner_cutting, type(max_nodes), max_nodes,
            type(max_expansions), max_expansions, type(memory_budget), memory_budget, workers,
            env)
@@ -267,22 +255,24 @@ def _job(lat: Lattice, env, method, neighbors, corner_cutting, max_nodes, max_ex
     except TypeError:  # an unhashable argument: checked (and refused) below
         hit = key = None
     if hit is not None and hit[0] is lat:
-        return hit[1]
-    if method not in METHODS:
-        raise PlanError(f"unknown method {method!r}; expected one of {', '.join(METHODS)}")
-    max_nodes = _limit(max_nodes, "max_nodes")
-    budget = _limit(memory_budget, "memory_budget") or default_memory_budget()
-    budget_nodes = default_max_expansions(max(1, budget // workers))
-    max_exp = _limit(max_expansions, "max_expansions") or budget_nodes
-    ms = move_set(lat, neighbors, corner_cutting, _HKIND[method])
-    node_cap = min(max_nodes, budget_nodes) if max_nodes else budget_nodes
-    params = SearchParams(_ANYANGLE[method], node_cap, max_exp, _WEIGHT.get(method, 1.0))
-    job = _Job(ms, params, max_nodes,
-               carries_guarantee(lat, neighbors, corner_cutting))
-    if key is not None:
-        if len(_JOBS) >= 256:
-            _JOBS.clear()
-        _JOBS[key] = (lat, job)
+        job = hit[1]
+    else:
+        if method not in METHODS:
+            raise PlanError(f"unknown method {method!r}; expected one of {', '.join(METHODS)}")
+        nodes = _limit(max_nodes, "max_nodes")
+        budget = _limit(memory_budget, "memory_budget") or default_memory_budget()
+        budget_nodes = default_max_expansions(max(1, budget // workers))
+        max_exp = _limit(max_expansions, "max_expansions") or budget_nodes
+        ms = move_set(lat, neighbors, corner_cutting, _HKIND[method])
+        node_cap = min(nodes, budget_nodes) if nodes else budget_nodes
+        params = SearchParams(_ANYANGLE[method], node_cap, max_exp, _WEIGHT.get(method, 1.0))
+        job = _Job(ms, params, nodes, carries_guarantee(lat, neighbors, corner_cutting))
+        if key is not None:
+            if len(_JOBS) >= 256:
+                _JOBS.clear()
+            _JOBS[key] = (lat, job)
+    _LAST[0] = (lat, method, neighbors, corner_cutting, max_nodes, max_expansions,
+                memory_budget, workers, env, job)
     return job
 
 
@@ -309,26 +299,23 @@ def _run(world: World, s: np.ndarray, gl: np.ndarray, job: _Job,
     if status == RUN_FOUND:
         return SearchResult(True, cells, cost, look + 2, exp, gen, secs, peak, "", {}, "found",
                             job.guarantee, compile_s), look
-    checks = look + 2  # and the two endpoint checks
-    max_nodes = job.max_nodes
+    checks, max_nodes = look + 2, job.max_nodes  # and the two endpoint checks
     if status == RUN_BAD_START or status == RUN_BAD_GOAL:
         what = "start" if status == RUN_BAD_START else "goal"
         cell = s if status == RUN_BAD_START else gl
         world.endpoint_cell(cell, what)  # raises the endpoint's error
         raise PlanError(f"{what} cell {cell.tolist()} is not free")  # pragma: no cover
-    none = cells  # the kernel's empty path
     if status == RUN_STOPPED:  # the goal is sealed in a small pocket
         n, probe_look = pocket[0]
-        why = (f"goal unreachable: its free space is {n} cells, closed off from the start")
-        checks += probe_look
-        look += probe_look
+        why = f"goal unreachable: its free space is {n} cells, closed off from the start"
+        checks, look = checks + probe_look, look + probe_look
     elif status == RUN_EXHAUSTED:
         why = f"goal unreachable: explored {gen} cells"
     elif status == RUN_LIMIT and max_nodes and gen >= max_nodes:
         why = f"node limit {max_nodes} reached after {exp} expansions"
     else:
         why = f"search budget exhausted after {exp} expansions ({peak} bytes)"
-    return SearchResult(False, none, math.inf, checks, exp, gen, secs, peak, why,
+    return SearchResult(False, cells, math.inf, checks, exp, gen, secs, peak, why,
                         status=STATUS_OF_RUN[status], guarantee=job.guarantee,
                         compile_seconds=compile_s), look
 
