@@ -80,8 +80,8 @@ class _Context:
         self.sc_key = None
         self.bound = None  # (its structs..., params, their types, Bound, entry point): _bound
         self.owner = 0  # id of the owner of the bound world (see run)
-        self.held = None  # (grid, its dense slot array) of the grid last searched: _dense
-        self.fast = None  # what run's short path needs to repeat the last search: _set_fast
+        self.held = None  # (grid, its dense slot array, owner id) last searched: _dense
+        self.fast = None  # what run's short path needs to repeat the last search (_run)
 
     def keep(self) -> None:
         """Drop arrays a long search grew past the kept size (module docstring)."""
@@ -289,7 +289,8 @@ def _run(ctx, occ, walk, ms, start, goal, params, span, owner, dense, pause_at, 
             out = (RUN_STOPPED, *_helper(finish, nodes, slots, state, False)(
                 nodes, slots, state, False))
     n = out[4]
-    # finish cleared the touched cells of the dense array: the context keeps it for reuse
+    # finish cleared the touched cells of the dense array (the context keeps it for reuse)
+    # and zeroed the state's page count: the paged map's bytes are those of _PCAP pages
     rest = (0 if dslot is None else dslot.nbytes) + max(nu, 64) + _STATE_BYTES
     rest += 0 if sc is nos else _nbytes(sc)
     if len(ctx.nodes.key) > KEEP_NODES or len(ctx.slots.bkeys) > KEEP_NODES // 8:
