@@ -5,10 +5,12 @@ Usage::
     python benchmarks/fixed_cost.py [--calls 2000]
 
 The query is one move long (start and goal are neighbouring free cells of a 64^3 cubic
-world with a few obstacles), so the two expansions it makes cost a negligible share: the
-figure is what every call pays whatever its length (argument checks, endpoint checks, the
-kernel call, building the result). Each figure is the median per call of ``--calls`` calls,
-after warm-up (compilation is never counted). ``search_speed.py`` prints the same line.
+world with a few obstacles), so the two expansions it makes (26 nodes generated) cost a small
+share: the figure is what every call pays whatever its length (argument checks, endpoint
+checks, the kernel call, building the result). The same search with the goal at the start
+(one expansion, no node generated) is the fixed cost with no expansion work at all. Each
+figure is the median per call of ``--calls`` calls, after warm-up (compilation is never
+counted). ``search_speed.py`` prints the same line.
 """
 
 from __future__ import annotations
@@ -26,8 +28,9 @@ from planner.world import World
 
 
 def fixed_cost(calls: int = 2000) -> dict:
-    """Median wall time per call (s) of ``search()`` and ``plan()`` on a one-move query, and
-    of the kernel time ``search()`` reports (``SearchResult.seconds``)."""
+    """Median wall time per call (s) of ``search()`` and ``plan()`` on a one-move query, of
+    the kernel time ``search()`` reports (``SearchResult.seconds``) and of ``search()`` from
+    a cell to itself (``same``)."""
     rng = np.random.default_rng(0)
     blocked = rng.integers(0, 64, (2000, 3))
     blocked = blocked[blocked[:, 0] >= 20]  # the query's corner stays free
@@ -40,7 +43,8 @@ def fixed_cost(calls: int = 2000) -> dict:
         plan(world, ps, pg)
     out = {}
     for name, call in (("search", lambda: S.search(world, s, g)),
-                       ("plan", lambda: plan(world, ps, pg))):
+                       ("plan", lambda: plan(world, ps, pg)),
+                       ("same", lambda: S.search(world, s, s))):
         t = np.empty(calls)
         k = np.empty(calls)
         for i in range(calls):
@@ -59,8 +63,8 @@ def line(calls: int = 2000) -> str:
     r = fixed_cost(calls)
     return (f"fixed cost per call on a prebuilt world (one-move query, median of {calls}): "
             f"search() {r['search'] * 1e6:.1f} us (its kernel call {r['kernel'] * 1e6:.1f} us; "
-            f"goal <= 10 us outside the expansions), plan() {r['plan'] * 1e6:.1f} us "
-            "(goal <= 50 us)")
+            f"goal <= 10 us outside the expansions; {r['same'] * 1e6:.1f} us from a cell to "
+            f"itself), plan() {r['plan'] * 1e6:.1f} us (goal <= 50 us)")
 
 
 def main(argv: list[str] | None = None) -> int:

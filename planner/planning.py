@@ -182,7 +182,7 @@ def plan(
     path_cells = res.cells
     checks = res.cell_checks
     seconds = res.seconds
-    path = np.concatenate([s[None], lat.to_world(path_cells), g[None]])
+    path = _path_points(lat, s, path_cells, g)
     length = raw_length = path_length(path, 0.0)
     if shortcut and method in ("astar", "dijkstra"):
         t0 = time.perf_counter()
@@ -190,7 +190,7 @@ def plan(
         path_cells = search.shortcut(world, path_cells)
         checks += world.cell_checks - before
         seconds += time.perf_counter() - t0
-        path = np.concatenate([s[None], lat.to_world(path_cells), g[None]])
+        path = _path_points(lat, s, path_cells, g)
         length = path_length(path, 0.0)
     return PlanResult(
         found=True, path=path, cells=path_cells, length=length, cell_checks=checks,
@@ -200,6 +200,17 @@ def plan(
                "smoothed_length": length if shortcut else None},
         guarantee=res.guarantee, unknown_cells=unknown_on_path(world, path), **common,
     )
+
+
+def _path_points(lat: Lattice, s: np.ndarray, cells: np.ndarray, g: np.ndarray) -> np.ndarray:
+    """(K + 2, 3) float64 path: the start point ``s``, the centres of ``cells`` (K, 3), the
+    goal point ``g`` (m). The values of ``np.concatenate([s[None], lat.to_world(cells),
+    g[None]])``, without its temporaries."""
+    path = np.empty((len(cells) + 2, 3))
+    path[0] = s
+    path[-1] = g
+    lat.to_world(cells, out=path[1:-1])
+    return path
 
 
 def describe(res: PlanResult, world=None) -> str:

@@ -62,6 +62,7 @@ _INDEX_LIMIT = 2.0**52
 # Cell sizes (m, cube root of the cell volume) whose geometry derives reliably: the linear
 # programs of the derivation have absolute tolerances, so far smaller or larger cells lose it.
 _SIDE_RANGE = (1e-6, 1e6)
+_POINT_KINDS = {"cubic": 1, "fcc": 2, "bcc": 3, "hex": 4}  # point_rounding: named kernels
 _SHELL_LIMIT = 5_000_000  # lattice vectors neighbors("face+k") may enumerate (24 bytes each)
 
 
@@ -321,6 +322,20 @@ class Lattice:
             qk.run_generic(self.quantizer(), x, out)
         return out
 
+    def point_rounding(self) -> tuple | None:
+        """How :meth:`quantize` rounds a point with a named lattice's own kernel, as the
+        arguments of :func:`planner.occupancy.grid.point_cell`: ``(kind, a, b, ginv,
+        reach)`` (``reach``: the largest coordinate (m) it takes, see :meth:`quantize`'s
+        range check), or None when :meth:`quantize` runs the generic quantizer."""
+        kind = _POINT_KINDS.get(self._kind) if self.dim == 3 else None
+        if kind is None:
+            return None
+        g = self._g
+        # what run_named passes each kernel (the same float64 values)
+        a, b = {1: (1.0 / g[0, 0], 0.0), 2: (-g[2, 2], 0.0), 3: (g[0, 0], 0.0),
+                4: (g[0, 0], g[2, 2])}[kind]
+        return kind, float(a), float(b), self._ginv, self._reach
+
     def _check_range(self, x: np.ndarray) -> None:
         """LatticeError for NaN/inf or for points whose indices would not fit exactly.
 
@@ -354,12 +369,14 @@ class Lattice:
             _qk().run_generic(self.quantizer(), x, out)
         return out
 
-    def to_world(self, indices: np.ndarray) -> np.ndarray:
+    def to_world(self, indices: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
         """Cell centres ``G @ w`` in metres.
 
         Parameters
         ----------
         indices : array_like of int, shape (N, d)
+        out : ndarray, shape (N, d), float64, optional
+            Written with the centres (the same values) and returned, instead of a new array.
 
         Returns
         -------
@@ -367,7 +384,11 @@ class Lattice:
         """
         w = indices
         if type(w) is np.ndarray and w.dtype == np.int64 and w.ndim == 2 and w.shape[1] == self.dim:
-            return w @ self._g.T  # the usual case (a path's cells), checked at once
+            # the usual case (a path's cells), checked at once
+            return w @ self._g.T if out is None else np.matmul(w, self._g.T, out=out)
+        if out is not None:
+            out[...] = self.to_world(indices)
+            return out
         w = np.asarray(indices)
         if w.ndim == 1 and w.shape[0] == self.dim:
             w = w[None, :]

@@ -109,6 +109,32 @@ def clear_cells(grid, lo, dims, w):  # pragma: no cover - compiled
 
 
 @njit_cached
+def point_cell(occ, kind, a, b, ginv, x0, x1, x2, cell):  # pragma: no cover - compiled
+    """Write into ``cell`` (3,) int64 the cell containing point (x0, x1, x2) (m), rounded by
+    the named lattice kernel ``kind`` (1 cubic, 2 FCC, 3 BCC, 4 hexagonal prism) with the
+    arguments ``a``, ``b``, ``ginv`` that :func:`planner.lattice.quantize.run_named` gives it
+    (:meth:`planner.lattice.Lattice.point_rounding`): the cell ``Lattice.quantize`` returns.
+    Returns whether it is in bounds and free (one lookup)."""
+    x = np.empty((1, 3), np.float64)
+    x[0, 0] = x0
+    x[0, 1] = x1
+    x[0, 2] = x2
+    out = np.empty((1, 3), np.int64)
+    if kind == 1:
+        qk.quantize_cubic(x, a, out)
+    elif kind == 2:
+        qk.quantize_fcc(x, a, ginv, out)
+    elif kind == 3:
+        qk.quantize_bcc(x, a, ginv, out)
+    else:
+        qk.quantize_hex(x, a, b, ginv, out)
+    cell[0] = out[0, 0]
+    cell[1] = out[0, 1]
+    cell[2] = out[0, 2]
+    return occ_free(occ, out[0, 0], out[0, 1], out[0, 2])
+
+
+@njit_cached
 def point_free(occ, quant, x0, x1, x2, buf, out):  # pragma: no cover - compiled
     """Is the cell containing point (x0, x1, x2) (m) in bounds and free? One lookup.
     ``quant``: ``Lattice.quantizer()``; ``buf`` (2, 3) float64 and ``out`` (1, 3) int64 are

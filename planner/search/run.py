@@ -40,6 +40,7 @@ from __future__ import annotations
 import math
 import os
 import time
+from time import perf_counter as _clock
 from typing import NamedTuple
 
 import numpy as np
@@ -186,7 +187,7 @@ def search(
         raise PlanError(f"unknown backend {backend!r}; expected numba or networkx")
     job = _prepare(world, method, neighbors, corner_cutting, max_nodes, max_expansions,
                    memory_budget, 1)
-    compile_s = warm_up()
+    compile_s = 0.0 if _WARM else warm_up()
     if backend == "networkx":
         s = world.endpoint_cell(start_cell, "start")
         gl = world.endpoint_cell(goal_cell, "goal")
@@ -195,18 +196,22 @@ def search(
         res = search_networkx(world, s, gl, job.ms, job.max_nodes or None)
         res.guarantee = job.guarantee
         return res
-    s, gl = _end_cell(start_cell, "start"), _end_cell(goal_cell, "goal")
-    res, look = _run(world, s, gl, job.ms, job.params, job.max_nodes)
+    s, gl = start_cell, goal_cell  # as _end_cell, the usual case written out
+    if not (type(s) is np.ndarray and s.shape == _SHAPE3 and s.dtype is _I8):
+        s = _end_cell(s, "start")
+    if not (type(gl) is np.ndarray and gl.shape == _SHAPE3 and gl.dtype is _I8):
+        gl = _end_cell(gl, "goal")
+    res, look = _run(world, s, gl, job, compile_s)
     world.cell_checks += look + 2  # and the two endpoint checks the kernel made
-    res.guarantee, res.compile_seconds = job.guarantee, compile_s
     return res
+
+
+_SHAPE3, _I8 = (3,), np.dtype(np.int64)
 
 
 def _end_cell(cell, what: str) -> np.ndarray:
     """A start or goal cell as (3,) int64 (PlanError for another shape or dtype); whether
     it is free is checked by the kernel, which names it when not."""
-    if type(cell) is np.ndarray and cell.shape == (3,) and cell.dtype == np.int64:
-        return cell
     c = as_cells(cell)
     if len(c) != 1:
         raise PlanError(f"{what} must be one cell (i, j, k), got shape {c.shape}")
@@ -223,6 +228,7 @@ class _Job(NamedTuple):
 
 
 _JOBS: dict[tuple, tuple] = {}  # the arguments of a call -> (lattice, its _Job)
+_LAST: list = [None]  # (lattice, the arguments, env token, _Job) of the last call
 
 
 def _prepare(world: World, method: str, neighbors: str, corner_cutting: bool, max_nodes,
@@ -230,40 +236,52 @@ def _prepare(world: World, method: str, neighbors: str, corner_cutting: bool, ma
     """Check the arguments shared by :func:`search` and :func:`search_many` and derive the
     move set and kernel settings; ``workers`` concurrent searches share the memory budget.
     Remembered per lattice and arguments (and the budget's environment variable): a
-    search's arguments are checked once, not on every call."""
+    search's arguments are checked once, not on every call. The last call's are compared
+    by identity first (a query loop passes the same objects), which costs less than
+    hashing them."""
     lat = world.lattice
+    env = _budget.env_token()
+    last = _LAST[0]
+    if (last is not None and last[0] is lat and last[1] is method and last[2] is neighbors
+            and last[3] is corner_cutting and last[4] is max_nodes
+            and last[5] is max_expansions and last[6] is memory_budget and last[7] == workers
+            and last[8] is env):
+        return last[9]
     key = (id(lat), method, neighbors, corner_cutting, type(max_nodes), max_nodes,
            type(max_expansions), max_expansions, type(memory_budget), memory_budget, workers,
-           _budget.env_token())
+           env)
     try:
         hit = _JOBS.get(key)
     except TypeError:  # an unhashable argument: checked (and refused) below
         hit = key = None
     if hit is not None and hit[0] is lat:
-        return hit[1]
-    if method not in METHODS:
-        raise PlanError(f"unknown method {method!r}; expected one of {', '.join(METHODS)}")
-    max_nodes = _limit(max_nodes, "max_nodes")
-    budget = _limit(memory_budget, "memory_budget") or default_memory_budget()
-    budget_nodes = default_max_expansions(max(1, budget // workers))
-    max_exp = _limit(max_expansions, "max_expansions") or budget_nodes
-    ms = move_set(lat, neighbors, corner_cutting, _HKIND[method])
-    node_cap = min(max_nodes, budget_nodes) if max_nodes else budget_nodes
-    params = SearchParams(_ANYANGLE[method], node_cap, max_exp, _WEIGHT.get(method, 1.0))
-    job = _Job(ms, params, max_nodes,
-               carries_guarantee(lat, neighbors, corner_cutting))
-    if key is not None:
-        if len(_JOBS) >= 256:
-            _JOBS.clear()
-        _JOBS[key] = (lat, job)
+        job = hit[1]
+    else:
+        if method not in METHODS:
+            raise PlanError(f"unknown method {method!r}; expected one of {', '.join(METHODS)}")
+        nodes = _limit(max_nodes, "max_nodes")
+        budget = _limit(memory_budget, "memory_budget") or default_memory_budget()
+        budget_nodes = default_max_expansions(max(1, budget // workers))
+        max_exp = _limit(max_expansions, "max_expansions") or budget_nodes
+        ms = move_set(lat, neighbors, corner_cutting, _HKIND[method])
+        node_cap = min(nodes, budget_nodes) if nodes else budget_nodes
+        params = SearchParams(_ANYANGLE[method], node_cap, max_exp, _WEIGHT.get(method, 1.0))
+        job = _Job(ms, params, nodes, carries_guarantee(lat, neighbors, corner_cutting))
+        if key is not None:
+            if len(_JOBS) >= 256:
+                _JOBS.clear()
+            _JOBS[key] = (lat, job)
+    _LAST[0] = (lat, method, neighbors, corner_cutting, max_nodes, max_expansions,
+                memory_budget, workers, env, job)
     return job
 
 
-def _run(world: World, s: np.ndarray, gl: np.ndarray, ms, params: SearchParams,
-         max_nodes: int) -> tuple[SearchResult, int]:
+def _run(world: World, s: np.ndarray, gl: np.ndarray, job: _Job,
+         compile_s: float = 0.0) -> tuple[SearchResult, int]:
     """One kernel search between two free cells: the result and the lookups to add to
     ``world.cell_checks`` (left to the caller, so that threads never write to the world)."""
     chk = world.checker
+    ms, params = job.ms, job.params
     pocket: list[tuple[int, int]] = []
 
     def goal_open() -> bool:  # asked once, by a search still going after PROBE_AFTER
@@ -272,35 +290,34 @@ def _run(world: World, s: np.ndarray, gl: np.ndarray, ms, params: SearchParams,
             pocket.append(p)
         return p is None
 
-    t0 = time.perf_counter()
-    status, cells, cost, counts, peak = _driver.run(chk.occupancy, chk.walk, ms, s, gl, params,
-                                                   _span(world) if params.anyangle else 0.0,
-                                                   owner=chk, pause_at=PROBE_AFTER,
-                                                   keep_going=goal_open)
-    secs = time.perf_counter() - t0
-    exp, gen, look = counts
-    checks = look + 2  # and the two endpoint checks
+    t0 = _clock()
+    out, peak = _driver.run(chk.occupancy, chk.walk, ms, s, gl, params,
+                            _span(world) if params.anyangle else 0.0, chk, True, PROBE_AFTER,
+                            goal_open)
+    secs = _clock() - t0
+    status, cells, cost, exp, gen, look = out
     if status == RUN_FOUND:
-        return SearchResult(True, cells, cost, checks, exp, gen, secs, peak), look
+        return SearchResult(True, cells, cost, look + 2, exp, gen, secs, peak, "", {}, "found",
+                            job.guarantee, compile_s), look
+    checks, max_nodes = look + 2, job.max_nodes  # and the two endpoint checks
     if status == RUN_BAD_START or status == RUN_BAD_GOAL:
         what = "start" if status == RUN_BAD_START else "goal"
         cell = s if status == RUN_BAD_START else gl
         world.endpoint_cell(cell, what)  # raises the endpoint's error
         raise PlanError(f"{what} cell {cell.tolist()} is not free")  # pragma: no cover
-    none = np.zeros((0, 3), np.int64)
     if status == RUN_STOPPED:  # the goal is sealed in a small pocket
         n, probe_look = pocket[0]
-        return SearchResult(False, none, math.inf, checks + probe_look, exp, gen, secs, peak,
-                            f"goal unreachable: its free space is {n} cells, closed off "
-                            "from the start", status=STATUS_OF_RUN[status]), look + probe_look
-    if status == RUN_EXHAUSTED:
+        why = f"goal unreachable: its free space is {n} cells, closed off from the start"
+        checks, look = checks + probe_look, look + probe_look
+    elif status == RUN_EXHAUSTED:
         why = f"goal unreachable: explored {gen} cells"
     elif status == RUN_LIMIT and max_nodes and gen >= max_nodes:
         why = f"node limit {max_nodes} reached after {exp} expansions"
     else:
         why = f"search budget exhausted after {exp} expansions ({peak} bytes)"
-    return SearchResult(False, none, math.inf, checks, exp, gen, secs, peak, why,
-                        status=STATUS_OF_RUN[status]), look
+    return SearchResult(False, cells, math.inf, checks, exp, gen, secs, peak, why,
+                        status=STATUS_OF_RUN[status], guarantee=job.guarantee,
+                        compile_seconds=compile_s), look
 
 
 def search_many(
@@ -358,7 +375,7 @@ def search_many(
         world.endpoint_cell(b[i], f"query {i}: goal")
 
     def one(i: int) -> tuple[SearchResult, int]:
-        return _run(world, a[i], b[i], job.ms, job.params, job.max_nodes)
+        return _run(world, a[i], b[i], job, compile_s if i == 0 else 0.0)
 
     if workers == 1:
         done = [one(i) for i in range(len(a))]
@@ -366,10 +383,8 @@ def search_many(
         with ThreadPoolExecutor(workers) as pool:
             done = list(pool.map(one, range(len(a))))
     out = []
-    for i, (res, look) in enumerate(done):
+    for res, look in done:
         world.cell_checks += look
-        res.guarantee = job.guarantee
-        res.compile_seconds = compile_s if i == 0 else 0.0
         out.append(res)
     return out
 
@@ -388,7 +403,7 @@ def _goal_pocket(world: World, ms, start, goal) -> tuple[int, int] | None:
     its time, well under a millisecond, is). Nothing is written to the world.
     The moves are symmetric (the same cells are checked either way), so this is exact."""
     chk = world.checker
-    status, _, _, (_, nodes, lookups), _ = _driver.run(
+    (status, _, _, _, nodes, lookups), _ = _driver.run(
         chk.occupancy, chk.walk, ms, goal, start, SearchParams(0, 0, GOAL_PROBE), 0.0,
         owner=chk, dense=False)
     if status != RUN_EXHAUSTED:

@@ -50,6 +50,8 @@ class ValidityChecker:
         self.states = 0
         self.motions = 0
         self._free_one = None  # compiled entry point of grid.free_one (see cell_free)
+        self._rounding = None  # Lattice.point_rounding(), or () when there is none (locate)
+        self._point_cell = None  # compiled entry point of grid.point_cell (see locate)
 
     @property
     def quantizer(self) -> Quantizer:
@@ -61,7 +63,7 @@ class ValidityChecker:
     def __getstate__(self) -> dict:
         self.quantizer  # noqa: B018 - a worker would otherwise redo the lattice geometry
         d = self.__dict__.copy()
-        d["_free_one"] = None  # a compiled entry point does not pickle
+        d["_free_one"] = d["_point_cell"] = None  # a compiled entry point does not pickle
         return d
 
     def is_valid(self, point) -> bool:
@@ -89,6 +91,26 @@ class ValidityChecker:
         if f is None:
             f = self._free_one = entry_point(wk.free_one, (self.occupancy, 0, 0, 0))
         return f(self.occupancy, i, j, k)
+
+    def locate(self, x: float, y: float, z: float) -> tuple[np.ndarray, bool] | None:
+        """The cell (3,) int64 that ``Lattice.quantize`` gives point (x, y, z) (m, Python
+        floats) and whether it is in bounds and free, in one compiled call (a start or goal
+        on every plan). None for a lattice without a named rounding kernel or a point past
+        its exact range: then ``quantize`` decides (or raises). Not counted here."""
+        r = self._rounding
+        if r is None:
+            r = self._rounding = self._lattice.point_rounding() or ()
+        if not r:
+            return None
+        kind, a, b, ginv, reach = r
+        if not (-reach <= x <= reach and -reach <= y <= reach and -reach <= z <= reach):
+            return None
+        cell = np.empty(3, np.int64)
+        f = self._point_cell
+        if f is None:
+            f = self._point_cell = entry_point(wk.point_cell, (self.occupancy, kind, a, b, ginv,
+                                                               x, y, z, cell))
+        return cell, f(self.occupancy, kind, a, b, ginv, x, y, z, cell)
 
     def cells_free(self, cells: np.ndarray) -> np.ndarray:
         """(N,) bool: each cell of ``cells`` ((N, 3) int64, C-contiguous) in bounds and free.

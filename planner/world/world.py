@@ -305,10 +305,16 @@ class World(CellSets, UnknownSpace):
             if x[i] < bl[i] - _BOUNDS_TOL or x[i] > bh[i] + _BOUNDS_TOL:
                 raise PlanError(f"{what} {_fmt(a)} is outside the map bounds {_fmt(lo)} .. "
                                 f"{_fmt(hi)}")
-        cell = self._lattice.quantize(a[None])[0]
-        self.cell_checks += 1
-        i, j, k = cell.tolist()
-        if not self.checker.cell_free(i, j, k):  # the message only when needed
+        hit = self.checker.locate(x[0], x[1], x[2])  # quantize and look up: one call
+        if hit is None:  # no named rounding kernel
+            cell = self._lattice.quantize(a[None])[0]
+            self.cell_checks += 1
+            i, j, k = cell.tolist()
+            free = self.checker.cell_free(i, j, k)
+        else:
+            cell, free = hit
+            self.cell_checks += 1
+        if not free:  # the message only when needed
             self._not_free(cell, f"{what} {_fmt(a)}")
         return a, cell
 

@@ -4,8 +4,14 @@ searches, grows them when the kernel asks, and traces the path.
 A search's fixed cost is what it pays outside the expansions, so nothing here is allocated
 per call: each thread keeps a :class:`_Context` (node table, heap, paged slot map, state,
 scratch) whose arrays the next search on that thread reuses, and a dense grid's cell -> slot
-array is pooled per grid. Arrays grown past :data:`KEEP_NODES` for a long search are dropped
-afterwards, so an idle thread never holds more than a short search's memory.
+array is held by the context that last searched the grid (pooled per grid when it moves on).
+Arrays grown past :data:`KEEP_NODES` for a long search are dropped afterwards, so an idle
+thread never holds more than a short search's memory.
+
+A search like the context's last one (same structs, settings and owner: the usual query
+loop) takes :func:`run`'s short path: copy the two end cells, one compiled call, the
+answer. Anything else (another world or move set, grown arrays, a pause, a search that
+needs room) takes the general path, which also sets the short path up for the next one.
 """
 
 from __future__ import annotations
@@ -34,7 +40,7 @@ from planner.search._nodes import (
 )
 from planner.search._state import new_state
 from planner.search.astar.bound import new_bound, search_bound
-from planner.search.result import RUN_BUDGET, RUN_FOUND, RUN_GROW, RUN_STOPPED
+from planner.search.result import RUN_BUDGET, RUN_GROW, RUN_STOPPED
 
 __all__ = ["run", "DENSE_SLOT_BUDGET", "KEEP_NODES"]
 
@@ -48,8 +54,9 @@ _PAGE_BYTES = PAGE * 4 + 2 * 8 + 8  # a page of int32 slots, its 2 table entries
 _STATE_BYTES = new_state(ASTAR_STATE).nbytes
 
 # One dense slot array per dense occupancy grid, reused across searches (cleared after each
-# search at the cells it touched, so a search never pays for the whole box). Taken out of
-# the pool while a search uses it: concurrent searches on one world get their own.
+# search at the cells it touched, so a search never pays for the whole box). A context holds
+# the array of the grid it last searched (``_Context.held``) and returns it here when it
+# searches another grid: concurrent searches on one world get their own.
 _POOL: dict[int, np.ndarray] = {}
 _LOCK = threading.Lock()
 _WATCHED: set[int] = set()
@@ -59,7 +66,7 @@ class _Context:
     """One thread's kernel arrays, reused by its next search (module docstring)."""
 
     __slots__ = ("nodes", "heap", "slots", "state", "ufree", "ends", "end0", "end1", "sc",
-                 "sc_key", "bound", "owner", "__weakref__")
+                 "sc_key", "bound", "owner", "held", "fast", "__weakref__")
 
     def __init__(self):
         self.nodes = new_nodes(_CAP)
@@ -73,6 +80,8 @@ class _Context:
         self.sc_key = None
         self.bound = None  # (its structs..., params, their types, Bound, entry point): _bound
         self.owner = 0  # id of the owner of the bound world (see run)
+        self.held = None  # (grid, its dense slot array, owner id) last searched: _dense
+        self.fast = None  # what run's short path needs to repeat the last search (_run)
 
     def keep(self) -> None:
         """Drop arrays a long search grew past the kept size (module docstring)."""
@@ -80,7 +89,7 @@ class _Context:
             self.nodes, self.heap = new_nodes(_CAP), new_heap(_CAP)
         if len(self.slots.bkeys) > KEEP_NODES // 8:
             self.slots = new_slots(_PCAP)
-        self.bound = None
+        self.bound = self.fast = None
 
 
 _LOCAL = threading.local()
@@ -128,14 +137,27 @@ def _sight(ctx: _Context, walk, span: float):
     return ctx.sc
 
 
-def _take_dense(occ) -> np.ndarray | None:
-    a = _POOL.pop(id(occ.grid), None)  # one dict operation: atomic under the GIL
-    if a is not None:
-        return a
-    cells = int(np.prod(occ.dims))  # the occupancy grid holds one bit per cell
-    if occ.mode != 0 or 4 * cells > DENSE_SLOT_BUDGET:
-        return None
-    return _lazy_zeros(cells)
+def _dense(ctx: _Context, occ, owner) -> np.ndarray | None:
+    """The dense slot array for a search of ``ctx`` on ``occ``'s grid: the one the context
+    holds for it, else the pool's or a new one (None when the grid is paged or too big for
+    :data:`DENSE_SLOT_BUDGET`). The context then holds it, until :func:`_unbind` of
+    ``owner`` (the structs' owner, see :func:`run`); the array it held for another grid goes
+    back to the pool."""
+    grid = occ.grid
+    h = ctx.held
+    if h is not None:
+        if h[0] is grid:
+            return h[1]
+        ctx.held = ctx.fast = None
+        _give_dense(h[0], h[1])
+    a = _POOL.pop(id(grid), None)  # one dict operation: atomic under the GIL
+    if a is None:
+        cells = int(np.prod(occ.dims))  # the occupancy grid holds one bit per cell
+        if occ.mode != 0 or 4 * cells > DENSE_SLOT_BUDGET:
+            return None
+        a = _lazy_zeros(cells)
+    ctx.held = (grid, a, id(owner))
+    return a
 
 
 def _lazy_zeros(n: int) -> np.ndarray:
@@ -160,19 +182,20 @@ def _forget(key: int) -> None:
         _WATCHED.discard(key)
 
 
-def _give_dense(occ, a: np.ndarray) -> None:
-    """Return a cleared dense slot array to the pool (dropped when the grid is freed)."""
-    key = id(occ.grid)
+def _give_dense(grid, a: np.ndarray) -> None:
+    """Return a cleared dense slot array of ``grid`` to the pool (dropped when the grid is
+    freed)."""
+    key = id(grid)
     _POOL[key] = a
     if key not in _WATCHED:
         with _LOCK:  # one finalizer per grid, whichever thread returns its array first
             new = key not in _WATCHED
             _WATCHED.add(key)
         if new:
-            weakref.finalize(occ.grid, _forget, key)
+            weakref.finalize(grid, _forget, key)
 
 
-def run(occ, walk, ms, start, goal, params, span: float, *, owner=None, dense: bool = True,
+def run(occ, walk, ms, start, goal, params, span: float, owner=None, dense: bool = True,
         pause_at: int = 0, keep_going=None):
     """Run one search to completion. ``span``: longest sight line (m) the any-angle scratch
     is sized for (0 for lattice A*).
@@ -189,23 +212,46 @@ def run(occ, walk, ms, start, goal, params, span: float, *, owner=None, dense: b
 
     Returns
     -------
-    status : int
-        A ``RUN_*`` code of :mod:`planner.search.result` (never RUN_GROW; RUN_STOPPED
-        when ``keep_going`` said stop; RUN_BAD_START / RUN_BAD_GOAL when that end is not
-        free, before any expansion).
-    cells : ndarray (K, 3) int64 or None
-        Path cells from start to goal when found.
-    cost : float
-    counts : tuple of int
-        ``(expansions, nodes, lookups)`` of the search.
+    out : tuple
+        ``(status, cells, cost, expansions, nodes, lookups)``. ``status``: a ``RUN_*`` code
+        of :mod:`planner.search.result` (never RUN_GROW; RUN_STOPPED when ``keep_going``
+        said stop; RUN_BAD_START / RUN_BAD_GOAL when that end is not free, before any
+        expansion); ``cells``: the (K, 3) int64 path cells from start to goal when found
+        (else empty); ``cost`` (m, inf when not found); the search's counts.
     peak : int
         Bytes of the search's own arrays at their peak, as grown for this search from the
         initial capacities (the same whatever the thread searched before).
     """
-    ctx = _context()
-    out = _run(ctx, occ, walk, ms, start, goal, params, span, dense, pause_at, keep_going)
+    try:
+        free = _LOCAL.free
+    except AttributeError:
+        free = _LOCAL.free = []
+    ctx = free.pop() if free else _context()  # this thread's free context
+    f = ctx.fast
+    if (f is not None and f[0] is occ and f[1] is ms and f[2] is params and f[3] == id(owner)
+            and f[4] is walk and dense and span <= 0 and f[5] == pause_at
+            and (keep_going is None) is f[6]):
+        # the short path (module docstring): the context's arrays, bound and dense slot
+        # array are those of its last search, which was like this one
+        ctx.end0[...] = start
+        ctx.end1[...] = goal
+        out = f[8](f[7], f[9], f[10])
+        status = out[0]
+        if status != RUN_GROW and not (f[10] and status == RUN_BUDGET):
+            if len(free) < 2:
+                free.append(ctx)  # _release
+            return out, (f[11] if out[4] <= _CAP else _fresh_bytes(out[4], 0) + f[12])
+        out = _run(ctx, occ, walk, ms, start, goal, params, span, owner, dense, pause_at,
+                   keep_going, out)
+    else:
+        out = _run(ctx, occ, walk, ms, start, goal, params, span, owner, dense, pause_at,
+                   keep_going)
     if owner is None:
-        ctx.bound = None
+        ctx.bound = ctx.fast = None
+        h = ctx.held
+        if h is not None:  # nothing would drop it when the grid is freed: back to the pool
+            ctx.held = None
+            _give_dense(h[0], h[1])
     else:
         ctx.owner = id(owner)
         if ctx.owner not in _OWNERS:
@@ -215,37 +261,47 @@ def run(occ, walk, ms, start, goal, params, span: float, *, owner=None, dense: b
     return out
 
 
-def _run(ctx, occ, walk, ms, start, goal, params, span, dense, pause_at, keep_going):
-    ctx.end0[...] = start
-    ctx.end1[...] = goal
+def _run(ctx, occ, walk, ms, start, goal, params, span, owner, dense, pause_at, keep_going,
+         out=None):
+    """:func:`run`'s general path; ``out``: the kernel's answer to the short path's call
+    (a request for room or a pause) when it started there. Also sets the short path up for
+    the next search when this one may take it."""
+    if out is None:
+        ctx.end0[...] = start
+        ctx.end1[...] = goal
     nos = _no_sight()
     sc = _sight(ctx, walk, span) if span > 0 else nos
     nu = len(ms.union)
     if nu > len(ctx.ufree):
         ctx.ufree = np.empty(nu, np.bool_)
-    dslot = _take_dense(occ) if dense else None
+        ctx.fast = None
+    dslot = _dense(ctx, occ, owner) if dense else None
     first = params
     if keep_going is not None and pause_at > 0 and not 0 < params.max_expansions <= pause_at:
         first = _paused(params, pause_at)
-    out = _loop(ctx, occ, walk, ms, sc, dslot, first, first is not params)
-    if first is not params and out[0] == RUN_BUDGET:
+    pausing = first is not params
+    out = _loop(ctx, occ, walk, ms, sc, dslot, first, pausing, out)
+    if pausing and out[0] == RUN_BUDGET:
         if keep_going():
             out = _loop(ctx, occ, walk, ms, sc, dslot, params, False)
         else:
             nodes, state, slots = ctx.nodes, ctx.state, _slots(ctx, occ, dslot)
             out = (RUN_STOPPED, *_helper(finish, nodes, slots, state, False)(
                 nodes, slots, state, False))
-    status, path, cost, exp, n, look = out
-    if dslot is not None:  # finish cleared the touched cells: reuse the array
-        _give_dense(occ, dslot)
-    if dslot is not None:
-        peak = _fresh_bytes(n, 0) + dslot.nbytes
-    else:
-        peak = _fresh_bytes(n, int(ctx.state[0]["pages"]))
-    peak += max(nu, 64) + _STATE_BYTES + (0 if sc is nos else _nbytes(sc))
+    n = out[4]
+    # finish cleared the touched cells of the dense array (the context keeps it for reuse)
+    # and zeroed the state's page count: the paged map's bytes are those of _PCAP pages
+    rest = (0 if dslot is None else dslot.nbytes) + max(nu, 64) + _STATE_BYTES
+    rest += 0 if sc is nos else _nbytes(sc)
     if len(ctx.nodes.key) > KEEP_NODES or len(ctx.slots.bkeys) > KEEP_NODES // 8:
         ctx.keep()
-    return status, (path if status == RUN_FOUND else None), cost, (exp, n, look), peak
+    bd = ctx.bound
+    if bd is not None and owner is not None and sc is nos and dense and bd[8] is first:
+        ctx.fast = (occ, ms, params, id(owner), walk, pause_at, keep_going is None, bd[10], bd[11],
+                    first, pausing, _fresh_bytes(0, 0) + rest, rest)
+    else:
+        ctx.fast = None
+    return out, _fresh_bytes(n, 0) + rest
 
 
 _PAUSED: dict[tuple, tuple] = {}
@@ -295,7 +351,10 @@ def _unbind(owner_id: int) -> None:
     _OWNERS.discard(owner_id)
     for ctx in list(_CONTEXTS):
         if ctx.owner == owner_id:
-            ctx.bound, ctx.owner = None, 0
+            ctx.bound, ctx.fast, ctx.owner = None, None, 0
+        h = ctx.held
+        if h is not None and h[2] == owner_id:
+            ctx.held = ctx.fast = None
 
 
 def _bound(ctx: _Context, occ, walk, ms, sc, dslot, params):
@@ -341,15 +400,18 @@ def _helper(disp, *args):
     return k
 
 
-def _loop(ctx: _Context, occ, walk, ms, sc, dslot, params, pausing):
+def _loop(ctx: _Context, occ, walk, ms, sc, dslot, params, pausing, out=None):
     """Call the kernel until it stops asking for room, growing the context's arrays; returns
-    the kernel's answer (:func:`planner.search.astar.kernel.search_call`)."""
+    the kernel's answer (:func:`planner.search.astar.kernel.search_call`). ``out``: its
+    answer to a call already made."""
     nm = len(ms.moves)
     while True:
-        b, call = _bound(ctx, occ, walk, ms, sc, dslot, params)
-        out = call(b, params, pausing)
+        if out is None:
+            b, call = _bound(ctx, occ, walk, ms, sc, dslot, params)
+            out = call(b, params, pausing)
         if out[0] != RUN_GROW:
             return out
+        out = ctx.fast = None  # the arrays grow: the short path's bound is stale
         state, nodes, slots = ctx.state, ctx.nodes, ctx.slots
         n, npg = int(state[0]["nodes"]), int(state[0]["pages"])
         cap, pcap = len(nodes.key), len(slots.bkeys)
