@@ -19,7 +19,7 @@ import argparse
 
 import numpy as np
 
-import planner.explore as ex
+import planner.explore.run as ex  # the module whose globals explore() reads
 from planner.maps import load_map_info, map_path
 from planner.search import search
 from planner.search.dstar.lite import DStarLite
@@ -35,7 +35,7 @@ def profile(name: str, lattice: str, query: int) -> dict:
         kept = r.cell_checks == 0  # kept the stored path: nothing collected (a repair
         n = 0 if kept else int(self._st["collected"])  # looks the start's cell up)
         dead = int((self._nd.mask[self._sc.ss[:n]] == 0).sum()) if n else 0
-        rows.append((n, dead, kept))
+        rows.append((id(self), n, dead, kept))
         return r
 
     def with_backward(search_fn, world, cur, goal, neighbors):
@@ -51,7 +51,8 @@ def profile(name: str, lattice: str, query: int) -> dict:
         r = ex.explore(map_path(name), q["start"], q["goal"], lattice=lattice)
     finally:
         DStarLite.plan, ex._scratch_astar = plan, scratch
-    c = np.array(rows[1:])
+    # this run's planner only (not a warm-up's), its first plan apart
+    c = np.array([row[1:] for row in rows if row[0] == rows[-1][0]][1:])
     rep = c[c[:, 2] == 0]  # the replans that repaired
     return {"replans": r.replans, "changed": np.median(r.changed[1:]),
             "kept": int(c[:, 2].sum()),
