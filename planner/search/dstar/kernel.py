@@ -158,7 +158,10 @@ def _near_path(nd, st, u):  # pragma: no cover - compiled
     return nd.near[u] == st.path_id or nd.near[u] == -st.path_id
 
 
-@njit_cached
+# The search's kernels compile without the runtime's reference counting (as the dense A*
+# loop, planner.search.astar.dense): they allocate nothing, and each heap operation inlined
+# into them otherwise increfs / decrefs the arrays it binds (atomic adds, tens per expansion).
+@njit_cached(_nrt=False)
 def edges(occ, ms, ufree, bx, nd, st, s):  # pragma: no cover - compiled
     """Edge mask of node ``s`` (looked up once, then cached)."""
     if nd.mask[s] >= 0:
@@ -220,7 +223,7 @@ def _remove(heap, pos, st, s):  # pragma: no cover - compiled
     st.queued = _heap.remove(heap, pos, st.queued, s)
 
 
-@njit_cached
+@njit_cached(_nrt=False)
 def update_vertex(ms, nd, heap, st, km, start, s):  # pragma: no cover - compiled
     """Queue ``s`` with its key when inconsistent, dequeue it when consistent.
 
@@ -250,7 +253,7 @@ def update_vertex(ms, nd, heap, st, km, start, s):  # pragma: no cover - compile
         _remove(heap, pos, st, s)
 
 
-@njit_cached
+@njit_cached(_nrt=False)
 def best_successor(occ, ms, ufree, bx, nd, st, s):  # pragma: no cover - compiled
     """``(min_m c(s, s + m) + g(s + m), node of the argmin or -1, its edge cost, m)``."""
     mk = edges(occ, ms, ufree, bx, nd, st, s)
@@ -273,7 +276,7 @@ def best_successor(occ, ms, ufree, bx, nd, st, s):  # pragma: no cover - compile
     return best, arg, bc, bm
 
 
-@njit_cached
+@njit_cached(_nrt=False)
 def recompute_rhs(occ, ms, ufree, bx, nd, st, s):  # pragma: no cover - compiled
     """rhs(s) = min over its moves of c + g (looks its edges up if needed): exact again."""
     best, _, _, m = best_successor(occ, ms, ufree, bx, nd, st, s)
@@ -282,7 +285,7 @@ def recompute_rhs(occ, ms, ufree, bx, nd, st, s):  # pragma: no cover - compiled
     nd.lazy[s] = 0
 
 
-@njit_cached
+@njit_cached(_nrt=False)
 def compute_path(occ, ms, ufree, bx, nd, heap, st, km, start, check_start):
     # pragma: no cover - compiled
     """ComputeShortestPath: expand until the start is consistent and no queued key is

@@ -111,7 +111,7 @@ def _replan(occ, ms, bx, nd, heap, sc, st, fs, start, cells, blocked):
     st.kept = 0
     if st.phase == PH_COLLECT:
         st.collected = collect(occ, ms, sc.affect, bx, nd, st, cells, blocked, sc.ss, sc.old,
-                           sc.redo)
+                               sc.redo, stencil_offsets(ms.union, bx.dims))
         st.phase = PH_APPLY
     if st.phase == PH_APPLY:
         n = st.collected
@@ -140,7 +140,7 @@ def _replan(occ, ms, bx, nd, heap, sc, st, fs, start, cells, blocked):
     return RUN_FOUND if k > j else RUN_EXHAUSTED
 
 
-@njit_cached
+@njit_cached(_nrt=False)
 def extract(occ, ms, ufree, bx, nd, st, start, out, step):  # pragma: no cover - compiled
     """Greedy descent from the start: next = argmin c(s, s') + g(s'), to the goal, or the
     stored path from the start on while it holds (module docstring). Returns
@@ -189,7 +189,7 @@ def extract(occ, ms, ufree, bx, nd, st, start, out, step):  # pragma: no cover -
     return 0, k, cost
 
 
-@njit_cached
+@njit_cached(_nrt=False)
 def _descend(occ, ms, ufree, bx, nd, st, s, pid):  # pragma: no cover - compiled
     """:func:`best_successor` of a path node, marking each neighbour it reads as next to
     path ``pid``. Returns (the argmin or -1, its edge cost)."""
@@ -215,8 +215,8 @@ def _descend(occ, ms, ufree, bx, nd, st, s, pid):  # pragma: no cover - compiled
     return arg, bc
 
 
-@njit_cached
-def collect(occ, ms, affect, bx, nd, st, cells, blocked, out_s, out_old, out_redo):
+@njit_cached(_nrt=False)
+def collect(occ, ms, affect, bx, nd, st, cells, blocked, out_s, out_old, out_redo, off):
     # pragma: no cover - compiled
     """Nodes with a cached edge mask whose stencil holds a changed cell, each once, in
     ``out_s[:n]`` with their old masks (``out_old``); returns n. A newly blocked cell at
@@ -227,7 +227,7 @@ def collect(occ, ms, affect, bx, nd, st, cells, blocked, out_s, out_old, out_red
     no edges to lose
     (blocked in this batch: its own cell's visit kills it; earlier: it died then), so
     away from the box faces one bit of the dense occupancy grid (``occ``, the node
-    map's box) skips it without touching its row."""
+    map's box) skips it without touching its row. ``off`` (U,): :func:`stencil_offsets`."""
     st.stamp += 1
     stamp = st.stamp
     ust = ms.union
@@ -237,11 +237,6 @@ def collect(occ, ms, affect, bx, nd, st, cells, blocked, out_s, out_old, out_red
     d0, d1, d2 = bx.dims[0], bx.dims[1], bx.dims[2]
     e0, e1, e2 = bx.ext[0], bx.ext[1], bx.ext[2]
     reach, slot, grid = bx.reach, bx.slot, occ.grid
-    # slot-map offset of each stencil node from the changed cell (cells away from the
-    # box faces need no bounds checks)
-    off = np.empty(nu, np.int64)
-    for j in range(nu):
-        off[j] = (ust[j, 0] * d1 + ust[j, 1]) * d2 + ust[j, 2]
     n = 0
     for i in range(cells.shape[0]):
         c0, c1, c2 = cells[i, 0], cells[i, 1], cells[i, 2]
@@ -293,6 +288,17 @@ def collect(occ, ms, affect, bx, nd, st, cells, blocked, out_s, out_old, out_red
     return n
 
 
+@njit_cached
+def stencil_offsets(ust, dims):  # pragma: no cover - compiled
+    """Slot-map offset (U,) of each union-stencil cell ``ust`` (U, 3) in a box of ``dims``:
+    :func:`collect` reads the nodes of changed cells away from the box faces through them,
+    without bounds checks (made outside it: a kernel without the runtime cannot allocate)."""
+    off = np.empty(ust.shape[0], np.int64)
+    for j in range(ust.shape[0]):
+        off[j] = (ust[j, 0] * dims[1] + ust[j, 1]) * dims[2] + ust[j, 2]
+    return off
+
+
 @njit_cached(inline="always")
 def _touch(nd, u, stamp, touched, nt):  # pragma: no cover - compiled
     """List node ``u`` once per repair (its queue entry is updated after all flips)."""
@@ -303,7 +309,7 @@ def _touch(nd, u, stamp, touched, nt):  # pragma: no cover - compiled
     return nt
 
 
-@njit_cached
+@njit_cached(_nrt=False)
 def apply_changes(occ, ms, ufree, bx, nd, heap, st, km, start, ss, old, redo, n, touched):
     # pragma: no cover - compiled
     """Look up the edge masks of the collected nodes marked ``redo``, then repair every

@@ -32,7 +32,7 @@ def _bit(bx, v0, v1, v2, value):  # pragma: no cover - compiled
             bx.rest[b >> 3] &= np.uint8(~(1 << (b & 7)) & 0xFF)
 
 
-@njit_cached
+@njit_cached(_nrt=False)
 def mark_path(ms, bx, path, k, value):  # pragma: no cover - compiled
     """Set (``value``) or clear the rest bits of the path ``path[:k]`` ((>= k, 3) int64):
     each cell, and each move's safe-rule cells."""
@@ -51,7 +51,7 @@ def mark_path(ms, bx, path, k, value):  # pragma: no cover - compiled
                 break
 
 
-@njit_cached
+@njit_cached(_nrt=False)
 def keep_path(bx, st, fs, start, cells, blocked, path, step):  # pragma: no cover - compiled
     """True when the stored path from ``start`` on is still a shortest path after the
     changes ``cells`` ((K, 3) int64; ``blocked`` (K,) bool what each became) that the
