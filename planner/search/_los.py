@@ -164,6 +164,20 @@ def dense_walk(grid, lo, dims, p0, p1, p2, q0, q1, q2):  # pragma: no cover - co
     return True, lookups
 
 
+# The runtime asked for explicitly (a callee otherwise inherits its caller's setting): it
+# allocates, and loops compiled without reference counting (which cannot) inline
+# cubic_walk and call it.
+@njit_cached(_nrt=True)
+def _far_sight(occ, p0, p1, p2, q0, q1, q2):  # pragma: no cover - compiled
+    """:func:`cubic_sight` between cells given by components (:func:`cubic_walk`'s lines
+    too long for its integer keys)."""
+    p = np.empty(3, np.int64)
+    q = np.empty(3, np.int64)
+    p[0], p[1], p[2] = p0, p1, p2
+    q[0], q[1], q[2] = q0, q1, q2
+    return cubic_sight(occ, p, q)
+
+
 @njit_cached(inline="always")
 def cubic_walk(occ, p0, p1, p2, q0, q1, q2):  # pragma: no cover - compiled
     """:func:`cubic_sight` by integer stepping (a 3D DDA), cell by cell from p to q,
@@ -181,11 +195,7 @@ def cubic_walk(occ, p0, p1, p2, q0, q1, q2):  # pragma: no cover - compiled
     d0, d1, d2 = q0 - p0, q1 - p1, q2 - p2
     a0, a1, a2 = abs(d0), abs(d1), abs(d2)
     if max(a0, max(a1, a2)) > DDA_MAX:  # keys would overflow: the float clipping
-        p = np.empty(3, np.int64)
-        q = np.empty(3, np.int64)
-        p[0], p[1], p[2] = p0, p1, p2
-        q[0], q[1], q[2] = q0, q1, q2
-        return cubic_sight(occ, p, q)
+        return _far_sight(occ, p0, p1, p2, q0, q1, q2)
     # Unpacked once: an inlined helper taking the struct pays reference counting of its
     # arrays per call, more than the lookup itself.
     mode, grid, lo, dims, table, tmask, gg, blo, bhi = occ
@@ -265,7 +275,7 @@ def cubic_edge(g):  # pragma: no cover - compiled
     return math.sqrt(g[0, 0] * g[0, 0] + g[1, 0] * g[1, 0] + g[2, 0] * g[2, 0])
 
 
-@njit_cached
+@njit_cached(_nrt=True)  # it allocates: as _far_sight, for loops without the runtime
 def los(occ, walk, p, q, sc, gen):  # pragma: no cover - compiled
     """Line of sight between the centres of cells p and q ((3,) int64 each) on scratch ``sc``
     with a fresh generation ``gen``. Returns ``(free, lookups)``."""

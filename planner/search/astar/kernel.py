@@ -150,6 +150,25 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state
                                   params.max_expansions, goal, cubic_edge(walk.g), params.h_weight)
         st.status = status
         return status
+    # the loop's tables, made here: the loop allocates nothing (see _loop)
+    uoff, moff, reach = grid_offsets(ms.union, ms.moves, occ.dims[1], occ.dims[2])
+    status = _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, moff,
+                   reach, 1e-9 * ms.cost.min())
+    st.status = status
+    return status
+
+
+# Without the runtime's reference counting, as the dense loops (planner.search.astar.dense):
+# each heap operation inlined here would otherwise incref / decref the heap arrays it binds.
+# Its rare allocating paths (the sight walk on fresh arrays, the float clipping of very
+# long cubic lines) are separate compiled functions, which keep theirs.
+@njit_cached(_nrt=False)
+def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, moff, reach,
+          fq):  # pragma: no cover - compiled
+    """:func:`search_run`'s general loop, given its tables: ``uoff`` (U,) and ``moff`` (M,)
+    the stencil's and the moves' grid offsets and ``reach`` their margin (cells)
+    (:func:`planner.search.astar.dense.grid_offsets`), ``fq`` the f grid (1e-9 of the
+    shortest move, m). Returns the run code (see :func:`search_run`)."""
     mode, grid, lo, dims, otable, otmask, gg, blo, bhi = occ
     lo0, lo1, lo2 = lo[0], lo[1], lo[2]
     d0, d1, d2 = dims[0], dims[1], dims[2]
@@ -178,9 +197,7 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state
     nm = moves.shape[0]
     bits = nu <= MAX_BITS  # one mask test per move instead of its CSR list
     gk = pack3(goal[0], goal[1], goal[2])
-    uoff, moff, reach = grid_offsets(ust, moves, d1, d2)  # dense grid: no bounds tests
     base = np.int64(0)
-    fq = 1e-9 * mcost.min()
     fq_inv = 1.0 / fq
     n = st.nodes
     hn = st.queued
@@ -378,7 +395,6 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state
     st.queued = hn
     st.expansions = expansions
     st.lookups = lookups
-    st.status = status
     return status
 
 
