@@ -62,7 +62,6 @@ _INDEX_LIMIT = 2.0**52
 # Cell sizes (m, cube root of the cell volume) whose geometry derives reliably: the linear
 # programs of the derivation have absolute tolerances, so far smaller or larger cells lose it.
 _SIDE_RANGE = (1e-6, 1e6)
-_POINT_KINDS = {"cubic": 1, "fcc": 2, "bcc": 3, "hex": 4}  # point_rounding: named kernels
 _SHELL_LIMIT = 5_000_000  # lattice vectors neighbors("face+k") may enumerate (24 bytes each)
 
 
@@ -327,13 +326,10 @@ class Lattice:
         arguments of :func:`planner.occupancy.grid.point_cell`: ``(kind, a, b, ginv,
         reach)`` (``reach``: the largest coordinate (m) it takes, see :meth:`quantize`'s
         range check), or None when :meth:`quantize` runs the generic quantizer."""
-        kind = _POINT_KINDS.get(self._kind) if self.dim == 3 else None
-        if kind is None:
+        named = _qk().named_scalars(self._kind, self._g) if self.dim == 3 else None
+        if named is None:
             return None
-        g = self._g
-        # what run_named passes each kernel (the same float64 values)
-        a, b = {1: (1.0 / g[0, 0], 0.0), 2: (-g[2, 2], 0.0), 3: (g[0, 0], 0.0),
-                4: (g[0, 0], g[2, 2])}[kind]
+        kind, a, b = named
         return kind, float(a), float(b), self._ginv, self._reach
 
     def _check_range(self, x: np.ndarray) -> None:

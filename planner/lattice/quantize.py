@@ -62,19 +62,36 @@ def run_generic(q: Quantizer, x: np.ndarray, out: np.ndarray) -> None:
     kernel(x, q.basis, q.basis_inv, q.cand, q.cand_z, q.counts, q.reduction, out)
 
 
+def named_scalars(kind: str, g: np.ndarray) -> tuple[int, float, float] | None:
+    """The specialised kernel of a named lattice and the scalars it takes from the generator
+    ``g`` (3, 3): ``(code, a, b)``, code 1 cubic, 2 FCC, 3 BCC, 4 hexagonal prism (also
+    :func:`planner.occupancy.grid.point_cell`'s codes); None when there is none."""
+    if kind == "cubic":
+        return 1, 1.0 / g[0, 0], 0.0
+    if kind == "fcc":
+        return 2, -g[2, 2], 0.0  # FCC = b * D3, b = -G[2,2]
+    if kind == "bcc":
+        return 3, g[0, 0], 0.0  # BCC = a * (Z3 u Z3 + 1/2)
+    if kind == "hex":
+        return 4, g[0, 0], g[2, 2]  # A2 (side a) x Z (height h)
+    return None
+
+
 def run_named(kind: str, g: np.ndarray, ginv: np.ndarray, x: np.ndarray, out: np.ndarray
               ) -> bool:
     """Quantize with the specialised kernel of a named lattice; False if there is none."""
-    if kind == "cubic":
-        quantize_cubic(x, 1.0 / g[0, 0], out)
-    elif kind == "fcc":
-        quantize_fcc(x, -g[2, 2], ginv, out)  # FCC = b * D3, b = -G[2,2]
-    elif kind == "bcc":
-        quantize_bcc(x, g[0, 0], ginv, out)  # BCC = a * (Z3 u Z3 + 1/2)
-    elif kind == "hex":
-        quantize_hex(x, g[0, 0], g[2, 2], ginv, out)  # A2 (side a) x Z (height h)
-    else:
+    named = named_scalars(kind, g)
+    if named is None:
         return False
+    code, a, b = named
+    if code == 1:
+        quantize_cubic(x, a, out)
+    elif code == 2:
+        quantize_fcc(x, a, ginv, out)
+    elif code == 3:
+        quantize_bcc(x, a, ginv, out)
+    else:
+        quantize_hex(x, a, b, ginv, out)
     return True
 
 

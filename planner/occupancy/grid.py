@@ -113,6 +113,7 @@ def point_cell(occ, kind, a, b, ginv, x0, x1, x2, cell):  # pragma: no cover - c
     """Write into ``cell`` (3,) int64 the cell containing point (x0, x1, x2) (m), rounded by
     the named lattice kernel ``kind`` (1 cubic, 2 FCC, 3 BCC, 4 hexagonal prism) with the
     arguments ``a``, ``b``, ``ginv`` that :func:`planner.lattice.quantize.run_named` gives it
+    (its :func:`~planner.lattice.quantize.named_scalars`)
     (:meth:`planner.lattice.Lattice.point_rounding`): the cell ``Lattice.quantize`` returns.
     Returns whether it is in bounds and free (one lookup)."""
     x = np.empty((1, 3), np.float64)
