@@ -8,8 +8,10 @@ instead. numba has no public API for it: :func:`entry_point` reads
 internals. A compiled entry point does not check its arguments, so it must only get
 arguments of the types it was looked up with: a caller keeps one entry point per argument
 types (per world's structs, per :class:`planner.search.astar.bound.Bound` type).
-A Ctrl-C that lands inside such a call surfaces as a SystemError caused by the
-KeyboardInterrupt; the returned function raises the KeyboardInterrupt itself.
+A signal whose Python handler raises (Ctrl-C's KeyboardInterrupt, a suite run's
+``Interrupted``) while compiled code runs Python (numba unpickles a dtype to box a new array)
+surfaces as a SystemError caused by the handler's exception; the returned function raises
+that exception itself.
 """
 
 from __future__ import annotations
@@ -33,9 +35,9 @@ def entry_point(disp, args: Sequence) -> Callable:
     def call(*a):
         try:
             return fn(*a)
-        except SystemError as exc:  # Ctrl-C during the call arrives as the cause of this
-            if isinstance(exc.__cause__, KeyboardInterrupt):
-                raise KeyboardInterrupt from None
+        except SystemError as exc:  # a signal handler's exception arrives as the cause
+            if exc.__cause__ is not None:
+                raise exc.__cause__ from None
             raise
 
     return call

@@ -3,14 +3,19 @@ that is reported found keeps the robot clearance against the raw obstacles."""
 
 import json
 import math
+import os
+import signal
+import threading
 
 import numpy as np
 import pytest
 
+import planner
 from planner.bench import rows as rows_mod
 from planner.bench import runner, summary
 from planner.bench import tasks as tasks_mod
 from planner.bench.metrics import Clearance
+from planner.bench.stopping import Interrupted, signals_raise
 from planner.bench.suite import SuiteError, load_suite
 from planner.maps import map_path
 
@@ -400,3 +405,17 @@ def test_rows_name_the_host_that_ran_them(tiny_tasks, tmp_path):
     rows = runner.run(tasks[:1], tmp_path / "r.jsonl", progress=False)
     assert rows and all(r["host"] == socket.gethostname() and r["worker"] is None
                         for r in rows)
+
+
+def test_a_signal_during_searches_stops_them_as_interrupted():
+    # the handler raises wherever Python runs next, often inside a compiled search (numba
+    # runs Python to box a new array); the run must still stop as Interrupted (exit 130/143)
+    world = planner.build_world("office", "cubic")
+    start, goal = (2.5, 2.5, 1.2), (3.5, 2.9, 1.2)
+    for delay in (0.005, 0.01, 0.02, 0.03, 0.05):
+        timer = threading.Timer(delay, os.kill, (os.getpid(), signal.SIGTERM))
+        with pytest.raises(Interrupted), signals_raise():
+            timer.start()
+            for _ in range(100_000):
+                planner.plan(world, start, goal)
+        timer.join()

@@ -15,7 +15,13 @@ from multiprocessing import get_context
 from pathlib import Path
 
 from planner.bench.rows import drop_partial_line, read_rows, row_key
-from planner.bench.stopping import Interrupted, signals_raise, stop_processes, worker_init
+from planner.bench.stopping import (
+    Interrupted,
+    interruption,
+    signals_raise,
+    stop_processes,
+    worker_init,
+)
 from planner.bench.task import run_task
 from planner.progress import Progress
 
@@ -64,9 +70,14 @@ def run(tasks: list[dict], out: Path, *, jobs: int = 1, scheduler: str | None = 
                     write(run_task(t))
             else:
                 _run_pool(todo, jobs, write)
-        except Interrupted as exc:
-            stop_processes(exc.processes)  # local workers and their own workers (OMPL)
-            raise
+        except (Interrupted, SystemError) as exc:
+            stop = interruption(exc)
+            if stop is None:
+                raise
+            stop_processes(stop.processes)  # local workers and their own workers (OMPL)
+            if stop is exc:
+                raise
+            raise stop from None
         finally:
             bar.close()
     return read_rows(out)

@@ -8,7 +8,7 @@ import contextlib
 import signal
 import time
 
-__all__ = ["Interrupted", "signals_raise", "stop_processes", "worker_init"]
+__all__ = ["Interrupted", "interruption", "signals_raise", "stop_processes", "worker_init"]
 
 
 class Interrupted(Exception):
@@ -27,7 +27,8 @@ class Interrupted(Exception):
 
 @contextlib.contextmanager
 def signals_raise():
-    """Turn SIGINT and SIGTERM into :class:`Interrupted` while the block runs."""
+    """Turn SIGINT and SIGTERM into :class:`Interrupted` while the block runs; it leaves the
+    block as :class:`Interrupted` even when it arrived inside a compiled call."""
     def handler(signum, frame):
         for s in (signal.SIGINT, signal.SIGTERM):  # a second signal must not interrupt cleanup
             signal.signal(s, signal.SIG_IGN)
@@ -38,9 +39,27 @@ def signals_raise():
     old = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM)}
     try:
         yield
+    except SystemError as exc:
+        stop = interruption(exc)
+        if stop is None:
+            raise
+        raise stop from None
     finally:
         for s, h in old.items():
             signal.signal(s, h)
+
+
+def interruption(exc: BaseException) -> Interrupted | None:
+    """The :class:`Interrupted` that ``exc`` is or stands for, else None.
+
+    When the handler runs inside a compiled call (numba runs Python to box a new array),
+    numba reports the exception it left set as a SystemError caused by it.
+    """
+    if isinstance(exc, Interrupted):
+        return exc
+    if isinstance(exc, SystemError) and isinstance(exc.__cause__, Interrupted):
+        return exc.__cause__
+    return None
 
 
 def _descendants() -> list:
