@@ -350,7 +350,11 @@ def main(argv: list[str] | None = None) -> int:
         except PlannerError as exc:
             print(f"planner: error: {' '.join(str(exc).split())}", file=sys.stderr)
             return 2
-        except KeyboardInterrupt:
+        except (KeyboardInterrupt, SystemError) as exc:
+            # numba reports a Ctrl-C inside a compiled call as a SystemError caused by it
+            if not isinstance(exc.__cause__ if isinstance(exc, SystemError) else exc,
+                              KeyboardInterrupt):
+                raise
             import signal
 
             signal.signal(signal.SIGINT, signal.SIG_IGN)  # a second Ctrl-C: no traceback
