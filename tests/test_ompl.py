@@ -124,7 +124,9 @@ def test_cell_check_budget(door):
     w, _ = door
     r = baseline.plan_ompl(w, START, GOAL, planner="rrtstar", time_limit=5.0, seed=0,
                            max_cell_checks=2000)
-    assert r.seconds < 2.0
+    # stopped by the budget, not the time limit (its 5 s make far more checks); one motion
+    # check may run past it
+    assert 2000 <= r.cell_checks < 3000
     if not r.found:
         assert "budget" in r.reason and r.status == "no path"
 
@@ -155,10 +157,10 @@ def test_blocked_or_outside_endpoints(door):
 
 def test_timeout_kills_worker(door):
     w, _ = door
-    r = baseline.plan_ompl(w, START, GOAL, planner="rrtstar", time_limit=5.0, timeout=0.5)
+    r = baseline.plan_ompl(w, START, GOAL, planner="rrtstar", time_limit=60.0, timeout=0.5)
     assert r.found is False
     assert "timeout" in r.reason and r.status == "timeout"
-    assert r.wall_seconds < 3.0
+    assert r.wall_seconds < 30  # killed, far from its time limit (a loaded machine spawns slowly)
     assert r.path.shape == (0, 3) and r.path_simplified is None
 
 
@@ -209,7 +211,7 @@ def test_killed_worker_is_reported_as_crash_not_timeout(door):
     out = {}
 
     def run():
-        out["r"] = baseline.plan_ompl(w, START, GOAL, planner="rrtstar", time_limit=20.0)
+        out["r"] = baseline.plan_ompl(w, START, GOAL, planner="rrtstar", time_limit=120.0)
 
     t = threading.Thread(target=run)
     t.start()
@@ -221,11 +223,11 @@ def test_killed_worker_is_reported_as_crash_not_timeout(door):
     assert kids, "no worker started"
     time.sleep(0.3)
     os.kill(kids[0].pid, signal.SIGKILL)
-    t.join(30)
+    t.join(120)
     r = out["r"]
     assert not r.found and r.status == "crashed"
     assert r.reason == f"worker crashed (signal {int(signal.SIGKILL)})"
-    assert r.wall_seconds < 15
+    assert r.wall_seconds < 60  # ended by the kill, far from its time limit
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
