@@ -5,13 +5,14 @@ numba's ``cache=True`` needs a writable cache location (``__pycache__`` beside t
 writable HOME it raises "no locator available" when the function is *defined*, which would
 make ``import planner`` fail. :func:`njit_cached` falls back to compiling in memory.
 
-Small helpers that hot loops call (heap, node table, heuristics, line of sight, occupancy
+Small helpers that hot loops call (node table, heuristics, line of sight, occupancy
 lookups) are ordinary compiled functions declared ``_nrt=False``: they allocate nothing and
-return scalars, so they need no reference counting, and without it a call costs no more
-than inlined code (LLVM inlines them where it pays). numba's own ``inline="always"`` would
-instead type and lower a copy of the helper's body at every call site, which made the
-install-time compile (``planner._warm``) several times longer. A helper that allocates keeps
-the runtime (``_nrt=True``, or inherits its caller's setting).
+return scalars, so they need no reference counting, and without it a call costs about what
+inlined code does (LLVM inlines them where it pays). numba's own ``inline="always"`` types
+and lowers a copy of the helper's body at every call site: on every helper it made the
+install-time compile (``planner._warm``) more than twice as long. Only the heap operations
+keep it (:mod:`planner.search._heap`). A helper that allocates keeps the runtime
+(``_nrt=True``, or inherits its caller's setting).
 
 numba keys each cached kernel on its own source file only. A kernel that calls a helper
 from another module holds the helper's machine code, so it would load stale code after that

@@ -12,10 +12,11 @@ expansions on the many equal-cost paths of a lattice). Entries equal in both com
 unspecified order. A* keys its entries (f, g); D* Lite (k1, tie-break) with the same rule
 (:mod:`planner.search.dstar.kernel`).
 
-All functions are compiled without reference counting (``_nrt=False``): counting the
-heap arrays' references on every call would slow the search loops markedly. Inside, heap indices are
-unsigned: numba then adds no negative-index fix-up to each load and store (the sifts run
-markedly faster).
+All functions are ``inline="always"`` (numba copies their bodies into each caller): as
+calls, the dense A* loop ran about 4% slower on long queries
+(``benchmarks/search_speed.py``), while inlining them adds little to the compile. Inside,
+heap indices are unsigned: numba then adds no negative-index fix-up to each load and store
+(the sifts run markedly faster).
 """
 
 from __future__ import annotations
@@ -45,7 +46,7 @@ def new_heap(cap: int) -> Heap:
     return Heap(np.empty(cap, np.int64), np.empty(cap, np.float64), np.empty(cap, np.float64))
 
 
-@njit_cached(_nrt=False)
+@njit_cached(inline="always")
 def _put(h, pos, i, x, xf, xg):  # pragma: no cover - compiled
     h.slot[i] = x
     h.f[i] = xf
@@ -53,12 +54,12 @@ def _put(h, pos, i, x, xf, xg):  # pragma: no cover - compiled
     pos[np.uint64(x)] = i
 
 
-@njit_cached(_nrt=False)
+@njit_cached(inline="always")
 def _before(af, ag, bf, bg):  # pragma: no cover - compiled
     return af < bf or (af == bf and ag > bg)
 
 
-@njit_cached(_nrt=False)
+@njit_cached(inline="always")
 def sift_up(h, pos, i0):  # pragma: no cover - compiled
     """Move entry ``i0`` up to its place (after a push or a key decrease)."""
     slot, hf, hg = h.slot, h.f, h.g
@@ -73,7 +74,7 @@ def sift_up(h, pos, i0):  # pragma: no cover - compiled
     _put(h, pos, i, x, xf, xg)
 
 
-@njit_cached(_nrt=False)
+@njit_cached(inline="always")
 def sift_down(h, pos, i0, n0):  # pragma: no cover - compiled
     """Move entry ``i0`` of a heap of ``n0`` entries down to its place."""
     slot, hf, hg = h.slot, h.f, h.g
@@ -94,7 +95,7 @@ def sift_down(h, pos, i0, n0):  # pragma: no cover - compiled
     _put(h, pos, i, x, xf, xg)
 
 
-@njit_cached(_nrt=False)
+@njit_cached(inline="always")
 def push(h, pos, n, x, xf, xg):  # pragma: no cover - compiled
     """Add slot ``x`` with key ``xf`` / tie-breaker ``xg`` to a heap of ``n``; returns n + 1."""
     _put(h, pos, np.uint64(n), x, xf, xg)
@@ -102,7 +103,7 @@ def push(h, pos, n, x, xf, xg):  # pragma: no cover - compiled
     return n + 1
 
 
-@njit_cached(_nrt=False)
+@njit_cached(inline="always")
 def pop(h, pos, n):  # pragma: no cover - compiled
     """Remove the first entry of a heap of ``n`` > 0; returns ``(slot, n - 1)``. The popped
     slot's ``pos`` is left for the caller to mark (closed)."""
@@ -115,7 +116,7 @@ def pop(h, pos, n):  # pragma: no cover - compiled
     return s, n
 
 
-@njit_cached(_nrt=False)
+@njit_cached(inline="always")
 def decrease_key(h, pos, x, xf, xg):  # pragma: no cover - compiled
     """Lower the key of slot ``x`` (in the heap) to ``xf`` with tie-breaker ``xg``."""
     i = np.uint64(pos[np.uint64(x)])
@@ -124,7 +125,7 @@ def decrease_key(h, pos, x, xf, xg):  # pragma: no cover - compiled
     sift_up(h, pos, i)
 
 
-@njit_cached(_nrt=False)
+@njit_cached(inline="always")
 def change_key(h, pos, n, x, xf, xg):  # pragma: no cover - compiled
     """Set the key of slot ``x`` (in a heap of ``n``) to ``xf`` / ``xg``, up or down."""
     i = np.uint64(pos[np.uint64(x)])
@@ -134,7 +135,7 @@ def change_key(h, pos, n, x, xf, xg):  # pragma: no cover - compiled
     sift_down(h, pos, pos[np.uint64(x)], n)
 
 
-@njit_cached(_nrt=False)
+@njit_cached(inline="always")
 def remove(h, pos, n, x):  # pragma: no cover - compiled
     """Take slot ``x`` out of a heap of ``n``; returns n - 1 and sets ``pos[x] = -1``."""
     i = pos[x]
