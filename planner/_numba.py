@@ -5,12 +5,22 @@ numba's ``cache=True`` needs a writable cache location (``__pycache__`` beside t
 writable HOME it raises "no locator available" when the function is *defined*, which would
 make ``import planner`` fail. :func:`njit_cached` falls back to compiling in memory.
 
-numba keys each cached kernel on its own source file only. A kernel that inlines a helper
-from another module would load stale machine code after that helper changes (a checkout
-that was edited or moved to another commit). So the package keeps one stamp of its kernel
-sources beside the in-tree cache: when the sources differ from the stamp, the in-tree cache
-is cleared before any kernel is defined, and if it cannot be cleared (a read-only tree), the
-kernels compile in memory. An installed package never changes, so its shipped cache stays.
+Small helpers that hot loops call (node table, heuristics, line of sight, occupancy
+lookups) are ordinary compiled functions declared ``_nrt=False``: they allocate nothing and
+return scalars, so they need no reference counting, and without it a call costs about what
+inlined code does (LLVM inlines them where it pays). numba's own ``inline="always"`` types
+and lowers a copy of the helper's body at every call site: on every helper it made the
+install-time compile (``planner._warm``) more than twice as long. Only the heap operations
+keep it (:mod:`planner.search._heap`). A helper that allocates keeps the runtime
+(``_nrt=True``, or inherits its caller's setting).
+
+numba keys each cached kernel on its own source file only. A kernel that calls a helper
+from another module holds the helper's machine code, so it would load stale code after that
+helper changes (a checkout that was edited or moved to another commit). So the package
+keeps one stamp of its kernel sources beside the in-tree cache: when the sources differ
+from the stamp, the in-tree cache is cleared before any kernel is defined, and if it cannot
+be cleared (a read-only tree), the kernels compile in memory. An installed package never
+changes, so its shipped cache stays.
 (A cache under ``NUMBA_CACHE_DIR`` is the user's to manage.)
 """
 
@@ -32,7 +42,7 @@ _STAMP = _ROOT / "__pycache__" / "kernels.stamp"
 
 def _sources_digest() -> str:
     """Digest of the package's kernel sources: relative path and content of every ``.py``
-    file that mentions numba (only those can define, or be inlined into, a kernel)."""
+    file that mentions numba (only those can define, or be called by, a kernel)."""
     h = hashlib.blake2b(digest_size=16)
     for p in sorted(_ROOT.rglob("*.py")):
         text = p.read_bytes()

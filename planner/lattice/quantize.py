@@ -109,7 +109,7 @@ def _indices3(p0, p1, p2, ginv, out, i):  # pragma: no cover - compiled
         out[i, j] = np.int64(np.rint(ginv[j, 0] * p0 + ginv[j, 1] * p1 + ginv[j, 2] * p2))
 
 
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def _scaled3(x, i, inv):  # pragma: no cover - compiled
     """Row i of x times inv, and its rounding."""
     u0, u1, u2 = x[i, 0] * inv, x[i, 1] * inv, x[i, 2] * inv
@@ -225,7 +225,7 @@ def quantize_generic(x, b, binv, cand, cand_z, counts, t, out):  # pragma: no co
             out[i, m] = np.int64(np.rint(acc))
 
 
-@njit_cached(inline="always")
+@njit_cached
 def candidate_norms3(cand):  # pragma: no cover - compiled
     """(8, k) squared lengths of the candidate offsets ``cand`` (8, k, 3) of a 3D quantizer."""
     k = cand.shape[1]
@@ -236,10 +236,10 @@ def candidate_norms3(cand):  # pragma: no cover - compiled
     return cn
 
 
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def closest_point3(x0, x1, x2, b, binv, cand, cand_z, counts, t, cn):  # pragma: no cover
     """Indices (three int64, in the user's generator) of the lattice point closest to
-    ``(x0, x1, x2)`` (metres): the body of :func:`quantize_generic3`, inlined into every
+    ``(x0, x1, x2)`` (metres): the body of :func:`quantize_generic3`, called by every
     compiled caller; ``cn`` from :func:`candidate_norms3`."""
     y0 = binv[0, 0] * x0 + binv[0, 1] * x1 + binv[0, 2] * x2
     y1 = binv[1, 0] * x0 + binv[1, 1] * x1 + binv[1, 2] * x2

@@ -28,7 +28,7 @@ def n_bytes(dims: np.ndarray) -> int:
     return (int(np.prod(np.asarray(dims, dtype=np.int64))) + 7) // 8
 
 
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def _test(y, bound, mode):  # pragma: no cover - compiled
     """``y >= bound``, ``y > bound``, ``y <= bound`` or ``y < bound`` (``mode`` 0 to 3)."""
     if mode == 0:
@@ -40,7 +40,7 @@ def _test(y, bound, mode):  # pragma: no cover - compiled
     return y < bound
 
 
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def _first_k(x, g, k0, k1, bound, mode):  # pragma: no cover - compiled
     """The first k of ``[k0, k1)`` passing ``_test(x + g * k, bound, mode)`` (k1 if none),
     for a test that fails and then passes as k grows. Float products and sums are monotone
@@ -55,7 +55,7 @@ def _first_k(x, g, k0, k1, bound, mode):  # pragma: no cover - compiled
     return a
 
 
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def line_range(x, g, lo, hi, k0, k1):  # pragma: no cover - compiled
     """``(a, b)``: the k of ``[k0, k1)`` with ``lo <= x + g * k <= hi`` are ``[a, b)`` (one
     coordinate of the cell centres ``G w`` along a line of the last index, ``x`` the sum of

@@ -48,12 +48,13 @@ class Occupancy(NamedTuple):
 
 
 # -- occupancy -----------------------------------------------------------------------------
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def cell_free(mode, grid, lo, dims, table, tmask, g, blo, bhi, i, j, k):  # pragma: no cover
     """True iff cell (i, j, k) is in bounds and not blocked (one occupancy lookup).
 
-    Takes the occupancy tuple's members (unpacked once by the caller) and is inlined:
-    a non-inlined call with array arguments pays reference counting on every call."""
+    Takes the occupancy tuple's members (unpacked once by the caller) and counts no
+    references (``_nrt=False``): counting those of its array arguments would cost more
+    than the lookup."""
     if mode == 0:
         a = i - lo[0]
         b = j - lo[1]
@@ -69,16 +70,16 @@ def cell_free(mode, grid, lo, dims, table, tmask, g, blo, bhi, i, j, k):  # prag
     return not in_key_set(table, tmask, pack3(i, j, k))
 
 
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def bit_free(grid, f):  # pragma: no cover - compiled
     """True iff cell ``f`` (flat C-order index in the dense box) is free: bit ``f & 7`` of
     byte ``f >> 3`` of a dense ``grid``. For kernels that step flat indices themselves."""
     return (grid[f >> 3] >> (f & 7)) & 1 != 0
 
 
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def occ_free(occ, i, j, k):  # pragma: no cover - compiled
-    """One lookup through the :class:`Occupancy` struct (inlined)."""
+    """One lookup through the :class:`Occupancy` struct."""
     return cell_free(occ.mode, occ.grid, occ.lo, occ.dims, occ.table, occ.tmask, occ.gmat,
                  occ.blo, occ.bhi, i, j, k)
 

@@ -64,13 +64,13 @@ _L3 = 1 << 20
 _M3 = (1 << 21) - 1
 
 
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def pack3(i, j, k):  # pragma: no cover - compiled
     """Key of one 3D index (no range check: callers stay inside the map's bounds)."""
     return (((i + _L3) << 42) | ((j + _L3) << 21)) | (k + _L3)
 
 
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def unpack3(key):  # pragma: no cover - compiled
     return ((key >> 42) & _M3) - _L3, ((key >> 21) & _M3) - _L3, (key & _M3) - _L3
 
@@ -89,7 +89,7 @@ def unique_keys(keys: np.ndarray) -> np.ndarray:
 
 
 # -- hashing and key sets ------------------------------------------------------------------
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def mix64(key):  # pragma: no cover - compiled
     """splitmix64 finaliser: packed keys of neighbouring cells differ in few low bits."""
     x = np.uint64(key)
@@ -113,7 +113,7 @@ def build_key_set(keys, size):  # pragma: no cover - compiled
     return table
 
 
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def in_key_set(table, mask, k):  # pragma: no cover - compiled
     """Is key ``k`` in the open-addressing set ``table`` (size ``mask + 1``)?"""
     p = mix64(k) & mask

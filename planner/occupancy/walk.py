@@ -39,7 +39,7 @@ class Walk(NamedTuple):
 
 
 # -- kernels --------------------------------------------------------------------
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def _touches(u0, u1, u2, lim0, idq, wv, rhs):  # pragma: no cover - compiled
     """Does the segment a + t (b - a), t in [0, 1], meet the closed Voronoi cell of the cell
     at index offset u (relative to the walk's start cell)? Clip t against each half-space

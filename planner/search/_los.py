@@ -38,7 +38,7 @@ def new_scratch(span: float, walk) -> SightScratch:
     return SightScratch(vis, vgen, queue, np.empty(3, np.int64), np.empty(3, np.int64))
 
 
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def _clip(u, dk, h, t0, t1):  # pragma: no cover - compiled
     """[t0, t1] cut to the t where |t dk - u| <= h (one axis of a cubic cell)."""
     if dk > 0:
@@ -50,7 +50,7 @@ def _clip(u, dk, h, t0, t1):  # pragma: no cover - compiled
     return 1.0, 0.0
 
 
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def _span(x0, x1, h, dk):  # pragma: no cover - compiled
     """Cells (first, count, step) whose axis interval [c - h, c + h] meets [x0, x1] (either
     order), listed in the segment's direction ``dk``."""
@@ -94,7 +94,7 @@ def cubic_sight(occ, p, q):  # pragma: no cover - compiled
     return True, lookups
 
 
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def _bit(grid, f):  # pragma: no cover - compiled
     """:func:`planner.occupancy.grid.bit_free` for a flat index known to be inside the box:
     an unsigned index spares numba's negative-index fix-up on every load of the walk."""
@@ -104,7 +104,7 @@ def _bit(grid, f):  # pragma: no cover - compiled
 DDA_MAX = 1 << 19  # longest axis extent (cells) of the integer walk: keys stay < 2**63
 
 
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def _keys(a0, a1, a2):  # pragma: no cover - compiled
     """The first crossing key per axis and its increment (:func:`cubic_walk`), for axis
     extents ``a`` (cells)."""
@@ -116,7 +116,7 @@ def _keys(a0, a1, a2):  # pragma: no cover - compiled
     return k0, k1, k2, 2 * k0, 2 * k1, 2 * k2
 
 
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def dense_walk(grid, lo, dims, p0, p1, p2, q0, q1, q2):  # pragma: no cover - compiled
     """:func:`cubic_walk` on a dense grid (``grid``, ``lo``, ``dims`` of the
     :class:`~planner.occupancy.grid.Occupancy`) between two cells inside its box, no axis
@@ -165,8 +165,8 @@ def dense_walk(grid, lo, dims, p0, p1, p2, q0, q1, q2):  # pragma: no cover - co
 
 
 # The runtime asked for explicitly (a callee otherwise inherits its caller's setting): it
-# allocates, and loops compiled without reference counting (which cannot) inline
-# cubic_walk and call it.
+# allocates, and cubic_walk, compiled without reference counting (which cannot allocate),
+# calls it.
 @njit_cached(_nrt=True)
 def _far_sight(occ, p0, p1, p2, q0, q1, q2):  # pragma: no cover - compiled
     """:func:`cubic_sight` between cells given by components (:func:`cubic_walk`'s lines
@@ -178,7 +178,7 @@ def _far_sight(occ, p0, p1, p2, q0, q1, q2):  # pragma: no cover - compiled
     return cubic_sight(occ, p, q)
 
 
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def cubic_walk(occ, p0, p1, p2, q0, q1, q2):  # pragma: no cover - compiled
     """:func:`cubic_sight` by integer stepping (a 3D DDA), cell by cell from p to q,
     stopping at the first blocked cell. Returns ``(free, lookups)``.
@@ -196,8 +196,7 @@ def cubic_walk(occ, p0, p1, p2, q0, q1, q2):  # pragma: no cover - compiled
     a0, a1, a2 = abs(d0), abs(d1), abs(d2)
     if max(a0, max(a1, a2)) > DDA_MAX:  # keys would overflow: the float clipping
         return _far_sight(occ, p0, p1, p2, q0, q1, q2)
-    # Unpacked once: an inlined helper taking the struct pays reference counting of its
-    # arrays per call, more than the lookup itself.
+    # Unpacked once: the lookups below take the arrays themselves.
     mode, grid, lo, dims, table, tmask, gg, blo, bhi = occ
     dense = mode == 0
     if dense:
@@ -250,7 +249,7 @@ def cubic_walk(occ, p0, p1, p2, q0, q1, q2):  # pragma: no cover - compiled
     return True, lookups
 
 
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def is_cubic(g):  # pragma: no cover - compiled
     """The generator is a cubic lattice's: orthogonal columns of one length, so a multiple
     of the identity, possibly turned (the benchmark suite's rotated worlds) or reflected.
@@ -268,7 +267,7 @@ def is_cubic(g):  # pragma: no cover - compiled
     return True
 
 
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def cubic_edge(g):  # pragma: no cover - compiled
     """A cubic generator's cell edge (m): the length of its first column (``|g[0, 0]|``
     exactly when it is unturned)."""
@@ -293,7 +292,7 @@ def los(occ, walk, p, q, sc, gen):  # pragma: no cover - compiled
     return free, n
 
 
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def sight(occ, walk, sc, st, p0, p1, p2, q0, q1, q2):  # pragma: no cover - compiled
     """:func:`los` between cells p and q given by components, inside a search: the
     generation counter is the search state's ``stamp`` (:mod:`planner.search._state`)."""

@@ -85,19 +85,19 @@ def new_slots(pcap: int, dense: np.ndarray | None = None, lo: np.ndarray | None 
                    np.empty(pcap, np.int64), dense, lo, dims)
 
 
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def dense_index(sm, v0, v1, v2):  # pragma: no cover - compiled
     """Index of cell v in the dense slot array (the caller knows v is in the box)."""
     return ((v0 - sm.lo[0]) * sm.dims[1] + (v1 - sm.lo[1])) * sm.dims[2] + (v2 - sm.lo[2])
 
 
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def local(v0, v1, v2):  # pragma: no cover - compiled
     """Index of a cell inside its page."""
     return ((v0 & PB_MASK) << (2 * PB_SHIFT)) | ((v1 & PB_MASK) << PB_SHIFT) | (v2 & PB_MASK)
 
 
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def block_key(v0, v1, v2):  # pragma: no cover - compiled
     return pack3(v0 >> PB_SHIFT, v1 >> PB_SHIFT, v2 >> PB_SHIFT)
 

@@ -11,8 +11,9 @@ between two cells from their index difference ``e = b - a`` ((3,) int) alone:
   generator (3, 3).
 - ``H_ZERO`` (Dijkstra): 0.
 
-The numba functions are ``inline="always"`` (the A* kernel calls them once per generated
-node; a real call there pays reference counting on the array arguments). The numpy forms
+The numba functions are compiled without reference counting (``_nrt=False``): the A*
+kernel calls them once per generated node, and counting the array arguments' references
+there would cost more than the estimate. The numpy forms
 take (..., 3) arrays of index differences and serve the Python side (D* Lite's key offset
 ``km``, the networkx reference); ``tests/test_search.py`` checks the two agree.
 """
@@ -32,7 +33,7 @@ _R3M2 = np.sqrt(3.0) - np.sqrt(2.0)
 _R2M1 = np.sqrt(2.0) - 1.0
 
 
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def octile(s, e0, e1, e2):  # pragma: no cover - compiled
     """Octile distance (m) of index difference e on the cubic lattice of cell size s (m):
     sqrt 3 per full diagonal, sqrt 2 per face diagonal, 1 per face step, times s."""
@@ -42,7 +43,7 @@ def octile(s, e0, e1, e2):  # pragma: no cover - compiled
     return s * (_R3M2 * lo + _R2M1 * (a + b + c - lo - hi) + hi)
 
 
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def gauge(hmat, e0, e1, e2):  # pragma: no cover - compiled
     """Move-set gauge (m) of index difference e: ``max(0, max_f hmat[f] . e)``, hmat (F, 3)."""
     hv = 0.0
@@ -53,7 +54,7 @@ def gauge(hmat, e0, e1, e2):  # pragma: no cover - compiled
     return hv
 
 
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def euclid(g, e0, e1, e2):  # pragma: no cover - compiled
     """Straight-line length |G e| (m) of index difference e, g the (3, 3) generator."""
     x = g[0, 0] * e0 + g[0, 1] * e1 + g[0, 2] * e2
@@ -62,7 +63,7 @@ def euclid(g, e0, e1, e2):  # pragma: no cover - compiled
     return np.sqrt(x * x + y * y + z * z)
 
 
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def estimate(ms, g, e0, e1, e2):  # pragma: no cover - compiled
     """The heuristic of move set ``ms`` (its ``hkind``) for index difference e (m)."""
     if ms.octile > 0.0:

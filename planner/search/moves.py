@@ -56,7 +56,7 @@ class MoveSet(NamedTuple):
     octile: float  # > 0: H_GAUGE in closed form, the octile distance of this cell size (m)
 
 
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def move_allowed(ufree, ptr, idx, m):  # pragma: no cover - compiled
     """Move ``m`` is allowed: every cell it needs is free (``ufree``: the union stencil's
     lookups around the expanded cell)."""

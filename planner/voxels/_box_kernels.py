@@ -55,7 +55,7 @@ def overlap_tests(lat: Lattice, half: np.ndarray, rot: np.ndarray) -> OverlapTes
                         cell.packing_radius, cell.covering_radius, tol)
 
 
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def _overlap_thresholds(half_i, axes_box, support_v, packing, covering, tol, thr
                         ):  # pragma: no cover - compiled
     """Per-axis thresholds ``thr`` of one box (half sizes ``half_i``) and the radii
@@ -74,7 +74,7 @@ def _overlap_thresholds(half_i, axes_box, support_v, packing, covering, tol, thr
     return hmin + packing - tol, math.sqrt(h2) + covering + tol
 
 
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def _overlaps(centre_i, base_i, offs_o, axes, thr, r_in, r_out, x
               ):  # pragma: no cover - compiled
     """Does the cell centred at ``base_i + offs_o`` overlap the box (see overlap_keys)?"""

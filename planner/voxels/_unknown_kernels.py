@@ -90,13 +90,13 @@ def edge_voxels(known, vdims):  # pragma: no cover - compiled
     return out
 
 
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def _near_face(t, eps):  # pragma: no cover - compiled
     """Is ``t`` within ``eps`` of an integer (a voxel face in voxel units)?"""
     return math.floor(t - eps) != math.floor(t + eps)
 
 
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def _voxel(x, gk, k, phase, res, g0, n, single, eps):  # pragma: no cover - compiled
     """Voxel index (clipped to ``[0, n)``) along one axis of the cell centre ``x + gk * k``,
     and whether it lies within ``eps`` voxels of a face along an axis that sums several

@@ -48,7 +48,7 @@ def cell_polytope(voronoi, rotation: np.ndarray | None = None) -> CellPolytope:
                         float(voronoi.covering_radius))
 
 
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def _in_cell(a, b, y, tol):  # pragma: no cover - compiled
     """Is ``y`` in {x : a x <= b + tol}?"""
     for i in range(a.shape[0]):

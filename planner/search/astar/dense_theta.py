@@ -68,7 +68,7 @@ def dense_lazy_theta(occ, ms, nodes, heap, dsl, st, max_nodes, max_exp, goal, ce
 
 
 # Without the runtime's reference counting, as the dense A* loop (planner.search.astar.dense):
-# each heap operation inlined here would otherwise incref / decref the heap arrays it binds.
+# each heap operation here would otherwise incref / decref the heap arrays it binds.
 @njit_cached(_nrt=False)
 def _loop(occ, ms, nodes, heap, dsl, st, max_nodes, max_exp, goal, cell, hw, uoff, moff, reach,
           mkey, fq):  # pragma: no cover - compiled

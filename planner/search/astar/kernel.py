@@ -159,7 +159,7 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state
 
 
 # Without the runtime's reference counting, as the dense loops (planner.search.astar.dense):
-# each heap operation inlined here would otherwise incref / decref the heap arrays it binds.
+# each heap operation here would otherwise incref / decref the heap arrays it binds.
 # Its rare allocating paths (the sight walk on fresh arrays, the float clipping of very
 # long cubic lines) are separate compiled functions, which keep theirs.
 @njit_cached(_nrt=False)

@@ -118,7 +118,7 @@ def new_nodes(cap: int, keep: DNodes | None = None, n: int = 0) -> DNodes:
     return nd
 
 
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def _box(bx, v0, v1, v2):  # pragma: no cover - compiled
     a = v0 - bx.lo[0]
     b = v1 - bx.lo[1]
@@ -128,7 +128,7 @@ def _box(bx, v0, v1, v2):  # pragma: no cover - compiled
     return (a * bx.dims[1] + b) * bx.dims[2] + c
 
 
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def node(bx, nd, st, v0, v1, v2, create):  # pragma: no cover - compiled
     """Node of cell (v0, v1, v2); created (g = rhs = inf) when ``create``; -1 if none."""
     b = _box(bx, v0, v1, v2)
@@ -152,15 +152,15 @@ def node(bx, nd, st, v0, v1, v2, create):  # pragma: no cover - compiled
     return s
 
 
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def _near_path(nd, st, u):  # pragma: no cover - compiled
     """The stored path's extraction read ``u`` (on the path or next to it)."""
     return nd.near[u] == st.path_id or nd.near[u] == -st.path_id
 
 
 # The search's kernels compile without the runtime's reference counting (as the dense A*
-# loop, planner.search.astar.dense): they allocate nothing, and each heap operation inlined
-# into them otherwise increfs / decrefs the arrays it binds (atomic adds, tens per expansion).
+# loop, planner.search.astar.dense): they allocate nothing, and each heap operation they run
+# would otherwise incref / decrefs the arrays it binds (atomic adds, tens per expansion).
 @njit_cached(_nrt=False)
 def edges(occ, ms, ufree, bx, nd, st, s):  # pragma: no cover - compiled
     """Edge mask of node ``s`` (looked up once, then cached)."""
@@ -189,13 +189,13 @@ def edges(occ, ms, ufree, bx, nd, st, s):  # pragma: no cover - compiled
     return m
 
 
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def _h(ms, start, v0, v1, v2):  # pragma: no cover - compiled
     """Heuristic between the start and a cell (symmetric: the move set is)."""
     return gauge(ms.hmat, v0 - start[0], v1 - start[1], v2 - start[2])
 
 
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def _key1(ms, g, rhs, hv, km, under):  # pragma: no cover - compiled
     """First key of a queued node. An underconsistent node (``under``: g < rhs, or a
     lazy node's rhs that may be too low) goes ahead of every
@@ -210,7 +210,7 @@ def _key1(ms, g, rhs, hv, km, under):  # pragma: no cover - compiled
     return k
 
 
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def _k1(ms, x):  # pragma: no cover - compiled
     """First key on a grid of 1e-9 move lengths: equal sums of the same moves in another
     order (float noise) mostly tie exactly, so the second key orders them."""
@@ -218,7 +218,7 @@ def _k1(ms, x):  # pragma: no cover - compiled
     return np.floor(x / q + 0.5) * q
 
 
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def _remove(heap, pos, st, s):  # pragma: no cover - compiled
     st.queued = _heap.remove(heap, pos, st.queued, s)
 

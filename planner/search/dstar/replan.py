@@ -99,7 +99,7 @@ def replan(occ, ms, bx, nd, heap, sc, st, fs, start, cells, blocked):
     return st.status
 
 
-@njit_cached(inline="always")
+@njit_cached
 def _replan(occ, ms, bx, nd, heap, sc, st, fs, start, cells, blocked):
     # pragma: no cover - compiled
     nm = ms.moves.shape[0]
@@ -299,7 +299,7 @@ def stencil_offsets(ust, dims):  # pragma: no cover - compiled
     return off
 
 
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def _touch(nd, u, stamp, touched, nt):  # pragma: no cover - compiled
     """List node ``u`` once per repair (its queue entry is updated after all flips)."""
     if nd.stamp[u] != stamp:
@@ -391,7 +391,7 @@ def apply_changes(occ, ms, ufree, bx, nd, heap, st, km, start, ss, old, redo, n,
         update_vertex(ms, nd, heap, st, km, start, u)
 
 
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def _settle(bx, nd, heap, st, u):  # pragma: no cover - compiled
     """A node without edges: no rhs reads its g any more, so it is consistent at inf
     without queueing it, and it leaves the node map (later changes near it need not

@@ -22,7 +22,7 @@ from planner._numba import njit_cached
 from planner.search.dstar.kernel import _box
 
 
-@njit_cached(inline="always")
+@njit_cached(_nrt=False)
 def _bit(bx, v0, v1, v2, value):  # pragma: no cover - compiled
     b = _box(bx, v0, v1, v2)
     if b >= 0:
