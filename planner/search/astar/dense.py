@@ -154,7 +154,7 @@ def dense_tables(ms, dims, used):  # pragma: no cover - compiled
 
 
 # Without the runtime's reference counting: the loop allocates nothing, and each heap
-# operation it runs would otherwise incref / decrefs the heap arrays it binds (an
+# operation it runs would otherwise incref / decref the heap arrays it binds (an
 # atomic add each, tens per expansion: about 45% of the loop's time on cubic-26).
 @njit_cached(_nrt=False)
 def dense_astar(grid, lo, dims, ms, nodes, heap, dsl, st, max_nodes, max_exp, goal, dt):

@@ -160,7 +160,7 @@ def _near_path(nd, st, u):  # pragma: no cover - compiled
 
 # The search's kernels compile without the runtime's reference counting (as the dense A*
 # loop, planner.search.astar.dense): they allocate nothing, and each heap operation they run
-# would otherwise incref / decrefs the arrays it binds (atomic adds, tens per expansion).
+# would otherwise incref / decref the arrays it binds (atomic adds, tens per expansion).
 @njit_cached(_nrt=False)
 def edges(occ, ms, ufree, bx, nd, st, s):  # pragma: no cover - compiled
     """Edge mask of node ``s`` (looked up once, then cached)."""
