@@ -19,6 +19,7 @@ from numba.experimental import structref
 
 from planner._numba import njit_cached
 from planner.occupancy.keys import unpack3
+from planner.search.astar.dense import grid_offsets
 from planner.search.dstar.kernel import (
     _box,
     _near_path,
@@ -110,8 +111,9 @@ def _replan(occ, ms, bx, nd, heap, sc, st, fs, start, cells, blocked):
         return RUN_FOUND if st.kept else RUN_EXHAUSTED
     st.kept = 0
     if st.phase == PH_COLLECT:
+        off = grid_offsets(ms.union, ms.moves, bx.dims[1], bx.dims[2])[0]
         st.collected = collect(occ, ms, sc.affect, bx, nd, st, cells, blocked, sc.ss, sc.old,
-                               sc.redo, stencil_offsets(ms.union, bx.dims))
+                               sc.redo, off)
         st.phase = PH_APPLY
     if st.phase == PH_APPLY:
         n = st.collected
@@ -227,7 +229,9 @@ def collect(occ, ms, affect, bx, nd, st, cells, blocked, out_s, out_old, out_red
     no edges to lose
     (blocked in this batch: its own cell's visit kills it; earlier: it died then), so
     away from the box faces one bit of the dense occupancy grid (``occ``, the node
-    map's box) skips it without touching its row. ``off`` (U,): :func:`stencil_offsets`."""
+    map's box) skips it without touching its row. ``off`` (U,): each stencil cell's
+    slot-map offset (:func:`~planner.search.astar.dense.grid_offsets`, made by the caller:
+    a kernel without the runtime cannot allocate)."""
     st.stamp += 1
     stamp = st.stamp
     ust = ms.union
@@ -286,17 +290,6 @@ def collect(occ, ms, affect, bx, nd, st, cells, blocked, out_s, out_old, out_red
                 if nd.near[s] == -pid:
                     st.path_valid = 0
     return n
-
-
-@njit_cached
-def stencil_offsets(ust, dims):  # pragma: no cover - compiled
-    """Slot-map offset (U,) of each union-stencil cell ``ust`` (U, 3) in a box of ``dims``:
-    :func:`collect` reads the nodes of changed cells away from the box faces through them,
-    without bounds checks (made outside it: a kernel without the runtime cannot allocate)."""
-    off = np.empty(ust.shape[0], np.int64)
-    for j in range(ust.shape[0]):
-        off[j] = (ust[j, 0] * dims[1] + ust[j, 1]) * dims[2] + ust[j, 2]
-    return off
 
 
 @njit_cached(_nrt=False)
