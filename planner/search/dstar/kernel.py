@@ -44,11 +44,10 @@ from planner.search.result import RUN_BLOCKED, RUN_FOUND, RUN_GROW
 #: path (:mod:`planner.search.dstar.replan`: its id, whether it is still valid, its length,
 #: the start's row in it), the replan's phase, its collected nodes, the room it asks for
 #: (nodes, repair scratch), whether the start's own cell is still to be checked, the
-#: replan's path: rows [path_from, path_to) of the path buffer, and whether the last call
-#: kept the stored path without repairing (:mod:`planner.search.dstar.rest`)
+#: replan's path: rows [path_from, path_to) of the path buffer
 REPLAN_STATE = state_dtype("path_id", "path_valid", "path_len", "path_at", "phase",
                            "collected", "need_nodes", "need_scratch", "check_start",
-                           "path_from", "path_to", "kept")
+                           "path_from", "path_to")
 _TOL = 1e-9  # relative: "rhs(s) = c + g_old" tested with slack (a spare recompute is safe)
 _BIAS = 4 * _TOL  # relative: an underconsistent node's key ahead of the ties (_key1)
 

@@ -48,6 +48,7 @@ from planner.search._heap import Heap, new_heap
 from planner.search._state import new_state
 from planner.search.dstar import kernel as dk
 from planner.search.dstar import replan as dr
+from planner.search.dstar.rest import keep_path
 from planner.search.heuristic import H_GAUGE, gauge_np
 from planner.search.moves import carries_guarantee, move_set
 from planner.search.result import RUN_FOUND, RUN_GROW, STATUS_OF_RUN, SearchResult
@@ -111,7 +112,7 @@ class DStarLite:
                                np.empty((4097, 3), i8), np.empty(4097, np.float64))
         self._state_array = new_state(dk.REPLAN_STATE)  # (1,): what the compiled call takes
         self._st = self._state_array[0]  # its record: a view, read and written from here
-        self._sv = self._state_array.view(np.int64)  # the same by field index (_PHASE...)
+        self._sv = self._state_array.view(np.int64)  # the same by field index (_NODES...)
         self._fs = np.zeros(2)  # km, the last path's cost
         self._last = self.start.copy()
         g = dk.node(self._bx, self._nd, self._st, *(int(x) for x in self.goal), True)
@@ -124,6 +125,7 @@ class DStarLite:
         self._kept: list[tuple[np.ndarray, bool]] = []  # blocked, not repaired (_keep)
         self._kept_n = 0  # cells in _kept
         self._state = None  # (occupancy, its ReplanState, entry point): see _call
+        self._keep_call = None  # keep_path's entry point (_keep)
         self._fl = {True: np.ones(1024, np.bool_), False: np.zeros(1024, np.bool_)}
         self._peak = 0
         self._ordered = 0  # node count at the last renumbering (_compact)
@@ -312,13 +314,17 @@ class DStarLite:
         unrepaired, with those kept before. None when it cannot be kept."""
         cells = pend[0][0] if len(pend) == 1 else (
             np.concatenate([p[0] for p in pend]) if pend else _NONE)
-        sv = self._sv
-        sv[_PHASE] = dr.PH_KEEP
-        call, arg = self._call()
+        sv, sc = self._sv, self._sc
+        flags = self._flags(len(cells), True)
+        if self._keep_call is None:  # its argument types never change
+            self._keep_call = entry_point(keep_path, (self._bx, self._state_array, self._fs,
+                                                      self.start, sc.path, sc.step, cells,
+                                                      flags))
         t0 = time.perf_counter()
-        done = call(arg, cells, self._flags(len(cells), True))
+        kept = self._keep_call(self._bx, self._state_array, self._fs, self.start, sc.path,
+                               sc.step, cells, flags)
         self._seconds += time.perf_counter() - t0
-        if done != RUN_FOUND:
+        if not kept:
             return None
         if len(cells):  # copied: the caller may reuse its array
             self._kept.append((cells.copy() if cells is pend[0][0] else cells, True))
@@ -377,7 +383,7 @@ _COMPACT_MIN = 1 << 14  # nodes: below this the node table fits in cache anyway
 _KEEP_MAX = 1 << 15  # unrepaired cells: then a repair (bounds its batch's scratch)
 _NONE_B = np.zeros(0, np.bool_)
 # field indices of the state record, read through an int64 view (``_sv``): a record's
-# field by name costs microseconds, as much as a kept replan's compiled call
-_PATH_VALID, _PHASE, _PATH_FROM, _PATH_TO, _LOOKUPS, _EXPANSIONS, _NODES = (
-    dk.REPLAN_STATE.names.index(f) for f in ("path_valid", "phase", "path_from", "path_to",
+# field by name costs microseconds, more than a kept replan's compiled call
+_PATH_VALID, _PATH_FROM, _PATH_TO, _LOOKUPS, _EXPANSIONS, _NODES = (
+    dk.REPLAN_STATE.names.index(f) for f in ("path_valid", "path_from", "path_to",
                                              "lookups", "expansions", "nodes"))

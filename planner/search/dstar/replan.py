@@ -29,10 +29,10 @@ from planner.search.dstar.kernel import (
     node,
     update_vertex,
 )
-from planner.search.dstar.rest import keep_path, mark_path
+from planner.search.dstar.rest import mark_path
 from planner.search.result import RUN_BLOCKED, RUN_EXHAUSTED, RUN_FOUND, RUN_GROW
 
-PH_COLLECT, PH_APPLY, PH_SEARCH, PH_PATH, PH_KEEP = 0, 1, 2, 3, 4
+PH_COLLECT, PH_APPLY, PH_SEARCH, PH_PATH = 0, 1, 2, 3
 
 
 class DScratch(NamedTuple):
@@ -89,10 +89,8 @@ def replan(occ, ms, bx, nd, heap, sc, st, fs, start, cells, blocked):
     ``blocked`` (K,) what each became), repair their edges, ComputeShortestPath, extract
     the path. ``st``: the planner's state record
     (:data:`~planner.search.dstar.kernel.REPLAN_STATE`); ``fs``: [km, path cost]. The caller
-    sets ``st.phase`` (PH_COLLECT, or PH_SEARCH without changes, or PH_KEEP: only
-    :func:`~planner.search.dstar.rest.keep_path`, its answer in ``st.kept``) and
-    ``st.check_start``; on
-    RUN_GROW it makes room for ``st.need_nodes`` nodes, ``st.need_scratch`` repair scratch
+    sets ``st.phase`` (PH_COLLECT, or PH_SEARCH without changes) and ``st.check_start``;
+    on RUN_GROW it makes room for ``st.need_nodes`` nodes, ``st.need_scratch`` repair scratch
     and a path of every node, and calls again.
     RUN_FOUND: the path is ``sc.path[st.path_from:st.path_to]``; RUN_EXHAUSTED: no path;
     RUN_BLOCKED: the start's own cell is blocked. The code is also left in ``st.status``."""
@@ -106,10 +104,6 @@ def _replan(occ, ms, bx, nd, heap, sc, st, fs, start, cells, blocked):
     nm = ms.moves.shape[0]
     st.need_nodes = 0
     st.need_scratch = 0
-    if st.phase == PH_KEEP:  # only keeps the stored path, or says it cannot
-        st.kept = keep_path(bx, st, fs, start, cells, blocked, sc.path, sc.step)
-        return RUN_FOUND if st.kept else RUN_EXHAUSTED
-    st.kept = 0
     if st.phase == PH_COLLECT:
         off = grid_offsets(ms.union, ms.moves, bx.dims[1], bx.dims[2])[0]
         st.collected = collect(occ, ms, sc.affect, bx, nd, st, cells, blocked, sc.ss, sc.old,

@@ -52,19 +52,29 @@ def mark_path(ms, bx, path, k, value):  # pragma: no cover - compiled
 
 
 @njit_cached(_nrt=False)
-def keep_path(bx, st, fs, start, cells, blocked, path, step):  # pragma: no cover - compiled
+def keep_path(bx, counts, fs, start, path, step, cells, blocked):  # pragma: no cover
     """True when the stored path from ``start`` on is still a shortest path after the
     changes ``cells`` ((K, 3) int64; ``blocked`` (K,) bool what each became) that the
     planner has not repaired (module docstring): then the replan's path is set (rows
-    ``[st.path_from, st.path_to)``, cost ``fs[1]``). Reads one bit per cell, no lookup."""
+    ``[st.path_from, st.path_to)`` of ``path``, cost ``fs[1]``; ``st`` is ``counts[0]``,
+    the planner's state record). Reads one bit per cell, no lookup.
+
+    Called on its own (a kept replan is this call alone): a few arrays to unbox, and the
+    state as its (1,) array (a record argument costs microseconds to unbox)."""
+    st = counts[0]
     if st.path_valid != 1:
         return False
+    lo0, lo1, lo2 = bx.lo[0], bx.lo[1], bx.lo[2]
+    d0, d1, d2 = bx.dims[0], bx.dims[1], bx.dims[2]
+    rest = bx.rest
     for i in range(cells.shape[0]):
         if not blocked[i]:
             return False
-        b = _box(bx, cells[i, 0], cells[i, 1], cells[i, 2])
-        if b >= 0 and (bx.rest[b >> 3] >> (b & 7)) & 1:
-            return False
+        a, b, c = cells[i, 0] - lo0, cells[i, 1] - lo1, cells[i, 2] - lo2
+        if 0 <= a < d0 and 0 <= b < d1 and 0 <= c < d2:
+            k = (a * d1 + b) * d2 + c
+            if (rest[k >> 3] >> (k & 7)) & 1:
+                return False
     k = st.path_len
     for j in range(st.path_at, k):
         if path[j, 0] == start[0] and path[j, 1] == start[1] and path[j, 2] == start[2]:
