@@ -208,8 +208,7 @@ def test_blocked_cells_off_the_path_keep_it_until_one_lands_on_it():
 def test_cells_blocked_far_from_the_path_wait_until_a_search_nears_them(name, slack,
                                                                         monkeypatch):
     # A scan blocks cells all around; a repair collects only those near the corridor of
-    # shortest paths and leaves the far ones (in cached stencils) waiting, more of them
-    # with less slack. When
+    # shortest paths and leaves the far ones waiting (more of them with less slack). When
     # a wall later forces the path through the far side, or a cell opens up, the waiting
     # cells are repaired before the search reads their nodes: every plan costs what A*
     # from scratch finds.
@@ -224,13 +223,7 @@ def test_cells_blocked_far_from_the_path_wait_until_a_search_nears_them(name, sl
     low = free[fx[:, 1] < fx[:, 1].min() + 1.5]
     start = low[np.argmin(lat.to_world(low)[:, 0])]
     goal = low[np.argmax(lat.to_world(low)[:, 0])]
-    # a wall after the start with a gap on the far side: the first (backward) plan floods
-    # the world, so far cells lie in cached stencils; then it opens, and the path is straight
-    gate = world.set_cells(cells[(np.abs(pos[:, 0] - 4.0) < 1.0) & (pos[:, 1] < 12.0)], True)
     dl = DStarLite(world, start, goal)
-    assert dl.plan().cost > _astar_cost(World(lat, [], [[0, 0, 0], [30, 16, 2]]), start, goal,
-                                        "full") + 1.0
-    dl.update(world.set_cells(gate, False), blocked=False)
     waited = 0
     for step in range(16):
         r = dl.plan()
@@ -253,4 +246,4 @@ def test_cells_blocked_far_from_the_path_wait_until_a_search_nears_them(name, sl
         dl.update(world.set_cells(wall, True), blocked=True)
         if step == 11:  # a far cell opens up again: every waiting cell is repaired first
             dl.update(world.set_cells(wall[:1], False), blocked=False)
-    assert waited > 0 or slack > 0  # with no slack, far cells always wait
+    assert waited > 0

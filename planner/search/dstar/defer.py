@@ -15,9 +15,8 @@ obstacles all around the robot, most of them far off the corridor of shortest pa
 :func:`planner.search.dstar.kernel.compute_path` returns ``RUN_DEFER`` before it would pop
 a key at or above the smallest bound (or stop with the start's key above it), so no node
 those cells touch is read while they wait, and the planner collects the cells that are due
-and resumes. A cell in no cached stencil needs no repair at all (every later lookup sees
-it blocked) and is dropped, as the repair's collection would. Only blocked cells wait: a
-freed cell is repaired after every waiting one, in order.
+and resumes. Only blocked cells wait: a freed cell is repaired after every waiting one,
+in order.
 """
 
 from __future__ import annotations
@@ -71,12 +70,10 @@ class Deferred:
         """The smallest bound (inf when none waits)."""
         return self._least
 
-    def split(self, cells: np.ndarray, start: np.ndarray, km: float, reach: float,
-              bx) -> np.ndarray:
+    def split(self, cells: np.ndarray, start: np.ndarray, km: float,
+              reach: float) -> np.ndarray:
         """Of blocked ``cells`` ((K, 3) int64, C-contiguous), return those whose bound is
-        at most ``reach`` and keep the others waiting, except cells in no cached stencil
-        of the node map ``bx`` (:class:`planner.search.dstar.kernel.DBox`): nothing to
-        repair."""
+        at most ``reach`` and keep the others waiting."""
         k, n = len(cells), self._n
         if len(self._due) < k:
             self._due = np.empty((max(k, 2 * len(self._due)), 3), np.int64)
@@ -84,15 +81,16 @@ class Deferred:
             cap = max(n + k, 2 * len(self._bound))
             self._cells = grown(self._cells, cap, n)
             self._bound = grown(self._bound, cap, n)
-        args = (self._hmat, self._goal, start, km - self._ext2, reach, bx, cells, self._due,
+        args = (self._hmat, self._goal, start, km - self._ext2, reach, cells, self._due,
                 self._cells[n:], self._bound[n:])
         if self._split is None:
             self._split = entry_point(_split, args)
-        nd, nf = self._split(*args)
-        if nf:
-            self._n = n + nf
-            self._least = min(self._least, float(self._bound[n:self._n].min()))
-        return cells if nd == k else self._due[:nd].copy()
+        nd = self._split(*args)
+        if nd == k:
+            return cells
+        self._n = n + k - nd
+        self._least = min(self._least, float(self._bound[n:self._n].min()))
+        return self._due[:nd].copy()
 
     def take(self, reach: float) -> np.ndarray:
         """The waiting cells whose bound is at most ``reach``, removed from the wait."""
@@ -115,31 +113,21 @@ class Deferred:
 
 
 @njit_cached(_nrt=False)
-def _split(hmat, goal, start, base, reach, bx, cells, due, far, lb):  # pragma: no cover
+def _split(hmat, goal, start, base, reach, cells, due, far, lb):  # pragma: no cover
     """Cells whose bound (``base`` + gauge to the goal + gauge to the start) is at most
     ``reach`` to ``due``, the others to ``far`` with their bounds in ``lb``; returns the
-    numbers due and waiting. A cell in no cached stencil (``bx.reach``) goes to neither:
-    no node's cached edges rest on it, and every later lookup sees it blocked (the
-    repair's collection skips it the same way)."""
-    lo0, lo1, lo2 = bx.lo[0], bx.lo[1], bx.lo[2]
-    d0, d1, d2 = bx.dims[0], bx.dims[1], bx.dims[2]
-    bits = bx.reach
+    number due."""
     nd = 0
     nf = 0
     for i in range(cells.shape[0]):
         c0, c1, c2 = cells[i, 0], cells[i, 1], cells[i, 2]
-        a, b, c = c0 - lo0, c1 - lo1, c2 - lo2
-        if 0 <= a < d0 and 0 <= b < d1 and 0 <= c < d2:
-            k = (a * d1 + b) * d2 + c
-            if (bits[k >> 3] >> (k & 7)) & 1 == 0:
-                continue
-        x = (base + gauge(hmat, c0 - goal[0], c1 - goal[1], c2 - goal[2])
+        b = (base + gauge(hmat, c0 - goal[0], c1 - goal[1], c2 - goal[2])
              + gauge(hmat, c0 - start[0], c1 - start[1], c2 - start[2]))
-        if x <= reach:
+        if b <= reach:
             due[nd, 0], due[nd, 1], due[nd, 2] = c0, c1, c2
             nd += 1
         else:
             far[nf, 0], far[nf, 1], far[nf, 2] = c0, c1, c2
-            lb[nf] = x
+            lb[nf] = b
             nf += 1
-    return nd, nf
+    return nd

@@ -322,7 +322,7 @@ class DStarLite:
             out = _NONE, _NONE_B
         elif blocks:
             c = np.concatenate(cells) if len(cells) > 1 else cells[0]
-            c = wait.split(c, self.start, float(self._fs[0]), self._reach(), self._bx)
+            c = wait.split(c, self.start, float(self._fs[0]), self._reach())
             out = c, self._flags(len(c), True)
         else:
             out = np.concatenate(cells), np.concatenate(state)
