@@ -12,7 +12,6 @@ import pytest
 from planner.errors import PlanError
 from planner.lattice import NAMED_LATTICES, Lattice
 from planner.search import move_stencils, search
-from planner.search.dstar import defer
 from planner.search.dstar import lite as incremental
 from planner.search.dstar.lite import DStarLite
 from planner.world import World
@@ -201,49 +200,3 @@ def test_blocked_cells_off_the_path_keep_it_until_one_lands_on_it():
     assert world.is_free(again.cells).all() and not (again.cells == [6, 3, 1]).all(1).any()
     d.update(world.set_cells([[6, 0, 0]], False), blocked=False)  # a freed cell repairs
     assert abs(d.plan().cost - _astar_cost(world, d.start, [12, 3, 1], "full")) <= 1e-9
-
-
-@pytest.mark.parametrize("slack", [0.0, 8.0])
-@pytest.mark.parametrize("name", NAMED_LATTICES)
-def test_cells_blocked_far_from_the_path_wait_until_a_search_nears_them(name, slack,
-                                                                        monkeypatch):
-    # A scan blocks cells all around; a repair collects only those near the corridor of
-    # shortest paths and leaves the far ones waiting (more of them with less slack). When
-    # a wall later forces the path through the far side, or a cell opens up, the waiting
-    # cells are repaired before the search reads their nodes: every plan costs what A*
-    # from scratch finds.
-    monkeypatch.setattr(defer, "_SLACK_MOVES", slack)
-    rng = np.random.default_rng(zlib.crc32(f"wait/{name}".encode()))
-    lat = Lattice.named(name, 1.0)
-    world = World(lat, np.zeros((0, 3), np.int64), [[0, 0, 0], [30, 16, 2]])
-    cells = _in_bounds_cells(world)
-    pos = lat.to_world(cells)
-    free = _free_cells(world)
-    fx = lat.to_world(free)
-    low = free[fx[:, 1] < fx[:, 1].min() + 1.5]
-    start = low[np.argmin(lat.to_world(low)[:, 0])]
-    goal = low[np.argmax(lat.to_world(low)[:, 0])]
-    dl = DStarLite(world, start, goal)
-    waited = 0
-    for step in range(16):
-        r = dl.plan()
-        want = _astar_cost(world, dl.start, goal, "full")
-        assert (math.isinf(want) and not r.found) or abs(r.cost - want) <= 1e-9, (step, r.cost,
-                                                                                 want)
-        assert r.found
-        assert abs(_assert_valid(world, r.cells, "full") - r.cost) <= 1e-9
-        waited = max(waited, len(dl._wait))
-        if len(r.cells) > 2:
-            dl.move_start(r.cells[1])
-        if step == 6:  # a wall across the low side: the path must swing to the far side
-            wall = cells[(np.abs(pos[:, 0] - 15.0) < 1.0) & (pos[:, 1] < 11.0)]
-        else:  # scattered cells, most far off the path, one next to it
-            far = cells[pos[:, 1] > 6.0]
-            wall = np.concatenate([far[rng.integers(0, len(far), 12)],
-                                   r.cells[len(r.cells) // 2][None] + [[0, 1, 0]]])
-        wall = wall[world.in_bounds(wall)]
-        wall = wall[~((wall == dl.start).all(1) | (wall == goal).all(1))]
-        dl.update(world.set_cells(wall, True), blocked=True)
-        if step == 11:  # a far cell opens up again: every waiting cell is repaired first
-            dl.update(world.set_cells(wall[:1], False), blocked=False)
-    assert waited > 0

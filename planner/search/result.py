@@ -15,7 +15,7 @@ import numpy as np
 
 __all__ = ["STATUSES", "STATUS_OF_RUN", "SearchResult", "RUN_EXHAUSTED", "RUN_FOUND",
            "RUN_LIMIT", "RUN_GROW", "RUN_BUDGET", "RUN_STOPPED", "RUN_BLOCKED", "RUN_BAD_START",
-           "RUN_BAD_GOAL", "RUN_DEFER"]
+           "RUN_BAD_GOAL"]
 
 STATUSES = ("found", "unreachable", "budget", "blocked")  # described on SearchResult.status
 
@@ -28,7 +28,6 @@ RUN_STOPPED = 5  # stopped at a pause: the goal is sealed in a small pocket (A* 
 RUN_BLOCKED = 6  # D* Lite: the start's own cell is blocked
 RUN_BAD_START = 7  # A*: the start cell is not free (never final: the caller raises)
 RUN_BAD_GOAL = 8  # A*: the goal cell is not free (never final: the caller raises)
-RUN_DEFER = 9  # D* Lite: its deferred changes are due (never final: the planner adds them)
 
 #: the :attr:`SearchResult.status` of each final kernel code
 STATUS_OF_RUN = {RUN_EXHAUSTED: "unreachable", RUN_FOUND: "found", RUN_LIMIT: "budget",

@@ -38,7 +38,7 @@ from planner.search import _heap
 from planner.search._state import state_dtype
 from planner.search.heuristic import gauge
 from planner.search.moves import move_allowed
-from planner.search.result import RUN_BLOCKED, RUN_DEFER, RUN_FOUND, RUN_GROW
+from planner.search.result import RUN_BLOCKED, RUN_FOUND, RUN_GROW
 
 #: the kernel state (:mod:`planner.search._state`): the common counters, then the stored
 #: path (:mod:`planner.search.dstar.replan`: its id, whether it is still valid, its length,
@@ -285,21 +285,16 @@ def recompute_rhs(occ, ms, ufree, bx, nd, st, s):  # pragma: no cover - compiled
 
 
 @njit_cached(_nrt=False)
-def compute_path(occ, ms, ufree, bx, nd, heap, st, km, start, check_start, dmin):
+def compute_path(occ, ms, ufree, bx, nd, heap, st, km, start, check_start):
     # pragma: no cover - compiled
     """ComputeShortestPath: expand until the start is consistent and no queued key is
     smaller than its key (ties, up to float noise, are expanded too). Returns RUN_FOUND
-    (settled), RUN_GROW when a new node might not fit, RUN_BLOCKED when ``check_start``
-    and the start's own cell is blocked (one lookup, as A*'s endpoint check), or RUN_DEFER
-    when deferred blocked cells are due: ``dmin`` is a lower bound of the first key of
-    every node whose edges they change (:mod:`planner.search.dstar.defer`), and the search
-    stops before it would pop such a key or stop with the start's key at or above it."""
+    (settled), RUN_GROW when a new node might not fit, or RUN_BLOCKED when ``check_start``
+    and the start's own cell is blocked (one lookup, as A*'s endpoint check)."""
     if check_start:
         st.lookups += 1
         if not occ_free(occ, start[0], start[1], start[2]):
             return RUN_BLOCKED
-    if dmin < np.inf and dmin <= _start_key(ms, bx, nd, st, km, start):
-        return RUN_DEFER  # before the start's own edges are read
     cap = nd.key.shape[0]
     nm = ms.moves.shape[0]
     goal = st.goal
@@ -330,10 +325,6 @@ def compute_path(occ, ms, ufree, bx, nd, heap, st, km, start, check_start, dmin)
         # with a larger min(g, rhs) than the start's is a key from an earlier start, not
         # refreshed: refreshing raises it, and refreshing them costs extra pops per replan.)
         e1 = _TOL * (1.0 + abs(ks1)) if ks1 < np.inf else 0.0
-        # The deferred cells as a queued underconsistent key dmin: due when it would be
-        # popped next
-        if dmin <= k1o + _TOL * (1.0 + abs(k1o)) and (srhs > sg or dmin <= ks1 + e1):
-            return RUN_DEFER
         if not (srhs > sg or k1o < ks1 - e1 or (k1o <= ks1 + e1 and tbo == np.inf)):
             break
         u = heap_s[0]
@@ -383,17 +374,4 @@ def compute_path(occ, ms, ufree, bx, nd, heap, st, km, start, check_start, dmin)
                         recompute_rhs(occ, ms, ufree, bx, nd, st, s)
                         update_vertex(ms, nd, heap, st, km, start, s)
             update_vertex(ms, nd, heap, st, km, start, u)
-    if dmin < np.inf and dmin <= _start_key(ms, bx, nd, st, km, start):
-        return RUN_DEFER  # the queue ran empty below them
     return RUN_FOUND
-
-
-@njit_cached(_nrt=False)
-def _start_key(ms, bx, nd, st, km, start):  # pragma: no cover - compiled
-    """The start's first key, min(g, rhs) + km, up to float noise above (inf when it
-    has no node)."""
-    ss = node(bx, nd, st, start[0], start[1], start[2], False)
-    if ss < 0:
-        return np.inf
-    k = _k1(ms, min(nd.g[ss], nd.rhs[ss]) + km)
-    return k + _TOL * (1.0 + abs(k))

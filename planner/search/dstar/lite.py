@@ -12,9 +12,7 @@ reuses the previous path from the new start on while nothing it was read from ch
 When the changes only block cells and none lies under the stored path (its cells and its
 moves' safe-rule cells), that path is still a shortest one: :meth:`plan` keeps it without
 repairing and leaves the cells pending until a change reaches the path
-(:mod:`planner.search.dstar.rest`). A repair of changes that only block cells collects
-those near the corridor of shortest paths and leaves the far ones waiting until a search
-nears them (:mod:`planner.search.dstar.defer`).
+(:mod:`planner.search.dstar.rest`).
 
 Cell checks count every occupancy lookup actually made, as A* does: a node's edges cost one
 lookup of its own cell plus one per union-stencil offset (A* skips the own cell, which it
@@ -50,11 +48,10 @@ from planner.search._heap import Heap, new_heap
 from planner.search._state import new_state
 from planner.search.dstar import kernel as dk
 from planner.search.dstar import replan as dr
-from planner.search.dstar.defer import Deferred
 from planner.search.dstar.rest import keep_path
 from planner.search.heuristic import H_GAUGE, gauge_np
 from planner.search.moves import carries_guarantee, move_set
-from planner.search.result import RUN_DEFER, RUN_FOUND, RUN_GROW, STATUS_OF_RUN, SearchResult
+from planner.search.result import RUN_FOUND, RUN_GROW, STATUS_OF_RUN, SearchResult
 from planner.world.world import World
 
 __all__ = ["DStarLite"]
@@ -116,8 +113,7 @@ class DStarLite:
         self._state_array = new_state(dk.REPLAN_STATE)  # (1,): what the compiled call takes
         self._st = self._state_array[0]  # its record: a view, read and written from here
         self._sv = self._state_array.view(np.int64)  # the same by field index (_NODES...)
-        self._fs = np.array([0.0, 0.0, np.inf])  # km, the last path's cost, least wait
-        self._wait = Deferred(self._ms, self.goal)  # blocked cells not yet repaired
+        self._fs = np.zeros(2)  # km, the last path's cost
         self._last = self.start.copy()
         g = dk.node(self._bx, self._nd, self._st, *(int(x) for x in self.goal), True)
         self._st["goal"] = g
@@ -279,22 +275,28 @@ class DStarLite:
         if self._kept:  # repaired now, before the new changes
             pend = self._kept + pend
             self._kept, self._kept_n = [], 0
-        t0 = time.perf_counter()
-        cells, state = self._batch(pend)
-        self._start_phase(cells)
+        if len(pend) == 1 and isinstance(pend[0][1], bool):
+            cells = pend[0][0]
+            state = self._flags(len(cells), pend[0][1])
+        elif pend:
+            cells = np.concatenate([p[0] for p in pend])
+            state = np.concatenate([np.full(len(c), b) if isinstance(b, bool) else b
+                                    for c, b in pend])
+        else:
+            cells, state = _NONE, _NONE_B
+        if len(cells):
+            self._collect_room(len(cells))
+            st["phase"] = dr.PH_COLLECT
+        else:
+            st["phase"] = dr.PH_SEARCH
         st["check_start"] = 1  # the start's own cell: one lookup, as A*'s endpoint check
         call, arg = self._call()
+        t0 = time.perf_counter()
         while True:
             done = call(arg, cells, state)
-            if done == RUN_GROW:
-                self._room(int(st["need_nodes"]))
-            elif done == RUN_DEFER:  # waiting cells are due (defer.py)
-                cells = self._wait.take(float(self._fs[2]) + self._wait.slack)
-                state = self._flags(len(cells), True)
-                self._fs[2] = self._wait.least
-                self._start_phase(cells)
-            else:
+            if done != RUN_GROW:
                 break
+            self._room(int(st["need_nodes"]))
             call, arg = self._call()
         if int(st["nodes"]) >= max(_COMPACT_MIN, 2 * self._ordered):
             self._compact()
@@ -305,49 +307,6 @@ class DStarLite:
         why = ("start cell is blocked" if STATUS_OF_RUN[done] == "blocked"
                else f"goal unreachable: explored {self.nodes} cells")
         return self._result(None, math.inf, why, done)
-
-    def _batch(self, pend: list) -> tuple[np.ndarray, np.ndarray]:
-        """The changes ``pend`` to repair now, as (K, 3) cells and (K,) bool states: when
-        they only block cells, those within reach of the start's key (the others wait:
-        :mod:`planner.search.dstar.defer`); when one frees a cell, every waiting cell
-        first, then the changes in order."""
-        cells = [c for c, _ in pend]
-        state = [np.full(len(c), b) if isinstance(b, bool) else b for c, b in pend]
-        wait = self._wait
-        blocks = all(b.all() for b in state)
-        if not blocks and len(wait):
-            cells.insert(0, wait.take_all())
-            state.insert(0, np.ones(len(cells[0]), np.bool_))
-        if not cells:
-            out = _NONE, _NONE_B
-        elif blocks:
-            c = np.concatenate(cells) if len(cells) > 1 else cells[0]
-            c = wait.split(c, self.start, float(self._fs[0]), self._reach())
-            out = c, self._flags(len(c), True)
-        else:
-            out = np.concatenate(cells), np.concatenate(state)
-        self._fs[2] = wait.least
-        return out
-
-    def _reach(self) -> float:
-        """How far a repair collects changed cells: the start's first key before the
-        changes (min(g, rhs) + km, at least the gauge to the goal + km) + the slack."""
-        bx, s = self._bx, self.start - self._bx.lo
-        k = math.inf
-        if (s >= 0).all() and (s < bx.dims).all():
-            slot = int(bx.slot[(s[0] * bx.dims[1] + s[1]) * bx.dims[2] + s[2]])
-            if slot >= 0:
-                k = min(float(self._nd.g[slot]), float(self._nd.rhs[slot]))
-        h = float(gauge_np(self._ms.hmat, self.goal - self.start))
-        return float(self._fs[0]) + (k if k < math.inf else h) + self._wait.slack
-
-    def _start_phase(self, cells: np.ndarray) -> None:
-        """The kernel's phase for a call with ``cells`` to repair (and room to collect)."""
-        if len(cells):
-            self._collect_room(len(cells))
-            self._st["phase"] = dr.PH_COLLECT
-        else:
-            self._st["phase"] = dr.PH_SEARCH
 
     def _keep(self, pend: list) -> SearchResult | None:
         """The stored path from the start on, when the changes ``pend`` (all blocked)

@@ -30,7 +30,7 @@ from planner.search.dstar.kernel import (
     update_vertex,
 )
 from planner.search.dstar.rest import mark_path
-from planner.search.result import RUN_BLOCKED, RUN_DEFER, RUN_EXHAUSTED, RUN_FOUND, RUN_GROW
+from planner.search.result import RUN_BLOCKED, RUN_EXHAUSTED, RUN_FOUND, RUN_GROW
 
 PH_COLLECT, PH_APPLY, PH_SEARCH, PH_PATH = 0, 1, 2, 3
 
@@ -119,14 +119,13 @@ def _replan(occ, ms, bx, nd, heap, sc, st, fs, start, cells, blocked):
                       sc.redo, n, sc.touched)
         st.phase = PH_SEARCH
     if st.phase == PH_SEARCH:
-        r = compute_path(occ, ms, sc.ufree, bx, nd, heap, st, fs[0], start, st.check_start == 1,
-                         fs[2])
+        r = compute_path(occ, ms, sc.ufree, bx, nd, heap, st, fs[0], start, st.check_start == 1)
         st.check_start = 0
         if r == RUN_GROW:
             st.need_nodes = nm + 1
             return RUN_GROW
-        if r == RUN_BLOCKED or r == RUN_DEFER:
-            return r
+        if r == RUN_BLOCKED:
+            return RUN_BLOCKED
         st.phase = PH_PATH
     if sc.path.shape[0] < st.nodes + 1:
         return RUN_GROW
