@@ -163,8 +163,7 @@ def plan(
         neighbors=neighbors, build_seconds=world.build_seconds or 0.0,
         unknown_note=world.unknown_note,
     )
-    s, s_cell = world.endpoint(start, "start")
-    g, g_cell = world.endpoint(goal, "goal")
+    s, s_cell, g, g_cell = world.endpoints(start, goal)
     if method.startswith("ompl:"):
         return _plan_ompl(world, s, g, method.split(":", 1)[1], time_limit, seed, common)
     res = search.search(
@@ -209,7 +208,10 @@ def _path_points(lat: Lattice, s: np.ndarray, cells: np.ndarray, g: np.ndarray) 
     path = np.empty((len(cells) + 2, 3))
     path[0] = s
     path[-1] = g
-    lat.to_world(cells, out=path[1:-1])
+    if cells.dtype == np.int64 and cells.ndim == 2 and cells.shape[1] == 3:
+        np.matmul(cells, lat.generator.T, out=path[1:-1])  # to_world's own product
+    else:
+        lat.to_world(cells, out=path[1:-1])
     return path
 
 
