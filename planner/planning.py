@@ -17,10 +17,13 @@ from planner.errors import PlanError
 from planner.lattice import Lattice
 from planner.ompl import check_seed
 from planner.path import path_length
+from planner.search.run import search_points
 from planner.world import World, as_point
 from planner.world.build import build_world
 
 __all__ = ["PlanResult", "build_world", "describe", "plan", "unknown_on_path"]
+
+_I8 = np.dtype(np.int64)
 
 
 @dataclass
@@ -145,8 +148,10 @@ def plan(
     -------
     PlanResult
     """
-    as_point(start, "start", 2)  # malformed input fails before any map is built
-    as_point(goal, "goal", 2)
+    pts = map_or_points.end_coords(start, goal) if isinstance(map_or_points, World) else None
+    if pts is None:  # (3,) float64 points inside a world's bounds need no other check
+        as_point(start, "start", 2)  # malformed input fails before any map is built
+        as_point(goal, "goal", 2)
     if not isinstance(method, str):
         raise PlanError(f"method must be a string, got {method!r}")
     if method.startswith("ompl:"):
@@ -163,14 +168,22 @@ def plan(
         neighbors=neighbors, build_seconds=world.build_seconds or 0.0,
         unknown_note=world.unknown_note,
     )
-    s, s_cell, g, g_cell = world.endpoints(start, goal)
-    if method.startswith("ompl:"):
-        return _plan_ompl(world, s, g, method.split(":", 1)[1], time_limit, seed, common)
-    res = search.search(
-        world, s_cell, g_cell, method=method, neighbors=neighbors,
-        corner_cutting=corner_cutting, backend=backend, max_expansions=max_expansions,
-        memory_budget=memory_budget,
-    )
+    res = None
+    if pts is not None and backend == "numba" and not method.startswith("ompl:"):
+        res = search_points(world, pts, method=method, neighbors=neighbors,
+                            corner_cutting=corner_cutting, max_expansions=max_expansions,
+                            memory_budget=memory_budget)
+    if res is not None:
+        s, g = start, goal  # checked: (3,) float64 points
+    else:
+        s, s_cell, g, g_cell = world.endpoints(start, goal)
+        if method.startswith("ompl:"):
+            return _plan_ompl(world, s, g, method.split(":", 1)[1], time_limit, seed, common)
+        res = search.search(
+            world, s_cell, g_cell, method=method, neighbors=neighbors,
+            corner_cutting=corner_cutting, backend=backend, max_expansions=max_expansions,
+            memory_budget=memory_budget,
+        )
     if not res.found:
         return PlanResult(
             found=False, path=np.zeros((0, 3)), cells=np.zeros((0, 3), np.int64),
@@ -208,8 +221,10 @@ def _path_points(lat: Lattice, s: np.ndarray, cells: np.ndarray, g: np.ndarray) 
     path = np.empty((len(cells) + 2, 3))
     path[0] = s
     path[-1] = g
-    if cells.dtype == np.int64 and cells.ndim == 2 and cells.shape[1] == 3:
-        np.matmul(cells, lat.generator.T, out=path[1:-1])  # to_world's own product
+    if cells.dtype is _I8 and cells.ndim == 2 and cells.shape[1] == 3:
+        # to_world's product ``cells @ G.T``, the identical floats (both go to BLAS for
+        # 2-D float64; tests/test_plan_points.py compares them) at less dispatch cost
+        np.dot(cells, lat.generator.T, out=path[1:-1])
     else:
         lat.to_world(cells, out=path[1:-1])
     return path

@@ -76,9 +76,9 @@ from planner.search.result import (
 )
 from planner.world.world import World
 
-__all__ = ["SearchResult", "search", "search_many", "shortcut", "warm_up", "move_stencils",
-           "move_heuristic", "METHODS", "carries_guarantee", "default_memory_budget",
-           "default_max_expansions", "H_WEIGHT", "MEMORY_SHARE"]
+__all__ = ["SearchResult", "search", "search_many", "search_points", "shortcut", "warm_up",
+           "move_stencils", "move_heuristic", "METHODS", "carries_guarantee",
+           "default_memory_budget", "default_max_expansions", "H_WEIGHT", "MEMORY_SHARE"]
 
 _WARM: list[float] = []
 
@@ -175,7 +175,7 @@ def search(
     ms, params = job.ms, job.params
     pocket: list[tuple[int, int]] = []
 
-    def goal_open() -> bool:
+    def goal_open(s: np.ndarray, gl: np.ndarray) -> bool:
         return _goal_open(world, ms, s, gl, pocket)
 
     t0 = _clock()
@@ -190,6 +190,55 @@ def search(
                             "found", job.guarantee, compile_s)
     res, look = _outcome(world, s, gl, job, out, peak, secs, pocket, compile_s)
     world.cell_checks += look + 2
+    return res
+
+
+def search_points(world: World, coords: tuple[float, ...], *, method: str = "astar",
+                  neighbors: str = "full", corner_cutting: bool = False,
+                  max_expansions: int | None = None,
+                  memory_budget: int | None = None) -> SearchResult | None:
+    """:func:`search` between the cells of a start and a goal point, with their lookups
+    (:meth:`World.endpoints`, also counted in ``world.cell_checks``) made in the search's
+    own kernel call when it can: what ``plan()`` does on a prebuilt world. ``coords``: the
+    two points as :meth:`World.end_coords` gives them (m).
+
+    Returns None, having checked or searched nothing, when it cannot: a lattice without a
+    named rounding kernel, an any-angle method, an argument :func:`search` would refuse,
+    this thread's first search of this kind, or an endpoint that is not free. The caller
+    then does the same with :meth:`World.endpoints` (which raises the endpoint's error)
+    and :func:`search`.
+    """
+    if not _WARM:
+        return None
+    try:
+        job = prepare(world, method, neighbors, corner_cutting, None, max_expansions,
+                      memory_budget, 1)
+    except PlanError:
+        return None
+    chk = world.checker
+    rounding = chk.rounding()
+    ms, params = job.ms, job.params
+    if rounding is None or params.anyangle:
+        return None
+    pocket: list[tuple[int, int]] = []
+
+    def goal_open(s: np.ndarray, gl: np.ndarray) -> bool:
+        return _goal_open(world, ms, s, gl, pocket)
+
+    t0 = _clock()
+    got = _driver.run_points(chk.occupancy, chk.walk, ms, params, chk, rounding, coords,
+                             PROBE_AFTER, goal_open)
+    secs = _clock() - t0
+    if got is None or got[0][0] == RUN_BAD_START or got[0][0] == RUN_BAD_GOAL:
+        return None
+    out, peak = got
+    if out[0] == RUN_FOUND:
+        look = out[5]
+        world.cell_checks += look + 4  # the endpoints' lookups and the search's two checks
+        return SearchResult(True, out[1], out[2], look + 2, out[3], out[4], secs, peak, "", {},
+                            "found", job.guarantee, 0.0)
+    res, look = _outcome(world, None, None, job, out, peak, secs, pocket, 0.0)
+    world.cell_checks += look + 4
     return res
 
 
@@ -213,7 +262,7 @@ def _run(world: World, s: np.ndarray, gl: np.ndarray, job: Job,
     ms, params = job.ms, job.params
     pocket: list[tuple[int, int]] = []
 
-    def goal_open() -> bool:
+    def goal_open(s: np.ndarray, gl: np.ndarray) -> bool:
         return _goal_open(world, ms, s, gl, pocket)
 
     t0 = _clock()

@@ -113,16 +113,22 @@ class ValidityChecker:
                                                                x, y, z, cell))
         return cell, f(self.occupancy, kind, a, b, ginv, x, y, z, cell)
 
+    def rounding(self) -> tuple | None:
+        """:meth:`planner.lattice.Lattice.point_rounding` of the lattice, ``(kind, a, b,
+        ginv, reach)``, made once; None for a lattice without a named rounding kernel."""
+        r = self._rounding
+        if r is None:
+            r = self._rounding = self._lattice.point_rounding() or ()
+        return r or None
+
     def locate_two(self, x0: float, x1: float, x2: float, y0: float, y1: float,
                    y2: float) -> tuple[np.ndarray, int] | None:
         """:meth:`locate` of two points (m, Python floats; a plan's start and goal) in one
         compiled call: their cells, rows of a (2, 3) int64 array, and whether each is in
         bounds and free as bit 0 (the first point) and bit 1. None when :meth:`locate`
         would say None for either. Not counted here."""
-        r = self._rounding
+        r = self.rounding()
         if r is None:
-            r = self._rounding = self._lattice.point_rounding() or ()
-        if not r:
             return None
         kind, a, b, ginv, reach = r
         if not (-reach <= x0 <= reach and -reach <= x1 <= reach and -reach <= x2 <= reach
