@@ -16,7 +16,7 @@ from planner import ompl, search
 from planner.errors import PlanError
 from planner.lattice import Lattice
 from planner.ompl import check_seed
-from planner.path import path_length
+from planner.path import _SHORT, _short_length, path_length
 from planner.search.run import search_points
 from planner.world import World, as_point
 from planner.world.build import build_world
@@ -195,7 +195,9 @@ def plan(
     checks = res.cell_checks
     seconds = res.seconds
     path = _path_points(lat, s, path_cells, g)
-    length = raw_length = path_length(path, 0.0)
+    # path_length's arithmetic; a short path's rows as Python floats, without its checks
+    length = raw_length = _short_length(path.tolist()) if len(path) <= _SHORT else path_length(
+        path, 0.0)
     if shortcut and method in ("astar", "dijkstra"):
         t0 = time.perf_counter()
         before = world.cell_checks
@@ -204,13 +206,13 @@ def plan(
         seconds += time.perf_counter() - t0
         path = _path_points(lat, s, path_cells, g)
         length = path_length(path, 0.0)
+    c = common  # the fields in their order: a keyword call costs 2 us more, every plan
     return PlanResult(
-        found=True, path=path, cells=path_cells, length=length, cell_checks=checks,
-        expansions=res.expansions, generated=res.generated, seconds=seconds,
-        peak_bytes=res.peak_bytes,
-        extra={"cost_between_centres": res.cost, "raw_length": raw_length,
-               "smoothed_length": length if shortcut else None},
-        guarantee=res.guarantee, unknown_cells=unknown_on_path(world, path), **common,
+        True, path, path_cells, length, checks, res.expansions, res.generated, seconds,
+        c["lattice"], c["cell_volume"], method, neighbors, "", res.peak_bytes,
+        c["build_seconds"], {"cost_between_centres": res.cost, "raw_length": raw_length,
+                             "smoothed_length": length if shortcut else None},
+        "found", res.guarantee, unknown_on_path(world, path), c["unknown_note"],
     )
 
 

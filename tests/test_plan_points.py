@@ -12,6 +12,7 @@ import pytest
 from planner import search as S
 from planner.errors import PlanError
 from planner.lattice import Lattice
+from planner.path import path_length
 from planner.planning import plan
 from planner.search.run import PROBE_AFTER, search_points
 from planner.world import World
@@ -73,6 +74,14 @@ def test_plan_reports_what_it_reported_through_endpoints_and_search():
         assert np.array_equal(p.cells, ref.cells)
         want = np.concatenate([a[None], w.lattice.to_world(ref.cells), b[None]])
         assert np.array_equal(p.path, want)
+        assert p.length == path_length(want) and p.generated == ref.generated
+        assert (p.lattice, p.cell_volume, p.method, p.neighbors, p.reason, p.status) == (
+            "cubic", 1.0, "astar", "full", "", "found")
+        assert (p.peak_bytes, p.guarantee, p.unknown_cells) == (ref.peak_bytes, True, 0)
+        assert p.build_seconds == (w.build_seconds or 0.0) and p.unknown_note == w.unknown_note
+        assert p.extra == {"cost_between_centres": ref.cost, "raw_length": p.length,
+                           "smoothed_length": None}
+        assert 0 < p.seconds < 1
 
 
 def test_plan_errors_are_the_endpoint_errors():
