@@ -16,11 +16,14 @@ from planner import ompl, search
 from planner.errors import PlanError
 from planner.lattice import Lattice
 from planner.ompl import check_seed
-from planner.path import path_length
+from planner.path import _SHORT, _short_length, path_length
+from planner.search.run import search_points
 from planner.world import World, as_point
 from planner.world.build import build_world
 
 __all__ = ["PlanResult", "build_world", "describe", "plan", "unknown_on_path"]
+
+_I8 = np.dtype(np.int64)
 
 
 @dataclass
@@ -145,8 +148,10 @@ def plan(
     -------
     PlanResult
     """
-    as_point(start, "start", 2)  # malformed input fails before any map is built
-    as_point(goal, "goal", 2)
+    pts = map_or_points.end_coords(start, goal) if isinstance(map_or_points, World) else None
+    if pts is None:  # (3,) float64 points inside a world's bounds need no other check
+        as_point(start, "start", 2)  # malformed input fails before any map is built
+        as_point(goal, "goal", 2)
     if not isinstance(method, str):
         raise PlanError(f"method must be a string, got {method!r}")
     if method.startswith("ompl:"):
@@ -163,15 +168,22 @@ def plan(
         neighbors=neighbors, build_seconds=world.build_seconds or 0.0,
         unknown_note=world.unknown_note,
     )
-    s, s_cell = world.endpoint(start, "start")
-    g, g_cell = world.endpoint(goal, "goal")
-    if method.startswith("ompl:"):
-        return _plan_ompl(world, s, g, method.split(":", 1)[1], time_limit, seed, common)
-    res = search.search(
-        world, s_cell, g_cell, method=method, neighbors=neighbors,
-        corner_cutting=corner_cutting, backend=backend, max_expansions=max_expansions,
-        memory_budget=memory_budget,
-    )
+    res = None
+    if pts is not None and backend == "numba" and not method.startswith("ompl:"):
+        res = search_points(world, pts, method=method, neighbors=neighbors,
+                            corner_cutting=corner_cutting, max_expansions=max_expansions,
+                            memory_budget=memory_budget)
+    if res is not None:
+        s, g = start, goal  # checked: (3,) float64 points
+    else:
+        s, s_cell, g, g_cell = world.endpoints(start, goal)
+        if method.startswith("ompl:"):
+            return _plan_ompl(world, s, g, method.split(":", 1)[1], time_limit, seed, common)
+        res = search.search(
+            world, s_cell, g_cell, method=method, neighbors=neighbors,
+            corner_cutting=corner_cutting, backend=backend, max_expansions=max_expansions,
+            memory_budget=memory_budget,
+        )
     if not res.found:
         return PlanResult(
             found=False, path=np.zeros((0, 3)), cells=np.zeros((0, 3), np.int64),
@@ -183,7 +195,9 @@ def plan(
     checks = res.cell_checks
     seconds = res.seconds
     path = _path_points(lat, s, path_cells, g)
-    length = raw_length = path_length(path, 0.0)
+    # path_length's arithmetic; a short path's rows as Python floats, without its checks
+    length = raw_length = _short_length(path.tolist()) if len(path) <= _SHORT else path_length(
+        path, 0.0)
     if shortcut and method in ("astar", "dijkstra"):
         t0 = time.perf_counter()
         before = world.cell_checks
@@ -192,13 +206,13 @@ def plan(
         seconds += time.perf_counter() - t0
         path = _path_points(lat, s, path_cells, g)
         length = path_length(path, 0.0)
+    c = common  # the fields in their order: a keyword call costs 2 us more, every plan
     return PlanResult(
-        found=True, path=path, cells=path_cells, length=length, cell_checks=checks,
-        expansions=res.expansions, generated=res.generated, seconds=seconds,
-        peak_bytes=res.peak_bytes,
-        extra={"cost_between_centres": res.cost, "raw_length": raw_length,
-               "smoothed_length": length if shortcut else None},
-        guarantee=res.guarantee, unknown_cells=unknown_on_path(world, path), **common,
+        True, path, path_cells, length, checks, res.expansions, res.generated, seconds,
+        c["lattice"], c["cell_volume"], method, neighbors, "", res.peak_bytes,
+        c["build_seconds"], {"cost_between_centres": res.cost, "raw_length": raw_length,
+                             "smoothed_length": length if shortcut else None},
+        "found", res.guarantee, unknown_on_path(world, path), c["unknown_note"],
     )
 
 
@@ -209,7 +223,12 @@ def _path_points(lat: Lattice, s: np.ndarray, cells: np.ndarray, g: np.ndarray) 
     path = np.empty((len(cells) + 2, 3))
     path[0] = s
     path[-1] = g
-    lat.to_world(cells, out=path[1:-1])
+    if cells.dtype is _I8 and cells.ndim == 2 and cells.shape[1] == 3:
+        # to_world's product ``cells @ G.T``, the identical floats (both go to BLAS for
+        # 2-D float64; tests/test_plan_points.py compares them) at less dispatch cost
+        np.dot(cells, lat.generator.T, out=path[1:-1])
+    else:
+        lat.to_world(cells, out=path[1:-1])
     return path
 
 

@@ -361,3 +361,38 @@ def test_a_world_knows_it_meets_unknown_space_after_every_change(tmp_path):
     planner.world.file.save_world(w, out)
     back = planner.build_world(out)
     assert back.has_unknown and back.n_unknown == 1
+
+
+@pytest.mark.parametrize("name", [*NAMED_LATTICES, "custom"])
+def test_endpoints_give_what_endpoint_gives(name):
+    """World.endpoints (one compiled lookup for both points when it can) returns the
+    values, counts the lookups and raises the errors of two endpoint calls, start first."""
+    if name == "custom":
+        lat = Lattice(np.array([[1.0, 0.3, 0.0], [0.0, 1.0, 0.2], [0.0, 0.0, 0.9]]))
+    else:
+        lat = Lattice.named(name, 0.37)
+    rng = np.random.default_rng(7)
+    w = planner.World(lat, rng.integers(0, 8, (60, 3)), [[0.0, 0.0, 0.0], [6.0, 6.0, 6.0]])
+    pts = [rng.uniform(-0.5, 6.5, 3) for _ in range(80)]
+    pts += [np.array([np.nan, 1.0, 1.0]), np.array([1.0, np.inf, 1.0]), [1.0, 2.0, 3.0],
+            np.array([1, 2, 3]), np.array([1.0, 2.0]), np.array([6.0 + 1e-10, 3.0, 0.0])]
+    for i in range(len(pts)):
+        a, b = pts[i], pts[(i * 7 + 3) % len(pts)]
+        before = w.cell_checks
+        try:
+            want = (*w.endpoint(a, "start"), *w.endpoint(b, "goal"))
+        except PlanError as e:
+            want = str(e)
+        n_want = w.cell_checks - before
+        before = w.cell_checks
+        try:
+            s, sc, g, gc = w.endpoints(a, b)
+            got = (s, sc, g, gc)
+        except PlanError as e:
+            got = str(e)
+        assert w.cell_checks - before == n_want
+        if isinstance(want, str):
+            assert got == want
+        else:
+            assert all(np.array_equal(x, y) and x.dtype == y.dtype
+                       for x, y in zip(got, want, strict=True))

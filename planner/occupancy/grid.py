@@ -137,6 +137,35 @@ def point_cell(occ, kind, a, b, ginv, x0, x1, x2, cell):  # pragma: no cover - c
 
 
 @njit_cached
+def point_cells(occ, kind, a, b, ginv, x0, x1, x2, y0, y1, y2, cells):
+    # pragma: no cover - compiled
+    """:func:`point_cell` of two points, (x0, x1, x2) and (y0, y1, y2) (m), in one call (a
+    plan's start and goal): their cells in rows 0 and 1 of ``cells`` (2, 3) int64. Returns
+    whether each is in bounds and free as bit 0 (the first) and bit 1 (two lookups)."""
+    x = np.empty((2, 3), np.float64)
+    x[0, 0] = x0
+    x[0, 1] = x1
+    x[0, 2] = x2
+    x[1, 0] = y0
+    x[1, 1] = y1
+    x[1, 2] = y2
+    if kind == 1:
+        qk.quantize_cubic(x, a, cells)
+    elif kind == 2:
+        qk.quantize_fcc(x, a, ginv, cells)
+    elif kind == 3:
+        qk.quantize_bcc(x, a, ginv, cells)
+    else:
+        qk.quantize_hex(x, a, b, ginv, cells)
+    free = 0
+    if occ_free(occ, cells[0, 0], cells[0, 1], cells[0, 2]):
+        free = 1
+    if occ_free(occ, cells[1, 0], cells[1, 1], cells[1, 2]):
+        free |= 2
+    return free
+
+
+@njit_cached
 def point_free(occ, quant, x0, x1, x2, buf, out):  # pragma: no cover - compiled
     """Is the cell containing point (x0, x1, x2) (m) in bounds and free? One lookup.
     ``quant``: ``Lattice.quantizer()``; ``buf`` (2, 3) float64 and ``out`` (1, 3) int64 are

@@ -41,7 +41,6 @@ import math
 import os
 import time
 from time import perf_counter as _clock
-from typing import NamedTuple
 
 import numpy as np
 
@@ -49,18 +48,21 @@ from planner import budget as _budget
 from planner.errors import PlanError
 from planner.lattice import Lattice
 from planner.occupancy.walk import as_cells
-from planner.search._los import new_scratch, shortcut_kernel
-from planner.search._nodes import BYTES_PER_NODE, new_slots, rehash
-from planner.search.astar import driver as _driver
-from planner.search.astar.kernel import LAZY_THETA, THETA, SearchParams
-from planner.search.heuristic import H_EUCLID, H_GAUGE, H_ZERO
-from planner.search.moves import (
-    MoveSet,
-    carries_guarantee,
-    move_heuristic,
-    move_set,
-    move_stencils,
+from planner.search._job import (
+    H_WEIGHT,
+    MEMORY_SHARE,
+    METHODS,
+    Job,
+    default_max_expansions,
+    default_memory_budget,
+    limit,
+    prepare,
 )
+from planner.search._los import new_scratch, shortcut_kernel
+from planner.search._nodes import new_slots, rehash
+from planner.search.astar import driver as _driver
+from planner.search.astar.kernel import SearchParams
+from planner.search.moves import carries_guarantee, move_heuristic, move_stencils
 from planner.search.reference import search_networkx
 from planner.search.result import (
     RUN_BAD_GOAL,
@@ -74,33 +76,9 @@ from planner.search.result import (
 )
 from planner.world.world import World
 
-__all__ = ["SearchResult", "search", "search_many", "shortcut", "warm_up", "move_stencils",
-           "move_heuristic", "METHODS", "carries_guarantee", "default_memory_budget",
-           "default_max_expansions"]
-
-METHODS = ("astar", "dijkstra", "theta", "lazy-theta", "weighted-theta")
-_ANYANGLE = {"astar": 0, "dijkstra": 0, "theta": THETA, "lazy-theta": LAZY_THETA,
-             "weighted-theta": LAZY_THETA}
-_HKIND = {"astar": H_GAUGE, "dijkstra": H_ZERO, "theta": H_EUCLID, "lazy-theta": H_EUCLID,
-          "weighted-theta": H_EUCLID}
-H_WEIGHT = 1.03  # weighted-theta's factor: dives like A*, lengths near Lazy Theta*'s
-_WEIGHT = {"weighted-theta": H_WEIGHT}
-MEMORY_SHARE = _budget.MEMORY_SHARE  # of physical memory, the default memory budget
-
-
-def default_memory_budget() -> int:
-    """Bytes a search may use by default: the one memory budget of :mod:`planner.budget`
-    (``PLANNER_MEMORY_BUDGET`` / ``--memory-budget``, else an eighth of the physical
-    memory)."""
-    return _budget.memory_budget()
-
-
-def default_max_expansions(memory_budget: int | None = None) -> int:
-    """Expansions allowed within ``memory_budget`` bytes (default
-    :func:`default_memory_budget`): the node budget ``budget // BYTES_PER_NODE``."""
-    b = default_memory_budget() if memory_budget is None else int(memory_budget)
-    return max(1, b // BYTES_PER_NODE)
-
+__all__ = ["SearchResult", "search", "search_many", "search_points", "shortcut", "warm_up",
+           "move_stencils", "move_heuristic", "METHODS", "carries_guarantee",
+           "default_memory_budget", "default_max_expansions", "H_WEIGHT", "MEMORY_SHARE"]
 
 _WARM: list[float] = []
 
@@ -125,15 +103,6 @@ def warm_up() -> float:
     rehash(new_slots(1), 0)  # the driver's slot-map growth
     _WARM[0] = time.perf_counter() - t0
     return _WARM[0]
-
-
-def _limit(value, name: str) -> int:
-    if value is None:
-        return 0
-    if (isinstance(value, bool) or not isinstance(value, int | np.integer) or value <= 0
-            or value >= 2**63):
-        raise PlanError(f"{name} must be a positive integer below 2**63, got {value!r}")
-    return int(value)
 
 
 def search(
@@ -185,8 +154,8 @@ def search(
     """
     if backend not in ("numba", "networkx"):
         raise PlanError(f"unknown backend {backend!r}; expected numba or networkx")
-    job = _prepare(world, method, neighbors, corner_cutting, max_nodes, max_expansions,
-                   memory_budget, 1)
+    job = prepare(world, method, neighbors, corner_cutting, max_nodes, max_expansions,
+                  memory_budget, 1)
     compile_s = 0.0 if _WARM else warm_up()
     if backend == "networkx":
         s = world.endpoint_cell(start_cell, "start")
@@ -201,8 +170,75 @@ def search(
         s = _end_cell(s, "start")
     if not (type(gl) is np.ndarray and gl.shape == _SHAPE3 and gl.dtype is _I8):
         gl = _end_cell(gl, "goal")
-    res, look = _run(world, s, gl, job, compile_s)
-    world.cell_checks += look + 2  # and the two endpoint checks the kernel made
+    # _run written out (a call less on every search)
+    chk = world.checker
+    ms, params = job.ms, job.params
+    pocket: list[tuple[int, int]] = []
+
+    def goal_open(s: np.ndarray, gl: np.ndarray) -> bool:
+        return _goal_open(world, ms, s, gl, pocket)
+
+    t0 = _clock()
+    out, peak = _driver.run(chk.occupancy, chk.walk, ms, s, gl, params,
+                            _span(world) if params.anyangle else 0.0, chk, True, PROBE_AFTER,
+                            goal_open)
+    secs = _clock() - t0
+    if out[0] == RUN_FOUND:
+        look = out[5]
+        world.cell_checks += look + 2  # and the two endpoint checks the kernel made
+        return SearchResult(True, out[1], out[2], look + 2, out[3], out[4], secs, peak, "", {},
+                            "found", job.guarantee, compile_s)
+    res, look = _outcome(world, s, gl, job, out, peak, secs, pocket, compile_s)
+    world.cell_checks += look + 2
+    return res
+
+
+def search_points(world: World, coords: tuple[float, ...], *, method: str = "astar",
+                  neighbors: str = "full", corner_cutting: bool = False,
+                  max_expansions: int | None = None,
+                  memory_budget: int | None = None) -> SearchResult | None:
+    """:func:`search` between the cells of a start and a goal point, with their lookups
+    (:meth:`World.endpoints`, also counted in ``world.cell_checks``) made in the search's
+    own kernel call when it can: what ``plan()`` does on a prebuilt world. ``coords``: the
+    two points as :meth:`World.end_coords` gives them (m).
+
+    Returns None, having checked or searched nothing, when it cannot: a lattice without a
+    named rounding kernel, an any-angle method, an argument :func:`search` would refuse,
+    this thread's first search of this kind, or an endpoint that is not free. The caller
+    then does the same with :meth:`World.endpoints` (which raises the endpoint's error)
+    and :func:`search`.
+    """
+    if not _WARM:
+        return None
+    try:
+        job = prepare(world, method, neighbors, corner_cutting, None, max_expansions,
+                      memory_budget, 1)
+    except PlanError:
+        return None
+    chk = world.checker
+    rounding = chk.rounding()
+    ms, params = job.ms, job.params
+    if rounding is None or params.anyangle:
+        return None
+    pocket: list[tuple[int, int]] = []
+
+    def goal_open(s: np.ndarray, gl: np.ndarray) -> bool:
+        return _goal_open(world, ms, s, gl, pocket)
+
+    t0 = _clock()
+    got = _driver.run_points(chk.occupancy, chk.walk, ms, params, chk, rounding, coords,
+                             PROBE_AFTER, goal_open)
+    secs = _clock() - t0
+    if got is None or got[0][0] == RUN_BAD_START or got[0][0] == RUN_BAD_GOAL:
+        return None
+    out, peak = got
+    if out[0] == RUN_FOUND:
+        look = out[5]
+        world.cell_checks += look + 4  # the endpoints' lookups and the search's two checks
+        return SearchResult(True, out[1], out[2], look + 2, out[3], out[4], secs, peak, "", {},
+                            "found", job.guarantee, 0.0)
+    res, look = _outcome(world, None, None, job, out, peak, secs, pocket, 0.0)
+    world.cell_checks += look + 4
     return res
 
 
@@ -218,65 +254,7 @@ def _end_cell(cell, what: str) -> np.ndarray:
     return c[0]
 
 
-class _Job(NamedTuple):
-    """What :func:`search` and :func:`search_many` pass every kernel search of one call."""
-
-    ms: MoveSet
-    params: SearchParams
-    max_nodes: int  # the caller's node limit (0 none), for the result's reason
-    guarantee: bool
-
-
-_JOBS: dict[tuple, tuple] = {}  # the arguments of a call -> (lattice, its _Job)
-_LAST: list = [None]  # (lattice, the arguments, env token, _Job) of the last call
-
-
-def _prepare(world: World, method: str, neighbors: str, corner_cutting: bool, max_nodes,
-             max_expansions, memory_budget, workers: int) -> _Job:
-    """Check the arguments shared by :func:`search` and :func:`search_many` and derive the
-    move set and kernel settings; ``workers`` concurrent searches share the memory budget.
-    Remembered per lattice and arguments (and the budget's environment variable): a
-    search's arguments are checked once, not on every call. The last call's are compared
-    by identity first (a query loop passes the same objects), which costs less than
-    hashing them."""
-    lat = world.lattice
-    env = _budget.env_token()
-    last = _LAST[0]
-    if (last is not None and last[0] is lat and last[1] is method and last[2] is neighbors
-            and last[3] is corner_cutting and last[4] is max_nodes
-            and last[5] is max_expansions and last[6] is memory_budget and last[7] == workers
-            and last[8] is env):
-        return last[9]
-    key = (id(lat), method, neighbors, corner_cutting, type(max_nodes), max_nodes,
-           type(max_expansions), max_expansions, type(memory_budget), memory_budget, workers,
-           env)
-    try:
-        hit = _JOBS.get(key)
-    except TypeError:  # an unhashable argument: checked (and refused) below
-        hit = key = None
-    if hit is not None and hit[0] is lat:
-        job = hit[1]
-    else:
-        if method not in METHODS:
-            raise PlanError(f"unknown method {method!r}; expected one of {', '.join(METHODS)}")
-        nodes = _limit(max_nodes, "max_nodes")
-        budget = _limit(memory_budget, "memory_budget") or default_memory_budget()
-        budget_nodes = default_max_expansions(max(1, budget // workers))
-        max_exp = _limit(max_expansions, "max_expansions") or budget_nodes
-        ms = move_set(lat, neighbors, corner_cutting, _HKIND[method])
-        node_cap = min(nodes, budget_nodes) if nodes else budget_nodes
-        params = SearchParams(_ANYANGLE[method], node_cap, max_exp, _WEIGHT.get(method, 1.0))
-        job = _Job(ms, params, nodes, carries_guarantee(lat, neighbors, corner_cutting))
-        if key is not None:
-            if len(_JOBS) >= 256:
-                _JOBS.clear()
-            _JOBS[key] = (lat, job)
-    _LAST[0] = (lat, method, neighbors, corner_cutting, max_nodes, max_expansions,
-                memory_budget, workers, env, job)
-    return job
-
-
-def _run(world: World, s: np.ndarray, gl: np.ndarray, job: _Job,
+def _run(world: World, s: np.ndarray, gl: np.ndarray, job: Job,
          compile_s: float = 0.0) -> tuple[SearchResult, int]:
     """One kernel search between two free cells: the result and the lookups to add to
     ``world.cell_checks`` (left to the caller, so that threads never write to the world)."""
@@ -284,17 +262,31 @@ def _run(world: World, s: np.ndarray, gl: np.ndarray, job: _Job,
     ms, params = job.ms, job.params
     pocket: list[tuple[int, int]] = []
 
-    def goal_open() -> bool:  # asked once, by a search still going after PROBE_AFTER
-        p = _goal_pocket(world, ms, s, gl)
-        if p is not None:
-            pocket.append(p)
-        return p is None
+    def goal_open(s: np.ndarray, gl: np.ndarray) -> bool:
+        return _goal_open(world, ms, s, gl, pocket)
 
     t0 = _clock()
     out, peak = _driver.run(chk.occupancy, chk.walk, ms, s, gl, params,
                             _span(world) if params.anyangle else 0.0, chk, True, PROBE_AFTER,
                             goal_open)
-    secs = _clock() - t0
+    return _outcome(world, s, gl, job, out, peak, _clock() - t0, pocket, compile_s)
+
+
+def _goal_open(world: World, ms, s, gl, pocket: list) -> bool:
+    """Asked once, by a search still going after :data:`PROBE_AFTER` expansions: False (and
+    the goal probe's ``(cells, lookups)`` appended to ``pocket``) when the goal is sealed
+    in a small pocket."""
+    p = _goal_pocket(world, ms, s, gl)
+    if p is not None:
+        pocket.append(p)
+    return p is None
+
+
+def _outcome(world: World, s: np.ndarray, gl: np.ndarray, job: Job, out: tuple, peak: int,
+             secs: float, pocket: list, compile_s: float) -> tuple[SearchResult, int]:
+    """The result of a kernel search (``out``, ``peak``: :func:`_driver.run`'s answer) and
+    the lookups to add to ``world.cell_checks``; the endpoint's PlanError when an end cell
+    is not free."""
     status, cells, cost, exp, gen, look = out
     if status == RUN_FOUND:
         return SearchResult(True, cells, cost, look + 2, exp, gen, secs, peak, "", {}, "found",
@@ -366,9 +358,9 @@ def search_many(
     if workers is None:
         cpus = os.sched_getaffinity(0) if hasattr(os, "sched_getaffinity") else None
         workers = len(cpus) if cpus else (os.cpu_count() or 1)
-    workers = max(1, min(_limit(workers, "workers"), len(a)))
-    job = _prepare(world, method, neighbors, corner_cutting, max_nodes, max_expansions,
-                   memory_budget, workers)
+    workers = max(1, min(limit(workers, "workers"), len(a)))
+    job = prepare(world, method, neighbors, corner_cutting, max_nodes, max_expansions,
+                  memory_budget, workers)
     compile_s = warm_up()
     for i in range(len(a)):
         world.endpoint_cell(a[i], f"query {i}: start")

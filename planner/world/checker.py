@@ -52,6 +52,7 @@ class ValidityChecker:
         self._free_one = None  # compiled entry point of grid.free_one (see cell_free)
         self._rounding = None  # Lattice.point_rounding(), or () when there is none (locate)
         self._point_cell = None  # compiled entry point of grid.point_cell (see locate)
+        self._point_cells = None  # and of grid.point_cells (see locate_two)
 
     @property
     def quantizer(self) -> Quantizer:
@@ -63,7 +64,7 @@ class ValidityChecker:
     def __getstate__(self) -> dict:
         self.quantizer  # noqa: B018 - a worker would otherwise redo the lattice geometry
         d = self.__dict__.copy()
-        d["_free_one"] = d["_point_cell"] = None  # a compiled entry point does not pickle
+        d["_free_one"] = d["_point_cell"] = d["_point_cells"] = None  # entry points do not pickle
         return d
 
     def is_valid(self, point) -> bool:
@@ -111,6 +112,34 @@ class ValidityChecker:
             f = self._point_cell = entry_point(wk.point_cell, (self.occupancy, kind, a, b, ginv,
                                                                x, y, z, cell))
         return cell, f(self.occupancy, kind, a, b, ginv, x, y, z, cell)
+
+    def rounding(self) -> tuple | None:
+        """:meth:`planner.lattice.Lattice.point_rounding` of the lattice, ``(kind, a, b,
+        ginv, reach)``, made once; None for a lattice without a named rounding kernel."""
+        r = self._rounding
+        if r is None:
+            r = self._rounding = self._lattice.point_rounding() or ()
+        return r or None
+
+    def locate_two(self, x0: float, x1: float, x2: float, y0: float, y1: float,
+                   y2: float) -> tuple[np.ndarray, int] | None:
+        """:meth:`locate` of two points (m, Python floats; a plan's start and goal) in one
+        compiled call: their cells, rows of a (2, 3) int64 array, and whether each is in
+        bounds and free as bit 0 (the first point) and bit 1. None when :meth:`locate`
+        would say None for either. Not counted here."""
+        r = self.rounding()
+        if r is None:
+            return None
+        kind, a, b, ginv, reach = r
+        if not (-reach <= x0 <= reach and -reach <= x1 <= reach and -reach <= x2 <= reach
+                and -reach <= y0 <= reach and -reach <= y1 <= reach and -reach <= y2 <= reach):
+            return None
+        cells = np.empty((2, 3), np.int64)
+        f = self._point_cells
+        if f is None:
+            f = self._point_cells = entry_point(wk.point_cells, (
+                self.occupancy, kind, a, b, ginv, x0, x1, x2, y0, y1, y2, cells))
+        return cells, f(self.occupancy, kind, a, b, ginv, x0, x1, x2, y0, y1, y2, cells)
 
     def cells_free(self, cells: np.ndarray) -> np.ndarray:
         """(N,) bool: each cell of ``cells`` ((N, 3) int64, C-contiguous) in bounds and free.

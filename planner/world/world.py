@@ -50,6 +50,7 @@ __all__ = ["World", "DENSE_BUDGET", "Occupancy", "ValidityChecker", "Walk", "as_
 
 DENSE_BUDGET = 256 * 2**20  # bytes of free bits: above this the hash set is used
 _BOUNDS_TOL = 1e-9
+_P3, _F8 = (3,), np.dtype(np.float64)
 
 
 class World(CellSets, UnknownSpace):
@@ -317,6 +318,39 @@ class World(CellSets, UnknownSpace):
         if not free:  # the message only when needed
             self._not_free(cell, f"{what} {_fmt(a)}")
         return a, cell
+
+    def end_coords(self, start, goal) -> tuple[float, ...] | None:
+        """``(x0, x1, x2, y0, y1, y2)``: a start and a goal point as Python floats (m) when
+        both are (3,) float64 arrays that pass :meth:`endpoint`'s bounds test (a plan's
+        usual case), else None (any other input, NaN, infinities, a point outside)."""
+        if not (type(start) is np.ndarray and type(goal) is np.ndarray
+                and start.shape == _P3 and goal.shape == _P3 and start.dtype == _F8
+                and goal.dtype == _F8):
+            return None
+        x0, x1, x2 = start.tolist()
+        y0, y1, y2 = goal.tolist()
+        (l0, l1, l2), (h0, h1, h2) = self._bounds.tolist()
+        t = _BOUNDS_TOL  # endpoint's test, inverted: NaN and infinities fail it
+        if (l0 - t <= x0 <= h0 + t and l1 - t <= x1 <= h1 + t and l2 - t <= x2 <= h2 + t
+                and l0 - t <= y0 <= h0 + t and l1 - t <= y1 <= h1 + t and l2 - t <= y2 <= h2 + t):
+            return x0, x1, x2, y0, y1, y2
+        return None
+
+    def endpoints(self, start, goal) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`endpoint` of a start and a goal point (m): ``(start, its cell, goal, its
+        cell)``, the same values, lookups and errors (the start's first). When both are
+        (3,) float64 arrays (a plan's usual case) both cells are looked up in one compiled
+        call; the cells are then the rows of one (2, 3) int64 array."""
+        pts = self.end_coords(start, goal)
+        if pts is not None:
+            hit = self.checker.locate_two(*pts)
+            if hit is not None and hit[1] == 3:  # both free
+                self.cell_checks += 2
+                cells = hit[0]
+                return start, cells[0], goal, cells[1]
+        s, s_cell = self.endpoint(start, "start")  # anything else, and the errors
+        g, g_cell = self.endpoint(goal, "goal")
+        return s, s_cell, g, g_cell
 
     def endpoint_cell(self, cell, what: str = "cell") -> np.ndarray:
         """:meth:`endpoint` for a lattice cell ((3,) int): returns it as (3,) int64, or

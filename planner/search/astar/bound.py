@@ -20,7 +20,7 @@ from numba import types
 from numba.experimental import structref
 
 from planner._numba import njit_cached
-from planner.occupancy.grid import occ_free
+from planner.occupancy.grid import occ_free, point_cells
 from planner.search._nodes import finish
 from planner.search.astar.dense import dense_astar, dense_tables
 from planner.search.astar.kernel import search_call, search_init
@@ -28,7 +28,7 @@ from planner.search.heuristic import H_EUCLID
 from planner.search.moves import MAX_BITS
 from planner.search.result import RUN_BAD_GOAL, RUN_BAD_START, RUN_BUDGET, RUN_FOUND, RUN_GROW
 
-__all__ = ["Bound", "new_bound", "search_bound"]
+__all__ = ["Bound", "new_bound", "search_bound", "search_points"]
 
 
 @structref.register
@@ -90,3 +90,22 @@ def search_bound(b, params, pausing):  # pragma: no cover - compiled
         return status, np.empty((0, 3), np.int64), np.inf, 0, 0, 0
     path, cost, exp, n, look = finish(b.nodes, b.slots, b.counts, status == RUN_FOUND)
     return status, path, cost, exp, n, look
+
+
+@njit_cached(nogil=True)
+def search_points(b, params, pausing, kind, ra, rb, ginv, reach, x0, x1, x2, y0, y1, y2):
+    # pragma: no cover - compiled
+    """:func:`search_bound` between the cells of two points, (x0, x1, x2) and (y0, y1, y2)
+    (m), that :func:`planner.occupancy.grid.point_cells` finds with the rounding arguments
+    ``kind, ra, rb, ginv`` and writes to ``b.ends`` first: a plan's endpoint lookups and
+    its search in one call. RUN_BAD_START or RUN_BAD_GOAL, and nothing else done, when a
+    cell is out of bounds or blocked, or a coordinate is past the rounding's exact range
+    ``reach`` (m)."""
+    free = 0
+    if (-reach <= x0 <= reach and -reach <= x1 <= reach and -reach <= x2 <= reach
+            and -reach <= y0 <= reach and -reach <= y1 <= reach and -reach <= y2 <= reach):
+        free = point_cells(b.occ, kind, ra, rb, ginv, x0, x1, x2, y0, y1, y2, b.ends)
+    if free != 3:
+        status = RUN_BAD_START if free & 1 == 0 else RUN_BAD_GOAL
+        return status, np.empty((0, 3), np.int64), np.inf, 0, 0, 0
+    return search_bound(b, params, pausing)

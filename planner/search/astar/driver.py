@@ -12,11 +12,12 @@ A search like the context's last one (same structs, settings and owner: the usua
 loop) takes :func:`run`'s short path: copy the two end cells, one compiled call, the
 answer. Anything else (another world or move set, grown arrays, a pause, a search that
 needs room) takes the general path, which also sets the short path up for the next one.
+:func:`run_points` is the short path from two points instead of two cells: a plan's two
+endpoint lookups made in the same compiled call.
 """
 
 from __future__ import annotations
 
-import mmap
 import threading
 import weakref
 
@@ -39,10 +40,11 @@ from planner.search._nodes import (
     rehash,
 )
 from planner.search._state import new_state
-from planner.search.astar.bound import new_bound, search_bound
+from planner.search.astar._pool import give, lazy_zeros, take
+from planner.search.astar.bound import new_bound, search_bound, search_points
 from planner.search.result import RUN_BUDGET, RUN_GROW, RUN_STOPPED
 
-__all__ = ["run", "DENSE_SLOT_BUDGET", "KEEP_NODES"]
+__all__ = ["run", "run_points", "DENSE_SLOT_BUDGET", "KEEP_NODES"]
 
 #: largest dense cell -> slot array (bytes, int32 per grid cell); bigger grids use pages.
 DENSE_SLOT_BUDGET = 512 * 2**20
@@ -53,20 +55,12 @@ _ROW_BYTES = sum(a.itemsize for a in (*new_nodes(1), *new_heap(1)))  # per node 
 _PAGE_BYTES = PAGE * 4 + 2 * 8 + 8  # a page of int32 slots, its 2 table entries and key
 _STATE_BYTES = new_state(ASTAR_STATE).nbytes
 
-# One dense slot array per dense occupancy grid, reused across searches (cleared after each
-# search at the cells it touched, so a search never pays for the whole box). A context holds
-# the array of the grid it last searched (``_Context.held``) and returns it here when it
-# searches another grid: concurrent searches on one world get their own.
-_POOL: dict[int, np.ndarray] = {}
-_LOCK = threading.Lock()
-_WATCHED: set[int] = set()
-
 
 class _Context:
     """One thread's kernel arrays, reused by its next search (module docstring)."""
 
     __slots__ = ("nodes", "heap", "slots", "state", "ufree", "ends", "end0", "end1", "sc",
-                 "sc_key", "bound", "owner", "held", "fast", "__weakref__")
+                 "sc_key", "bound", "owner", "held", "fast", "points", "__weakref__")
 
     def __init__(self):
         self.nodes = new_nodes(_CAP)
@@ -82,6 +76,7 @@ class _Context:
         self.owner = 0  # id of the owner of the bound world (see run)
         self.held = None  # (grid, its dense slot array, owner id) last searched: _dense
         self.fast = None  # what run's short path needs to repeat the last search (_run)
+        self.points = None  # (compiled search_bound, rounding's ginv, its search_points)
 
     def keep(self) -> None:
         """Drop arrays a long search grew past the kept size (module docstring)."""
@@ -149,50 +144,15 @@ def _dense(ctx: _Context, occ, owner) -> np.ndarray | None:
         if h[0] is grid:
             return h[1]
         ctx.held = ctx.fast = None
-        _give_dense(h[0], h[1])
-    a = _POOL.pop(id(grid), None)  # one dict operation: atomic under the GIL
+        give(h[0], h[1])
+    a = take(grid)
     if a is None:
         cells = int(np.prod(occ.dims))  # the occupancy grid holds one bit per cell
         if occ.mode != 0 or 4 * cells > DENSE_SLOT_BUDGET:
             return None
-        a = _lazy_zeros(cells)
+        a = lazy_zeros(cells)
     ctx.held = (grid, a, id(owner))
     return a
-
-
-def _lazy_zeros(n: int) -> np.ndarray:
-    """``np.zeros(n, np.int32)`` whose pages the OS zeroes on first touch, 4 KiB at a time.
-
-    numpy asks for transparent huge pages on large arrays; a search touches a few scattered
-    cells of the box, and each touch then makes the kernel zero a whole 2 MiB page (the first
-    FCC query on a 256^3 box: 1.5 s instead of 0.01 s, and the whole array resident). An
-    anonymous mapping without that advice is zeroed per small page, where it is touched."""
-    nbytes = 4 * n
-    if nbytes < 1 << 22:
-        return np.zeros(n, np.int32)
-    mm = mmap.mmap(-1, nbytes)
-    if hasattr(mmap, "MADV_NOHUGEPAGE"):  # also when the system default is "always"
-        mm.madvise(mmap.MADV_NOHUGEPAGE)
-    return np.frombuffer(mm, dtype=np.int32)  # keeps the mapping alive; writable, aligned
-
-
-def _forget(key: int) -> None:
-    with _LOCK:
-        _POOL.pop(key, None)
-        _WATCHED.discard(key)
-
-
-def _give_dense(grid, a: np.ndarray) -> None:
-    """Return a cleared dense slot array of ``grid`` to the pool (dropped when the grid is
-    freed)."""
-    key = id(grid)
-    _POOL[key] = a
-    if key not in _WATCHED:
-        with _LOCK:  # one finalizer per grid, whichever thread returns its array first
-            new = key not in _WATCHED
-            _WATCHED.add(key)
-        if new:
-            weakref.finalize(grid, _forget, key)
 
 
 def run(occ, walk, ms, start, goal, params, span: float, owner=None, dense: bool = True,
@@ -206,9 +166,9 @@ def run(occ, walk, ms, start, goal, params, span: float, owner=None, dense: bool
 
     ``dense=False`` keeps the search off the pooled dense slot array (a short search run
     while another search on the same grid holds it). With ``keep_going`` (a callable
-    returning bool), a search still going after ``pause_at`` expansions pauses once and
-    asks it whether to go on; False stops it with :data:`RUN_STOPPED`. Most searches are
-    shorter and never pay for the question.
+    taking the start and goal cells, returning bool), a search still going after
+    ``pause_at`` expansions pauses once and asks it whether to go on; False stops it with
+    :data:`RUN_STOPPED`. Most searches are shorter and never pay for the question.
 
     Returns
     -------
@@ -246,19 +206,81 @@ def run(occ, walk, ms, start, goal, params, span: float, owner=None, dense: bool
     else:
         out = _run(ctx, occ, walk, ms, start, goal, params, span, owner, dense, pause_at,
                    keep_going)
+    _settle(ctx, owner)
+    return out
+
+
+def run_points(occ, walk, ms, params, owner, rounding, pts, pause_at: int = 0,
+               keep_going=None):
+    """:func:`run` (dense, lattice A* / Dijkstra) between the cells of two points, found in
+    the same compiled call (:func:`~planner.search.astar.bound.search_points`): a plan's
+    endpoint lookups and search at the cost of one call. ``rounding``: ``(kind, a, b,
+    ginv, reach)`` of :meth:`planner.lattice.Lattice.point_rounding`; ``pts``: the two
+    points' coordinates ``(x0, x1, x2, y0, y1, y2)`` (m, Python floats).
+
+    Returns :func:`run`'s ``(out, peak)`` (``out[0]`` RUN_BAD_START or RUN_BAD_GOAL, and
+    nothing searched, when that cell is out of bounds or blocked or a point past
+    ``reach``), or None when this
+    thread's context did not last run a search like this one (only :func:`run`'s short path
+    takes points): the caller then looks the cells up and calls :func:`run`, which sets the
+    short path up for the next call."""
+    free = getattr(_LOCAL, "free", None)
+    if not free:
+        return None
+    ctx = free[-1]
+    f = ctx.fast
+    if not (f is not None and f[0] is occ and f[1] is ms and f[2] is params
+            and f[3] == id(owner) and f[4] is walk and f[5] == pause_at
+            and (keep_going is None) is f[6]):
+        return None
+    ginv = rounding[3]
+    p = ctx.points
+    if p is not None and p[0] is f[8] and p[1] is ginv:
+        call = p[2]
+    else:  # one search_points per compiled search_bound (its argument types) and rounding
+        key = (f[8], id(ginv))
+        hit = _POINTS.get(key)
+        if hit is not None and hit[0] is ginv:
+            call = hit[1]
+        else:
+            if len(_POINTS) >= 256:
+                _POINTS.clear()
+            call = entry_point(search_points, (f[7], f[9], f[10], *rounding, *pts))
+            _POINTS[key] = (ginv, call)  # holds the array: its id stays its own
+        ctx.points = (f[8], ginv, call)  # no world's arrays: nothing outlives a world
+    free.pop()
+    out = call(f[7], f[9], f[10], *rounding, *pts)
+    status = out[0]
+    if status != RUN_GROW and not (f[10] and status == RUN_BUDGET):
+        if len(free) < 2:
+            free.append(ctx)  # _release
+        return out, (f[11] if out[4] <= _CAP else _fresh_bytes(out[4], 0) + f[12])
+    # it needs room or paused: go on as run does (the cells are in the context's ends)
+    out = _run(ctx, occ, walk, ms, None, None, params, 0.0, owner, True, pause_at, keep_going,
+               out)
+    _settle(ctx, owner)
+    return out
+
+
+#: (a compiled search_bound, id of a rounding's ginv) -> (ginv, its search_points)
+_POINTS: dict[tuple, tuple] = {}
+
+
+def _settle(ctx: _Context, owner) -> None:
+    """After a search of ``ctx`` for ``owner`` (see :func:`run`): keep its bound for the
+    owner's next search, or drop what only the owner's lifetime would free; release it."""
     if owner is None:
         ctx.bound = ctx.fast = None
         h = ctx.held
         if h is not None:  # nothing would drop it when the grid is freed: back to the pool
             ctx.held = None
-            _give_dense(h[0], h[1])
+            give(h[0], h[1])
     else:
         ctx.owner = id(owner)
         if ctx.owner not in _OWNERS:
             _OWNERS.add(ctx.owner)
             weakref.finalize(owner, _unbind, ctx.owner)
     _release(ctx)  # not after an exception: a context left mid-search is dropped
-    return out
 
 
 def _run(ctx, occ, walk, ms, start, goal, params, span, owner, dense, pause_at, keep_going,
@@ -282,7 +304,7 @@ def _run(ctx, occ, walk, ms, start, goal, params, span, owner, dense, pause_at, 
     pausing = first is not params
     out = _loop(ctx, occ, walk, ms, sc, dslot, first, pausing, out)
     if pausing and out[0] == RUN_BUDGET:
-        if keep_going():
+        if keep_going(ctx.ends[0].copy(), ctx.ends[1].copy()):
             out = _loop(ctx, occ, walk, ms, sc, dslot, params, False)
         else:
             nodes, state, slots = ctx.nodes, ctx.state, _slots(ctx, occ, dslot)
