@@ -84,6 +84,15 @@ def run_named(kind: str, g: np.ndarray, ginv: np.ndarray, x: np.ndarray, out: np
     if named is None:
         return False
     code, a, b = named
+    quantize_code(code, a, b, ginv, x, out)
+    return True
+
+
+@njit_cached(nogil=True)
+def quantize_code(code, a, b, ginv, x, out):  # pragma: no cover - compiled
+    """:func:`run_named` inside compiled code: quantize ``x`` ((N, 3) float64, m) into
+    ``out`` ((N, 3) int64) with the kernel ``code`` (1 cubic, 2 FCC, 3 BCC, 4 hexagonal
+    prism) and its scalars ``a``, ``b`` (:func:`named_scalars`)."""
     if code == 1:
         quantize_cubic(x, a, out)
     elif code == 2:
@@ -92,7 +101,6 @@ def run_named(kind: str, g: np.ndarray, ginv: np.ndarray, x: np.ndarray, out: np
         quantize_bcc(x, a, ginv, out)
     else:
         quantize_hex(x, a, b, ginv, out)
-    return True
 
 
 @njit_cached(nogil=True)

@@ -122,14 +122,7 @@ def point_cell(occ, kind, a, b, ginv, x0, x1, x2, cell):  # pragma: no cover - c
     x[0, 1] = x1
     x[0, 2] = x2
     out = np.empty((1, 3), np.int64)
-    if kind == 1:
-        qk.quantize_cubic(x, a, out)
-    elif kind == 2:
-        qk.quantize_fcc(x, a, ginv, out)
-    elif kind == 3:
-        qk.quantize_bcc(x, a, ginv, out)
-    else:
-        qk.quantize_hex(x, a, b, ginv, out)
+    qk.quantize_code(kind, a, b, ginv, x, out)
     cell[0] = out[0, 0]
     cell[1] = out[0, 1]
     cell[2] = out[0, 2]
@@ -149,14 +142,7 @@ def point_cells(occ, kind, a, b, ginv, x0, x1, x2, y0, y1, y2, cells):
     x[1, 0] = y0
     x[1, 1] = y1
     x[1, 2] = y2
-    if kind == 1:
-        qk.quantize_cubic(x, a, cells)
-    elif kind == 2:
-        qk.quantize_fcc(x, a, ginv, cells)
-    elif kind == 3:
-        qk.quantize_bcc(x, a, ginv, cells)
-    else:
-        qk.quantize_hex(x, a, b, ginv, cells)
+    qk.quantize_code(kind, a, b, ginv, x, cells)
     free = 0
     if occ_free(occ, cells[0, 0], cells[0, 1], cells[0, 2]):
         free = 1
