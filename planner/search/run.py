@@ -170,8 +170,26 @@ def search(
         s = _end_cell(s, "start")
     if not (type(gl) is np.ndarray and gl.shape == _SHAPE3 and gl.dtype is _I8):
         gl = _end_cell(gl, "goal")
-    res, look = _run(world, s, gl, job, compile_s)
-    world.cell_checks += look + 2  # and the two endpoint checks the kernel made
+    # _run written out (a call less on every search)
+    chk = world.checker
+    ms, params = job.ms, job.params
+    pocket: list[tuple[int, int]] = []
+
+    def goal_open(s: np.ndarray, gl: np.ndarray) -> bool:
+        return _goal_open(world, ms, s, gl, pocket)
+
+    t0 = _clock()
+    out, peak = _driver.run(chk.occupancy, chk.walk, ms, s, gl, params,
+                            _span(world) if params.anyangle else 0.0, chk, True, PROBE_AFTER,
+                            goal_open)
+    secs = _clock() - t0
+    if out[0] == RUN_FOUND:
+        look = out[5]
+        world.cell_checks += look + 2  # and the two endpoint checks the kernel made
+        return SearchResult(True, out[1], out[2], look + 2, out[3], out[4], secs, peak, "", {},
+                            "found", job.guarantee, compile_s)
+    res, look = _outcome(world, s, gl, job, out, peak, secs, pocket, compile_s)
+    world.cell_checks += look + 2
     return res
 
 
