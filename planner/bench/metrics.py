@@ -73,23 +73,21 @@ class Clearance:
         samples = [a + np.linspace(0, 1, n)[:, None] * (b - a)
                    for a, b, n in zip(a_all, b_all, counts, strict=True)]
         slacks = 0.5 * lens / (counts - 1)  # farthest segment point to a sample
-        cut = np.cumsum(counts)[:-1]
         trees = [(tree, data, pad) for tree, data, pad in
                  ((self._pt, self.points, 0.0), (self._bt, self.boxes, self.half * np.sqrt(3)))
                  if tree is not None]
         if not trees:
             return np.inf
-        # Every sample's nearest point or cube centre bounds the minimum from above, so a
+        # Any sample's nearest point or cube centre bounds the minimum from above, so a
         # candidate farther than that bound (+ slack + pad) from all of a segment's samples
         # cannot be the nearest obstacle: one bound prunes every segment at once.
         flat = np.concatenate(samples)
-        near = [np.split(tree.query(flat)[0], cut) for tree, _, _ in trees]
-        bound = min(float(d.min()) for d in (np.concatenate(n) for n in near))
+        bound = min(float(tree.query(flat)[0].min()) for tree, _, _ in trees)
         best = np.inf
         seg, cand = [], []  # cube candidates: their segment, their cube
-        for (tree, data, pad), d0s in zip(trees, near, strict=True):
-            for i, (s, d0) in enumerate(zip(samples, d0s, strict=True)):
-                reach = min(float(d0.min()), bound) + slacks[i] + pad
+        for tree, data, pad in trees:
+            for i, s in enumerate(samples):
+                reach = bound + slacks[i] + pad
                 idx = np.unique(np.concatenate(
                     [np.asarray(j, dtype=np.int64) for j in tree.query_ball_point(s, reach)]
                 ))
