@@ -65,25 +65,42 @@ class Clearance:
         ``step`` (m) is the sampling used to find candidates; the result is exact.
         """
         path = np.asarray(path, dtype=float)
+        a_all, b_all = path[:-1], path[1:]
+        if not len(a_all):
+            return np.inf
+        lens = np.array([np.linalg.norm(b - a) for a, b in zip(a_all, b_all, strict=True)])
+        counts = np.maximum(2, np.ceil(lens / step).astype(np.int64) + 1)
+        samples = [a + np.linspace(0, 1, n)[:, None] * (b - a)
+                   for a, b, n in zip(a_all, b_all, counts, strict=True)]
+        slacks = 0.5 * lens / (counts - 1)  # farthest segment point to a sample
+        trees = [(tree, data, pad) for tree, data, pad in
+                 ((self._pt, self.points, 0.0), (self._bt, self.boxes, self.half * np.sqrt(3)))
+                 if tree is not None]
+        if not trees:
+            return np.inf
+        # Any sample's nearest point or cube centre bounds the minimum from above, so a
+        # candidate farther than that bound (+ slack + pad) from all of a segment's samples
+        # cannot be the nearest obstacle: one bound prunes every segment at once.
+        flat = np.concatenate(samples)
+        bound = min(float(tree.query(flat)[0].min()) for tree, _, _ in trees)
         best = np.inf
-        for a, b in zip(path[:-1], path[1:], strict=True):
-            n = max(2, int(np.ceil(np.linalg.norm(b - a) / step)) + 1)
-            s = a + np.linspace(0, 1, n)[:, None] * (b - a)
-            slack = 0.5 * np.linalg.norm(b - a) / (n - 1)  # farthest segment point to a sample
-            for tree, data, pad in ((self._pt, self.points, 0.0),
-                                    (self._bt, self.boxes, self.half * np.sqrt(3))):
-                if tree is None:
-                    continue
-                d0, _ = tree.query(s)
-                reach = min(float(d0.min()) + slack + pad, best + slack + pad)
+        seg, cand = [], []  # cube candidates: their segment, their cube
+        for tree, data, pad in trees:
+            for i, s in enumerate(samples):
+                reach = bound + slacks[i] + pad
                 idx = np.unique(np.concatenate(
-                    [np.asarray(i, dtype=np.int64) for i in tree.query_ball_point(s, reach)]
+                    [np.asarray(j, dtype=np.int64) for j in tree.query_ball_point(s, reach)]
                 ))
                 if not len(idx):
                     continue
                 if pad:
-                    d = _segment_box_dist(a, b, data[idx], self.halves[idx])
+                    seg.append(np.full(len(idx), i))
+                    cand.append(idx)
                 else:
-                    d = _segment_point_dist(a, b, data[idx])
-                best = min(best, float(d.min()))
+                    best = min(best, float(_segment_point_dist(a_all[i], b_all[i],
+                                                               data[idx]).min()))
+        if cand:  # one golden-section search for all segments' cubes
+            i, idx = np.concatenate(seg), np.concatenate(cand)
+            d = _segment_box_dist(a_all[i], b_all[i], self.boxes[idx], self.halves[idx])
+            best = min(best, float(d.min()))
         return best

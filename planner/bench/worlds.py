@@ -138,7 +138,7 @@ def cached_world(cache_dir: str | None, map_path: str, lattice: str, cell_volume
     import hashlib
     from pathlib import Path
 
-    from planner.occupancy.keys import pack, unpack  # lazy: numba
+    from planner.occupancy.keys import pack, unique_keys, unpack  # lazy: numba
     from planner.world import World  # lazy: numba
 
     if cache_dir is None:
@@ -161,7 +161,7 @@ def cached_world(cache_dir: str | None, map_path: str, lattice: str, cell_volume
     f.parent.mkdir(parents=True, exist_ok=True)
 
     def steps(cells):  # sorted keys as steps: small numbers that compress well
-        return np.diff(np.unique(pack(cells)), prepend=np.int64(0))
+        return np.diff(unique_keys(pack(cells)), prepend=np.int64(0))
 
     with atomic_path(f) as tmp, open(tmp, "wb") as fh:
         np.savez_compressed(fh, key_steps=steps(w.blocked), unknown_steps=steps(w.unknown),
