@@ -18,26 +18,38 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 
-__all__ = ["entry_point"]
+__all__ = ["entry_point", "raw_entry_point", "signal_cause"]
 
 
 def entry_point(disp, args: Sequence) -> Callable:
     """The compiled function of numba dispatcher ``disp`` for the types of ``args``
     (compiled, or loaded from the cache, if needed). Without numba compilation
     (``NUMBA_DISABLE_JIT``) the plain Python function."""
-    if not hasattr(disp, "overloads"):
-        return disp
-    sig = tuple(disp.typeof_pyval(a) for a in args)
-    if sig not in disp.overloads:
-        disp.compile(sig)
-    fn = disp.overloads[sig].entry_point
+    fn = raw_entry_point(disp, args)
+    if fn is disp:
+        return fn
 
     def call(*a):
         try:
             return fn(*a)
         except SystemError as exc:  # a signal handler's exception arrives as the cause
-            if exc.__cause__ is not None:
-                raise exc.__cause__ from None
-            raise
+            raise signal_cause(exc) from None
 
     return call
+
+
+def raw_entry_point(disp, args: Sequence) -> Callable:
+    """:func:`entry_point` without its wrapper, a Python call less for the hottest callers:
+    they catch SystemError themselves and raise :func:`signal_cause` of it."""
+    if not hasattr(disp, "overloads"):
+        return disp
+    sig = tuple(disp.typeof_pyval(a) for a in args)
+    if sig not in disp.overloads:
+        disp.compile(sig)
+    return disp.overloads[sig].entry_point
+
+
+def signal_cause(exc: SystemError) -> BaseException:
+    """The exception to raise for a SystemError out of a compiled call: the signal
+    handler's exception that caused it (module docstring), else ``exc`` itself."""
+    return exc if exc.__cause__ is None else exc.__cause__

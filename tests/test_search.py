@@ -525,3 +525,32 @@ def test_search_many_refuses_a_blocked_endpoint_before_searching():
     assert w.cell_checks - before <= 4  # endpoint checks only: no search ran
     with pytest.raises(PlanError, match="same shape"):
         S.search_many(w, [[0, 0, 0]], [[5, 5, 5], [1, 1, 1]])
+
+
+def test_a_query_loop_gets_what_each_search_gets_alone():
+    """A search with the arguments of the thread's last one repeats them without comparing
+    them again; whatever ran before (another world or method, a search long enough to grow
+    the arrays, cells blocked in place), each query gets the result it gets on its own."""
+    rng = np.random.default_rng(11)
+    small = _box_world(n=12, blocked=rng.integers(0, 12, size=(250, 3)))
+    big = _box_world(n=40, blocked=rng.integers(0, 40, size=(3000, 3)))
+    loop = []
+    for i in range(40):
+        w = big if i % 7 in (3, 4) else small  # two long searches in a row, then short ones
+        n = 40 if w is big else 12
+        free = np.argwhere(np.ones((n, n, n), bool))
+        free = free[w.is_free(free)]
+        s, g = free[rng.choice(len(free), 2, replace=False)]
+        method = "dijkstra" if i % 5 == 4 else "astar"
+        loop.append((w, s, g, method, S.search(w, s, g, method=method)))
+        if i == 30:  # cells blocked in place: the same world, structs and arrays
+            hit = w.set_cells(loop[-1][4].cells[1:-1], True)
+            assert len(hit)
+            loop.append((w, s, g, method, S.search(w, s, g, method=method)))
+            assert loop[-1][4].cost > loop[-2][4].cost
+    for w, s, g, method, r in loop[-10:]:
+        alone = S.search_many(w, s[None], g[None], method=method, workers=1)[0]
+        assert (r.status, r.expansions, r.generated, r.cell_checks) == (
+            alone.status, alone.expansions, alone.generated, alone.cell_checks)
+        assert r.cost == alone.cost and np.array_equal(r.cells, alone.cells)
+    assert any(r.generated > 4096 for *_, r in loop)  # grown past the kept arrays

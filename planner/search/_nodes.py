@@ -123,7 +123,7 @@ def find_slot(sm, v0, v1, v2):  # pragma: no cover - compiled
         p = (p + 1) & bmask
 
 
-@njit_cached
+@njit_cached(_nrt=False)
 def new_page(sm, st, bk, p):  # pragma: no cover - compiled
     """Open a page for block ``bk`` at free table position ``p``; returns its number."""
     q = st.pages
@@ -153,25 +153,53 @@ def finish(nodes, sm, state, found):  # pragma: no cover - compiled
 
     Returns ``(path, cost, expansions, nodes, lookups)``: the (K, 3) int64 cells from the
     start to the goal node (``state``'s ``goal``; (0, 3) unless ``found``) and its cost
-    (m, inf unless ``found``). Then the dense slots of the search's nodes are reset to
-    none (0), or the paged map's block table emptied, and the counters of ``state`` (an
-    ``ASTAR_STATE`` (1,) array) zeroed but its ``stamp``, which keeps counting so that
-    stamped scratch needs no clearing."""
+    (m, inf unless ``found``); then as :func:`end_search`. Only the path's allocation
+    needs the runtime: the rest runs in the helpers, which count no references."""
+    k = path_length(nodes, state[0].goal) if found else 0
+    path = np.empty((k, 3), np.int64)
+    cost, exp, n, look = end_search(nodes, sm, state, path)
+    return path, cost, exp, n, look
+
+
+@njit_cached(_nrt=False)
+def path_length(nodes, goal_slot):  # pragma: no cover - compiled
+    """Cells on the path from the start (its own parent) to ``goal_slot``."""
+    par = nodes.par
+    k = 1
+    x = goal_slot
+    while par[x] != x:
+        x = par[x]
+        k += 1
+    return k
+
+
+@njit_cached(_nrt=False)
+def end_search(nodes, sm, state, path):  # pragma: no cover - compiled
+    """End a search: write the path to ``state``'s goal node into ``path`` ((K, 3) int64,
+    K from :func:`path_length`; (0, 3) when none was found) and return ``(cost,
+    expansions, nodes, lookups)`` (cost in m, inf when ``path`` is empty). Then the dense
+    slots of the search's nodes are reset to none (0), or the paged map's block table
+    emptied, and the counters of ``state`` (an ``ASTAR_STATE`` (1,) array) zeroed but its
+    ``stamp``, which keeps counting so that stamped scratch needs no clearing."""
     st = state[0]
     n = st.nodes
-    if found:
-        path = trace_path(nodes, st.goal)
-        cost = nodes.g[st.goal]
-    else:
-        path = np.empty((0, 3), np.int64)
-        cost = np.inf
+    cost = np.inf
+    if path.shape[0] > 0:
+        key, par = nodes.key, nodes.par
+        x = st.goal
+        cost = nodes.g[x]
+        for i in range(path.shape[0] - 1, -1, -1):
+            path[i, 0], path[i, 1], path[i, 2] = unpack3(key[x])
+            x = par[x]
     if sm.dense.shape[0] > 1:
         for i in range(n):
             v0, v1, v2 = unpack3(nodes.key[i])
             sm.dense[dense_index(sm, v0, v1, v2)] = 0
     else:
-        sm.btab[:] = _EMPTY
-    out = (path, cost, st.expansions, n, st.lookups)
+        btab = sm.btab
+        for i in range(btab.shape[0]):
+            btab[i] = _EMPTY
+    exp, look = st.expansions, st.lookups
     st.nodes = 0
     st.queued = 0
     st.expansions = 0
@@ -179,21 +207,4 @@ def finish(nodes, sm, state, found):  # pragma: no cover - compiled
     st.goal = 0
     st.status = 0
     st.pages = 0
-    return out
-
-
-@njit_cached
-def trace_path(nodes, goal_slot):  # pragma: no cover - compiled
-    """(K, 3) int64 cells from the start (its own parent) to ``goal_slot``."""
-    key, par = nodes.key, nodes.par
-    k = 1
-    x = goal_slot
-    while par[x] != x:
-        x = par[x]
-        k += 1
-    path = np.empty((k, 3), dtype=np.int64)
-    x = goal_slot
-    for i in range(k - 1, -1, -1):
-        path[i, 0], path[i, 1], path[i, 2] = unpack3(key[x])
-        x = par[x]
-    return path
+    return cost, exp, n, look

@@ -34,7 +34,7 @@ STATUS_OF_RUN = {RUN_EXHAUSTED: "unreachable", RUN_FOUND: "found", RUN_LIMIT: "b
                  RUN_BUDGET: "budget", RUN_STOPPED: "unreachable", RUN_BLOCKED: "blocked"}
 
 
-@dataclass
+@dataclass(slots=True)
 class SearchResult:
     """Outcome of one search.
 

@@ -170,19 +170,20 @@ def search(
         s = _end_cell(s, "start")
     if not (type(gl) is np.ndarray and gl.shape == _SHAPE3 and gl.dtype is _I8):
         gl = _end_cell(gl, "goal")
-    # _run written out (a call less on every search)
+    # _run written out (a call less on every search), and a query loop's next search
+    # repeated by its job (the same arguments, see prepare) without comparing them again
     chk = world.checker
-    ms, params = job.ms, job.params
     pocket: list[tuple[int, int]] = []
-
-    def goal_open(s: np.ndarray, gl: np.ndarray) -> bool:
-        return _goal_open(world, ms, s, gl, pocket)
-
+    probe = (_goal_open, world, job.ms, pocket)
     t0 = _clock()
-    out, peak = _driver.run(chk.occupancy, chk.walk, ms, s, gl, params,
-                            _span(world) if params.anyangle else 0.0, chk, True, PROBE_AFTER,
-                            goal_open)
+    got = _driver.repeat(chk, job, s, gl, probe)
+    if got is None:
+        ms, params = job.ms, job.params
+        got = _driver.run(chk.occupancy, chk.walk, ms, s, gl, params,
+                          _span(world) if params.anyangle else 0.0, chk, True, PROBE_AFTER,
+                          probe, job)
     secs = _clock() - t0
+    out, peak = got
     if out[0] == RUN_FOUND:
         look = out[5]
         world.cell_checks += look + 2  # and the two endpoint checks the kernel made
@@ -221,13 +222,9 @@ def search_points(world: World, coords: tuple[float, ...], *, method: str = "ast
     if rounding is None or params.anyangle:
         return None
     pocket: list[tuple[int, int]] = []
-
-    def goal_open(s: np.ndarray, gl: np.ndarray) -> bool:
-        return _goal_open(world, ms, s, gl, pocket)
-
     t0 = _clock()
     got = _driver.run_points(chk.occupancy, chk.walk, ms, params, chk, rounding, coords,
-                             PROBE_AFTER, goal_open)
+                             PROBE_AFTER, (_goal_open, world, ms, pocket))
     secs = _clock() - t0
     if got is None or got[0][0] == RUN_BAD_START or got[0][0] == RUN_BAD_GOAL:
         return None
@@ -261,18 +258,14 @@ def _run(world: World, s: np.ndarray, gl: np.ndarray, job: Job,
     chk = world.checker
     ms, params = job.ms, job.params
     pocket: list[tuple[int, int]] = []
-
-    def goal_open(s: np.ndarray, gl: np.ndarray) -> bool:
-        return _goal_open(world, ms, s, gl, pocket)
-
     t0 = _clock()
     out, peak = _driver.run(chk.occupancy, chk.walk, ms, s, gl, params,
                             _span(world) if params.anyangle else 0.0, chk, True, PROBE_AFTER,
-                            goal_open)
+                            (_goal_open, world, ms, pocket))
     return _outcome(world, s, gl, job, out, peak, _clock() - t0, pocket, compile_s)
 
 
-def _goal_open(world: World, ms, s, gl, pocket: list) -> bool:
+def _goal_open(world: World, ms, pocket: list, s, gl) -> bool:
     """Asked once, by a search still going after :data:`PROBE_AFTER` expansions: False (and
     the goal probe's ``(cells, lookups)`` appended to ``pocket``) when the goal is sealed
     in a small pocket."""

@@ -10,7 +10,11 @@ Inside compiled code every call to a function that is not inlined counts a refer
 each array of its arguments on entry and releases it on return: passing the 13 structs
 down :func:`search_bound` -> ``search_call`` -> ``search_run`` cost more than a
 one-expansion search itself. The commonest case (lattice A* / Dijkstra on a dense grid)
-therefore goes from :func:`search_bound` to the dense loop directly.
+therefore goes from :func:`search_bound` to the dense loop directly, and counts no
+references at all: reading a field of :class:`Bound` counts one for each array of the
+field's struct, so the dense search runs in kernels compiled without reference counting
+(``_nrt=False``) that read the fields through :func:`planner._numba.borrow_fields`, and
+only the path's allocation runs in the kernel that counts them.
 """
 
 from __future__ import annotations
@@ -19,16 +23,16 @@ import numpy as np
 from numba import types
 from numba.experimental import structref
 
-from planner._numba import njit_cached
+from planner._numba import borrow_fields, njit_cached
 from planner.occupancy.grid import occ_free, point_cells
-from planner.search._nodes import finish
+from planner.search._nodes import end_search, path_length
 from planner.search.astar.dense import dense_astar, dense_tables
 from planner.search.astar.kernel import search_call, search_init
 from planner.search.heuristic import H_EUCLID
 from planner.search.moves import MAX_BITS
 from planner.search.result import RUN_BAD_GOAL, RUN_BAD_START, RUN_BUDGET, RUN_FOUND, RUN_GROW
 
-__all__ = ["Bound", "new_bound", "search_bound", "search_points"]
+__all__ = ["Bound", "new_bound", "search_bound", "search_cells", "search_points"]
 
 
 @structref.register
@@ -57,22 +61,23 @@ def new_bound(occ, walk, ms, nodes, heap, slots, sc, ufree, ends, state):
                  dense_tables(ms, occ.dims, used))
 
 
-@njit_cached(nogil=True)  # threads search in parallel (search_many)
-def search_bound(b, params, pausing):  # pragma: no cover - compiled
-    """:func:`~planner.search.astar.kernel.search_call` on the arrays of ``b``: the same
-    answer, and for lattice A* / Dijkstra on a dense grid the same steps without the calls
-    between (module docstring)."""
-    occ, ms = b.occ, b.ms
-    dsl = b.slots.dense
-    if not (params.anyangle == 0 and occ.mode == 0 and dsl.shape[0] > 1
+_NOT_DENSE = -1  # _dense_run: not a lattice A* / Dijkstra search on a dense grid
+
+
+@njit_cached(_nrt=False, nogil=True)
+def _dense_run(b, params, pausing):  # pragma: no cover - compiled
+    """:func:`search_bound`'s dense search up to the path: ``(status, K)``, K the path's
+    cells when found (else 0); ``(_NOT_DENSE, 0)``, and nothing done, when the search is
+    not lattice A* / Dijkstra on a dense grid."""
+    occ, walk, ms, nodes, heap, slots, sc, ufree, ends, counts, dt = borrow_fields(b)
+    if not (params.anyangle == 0 and occ.mode == 0 and slots.dense.shape[0] > 1
             and ms.union.shape[0] <= MAX_BITS and ms.hkind != H_EUCLID):
-        return search_call(occ, b.walk, ms, b.nodes, b.heap, b.slots, b.sc, b.ufree, params,
-                           b.ends, b.counts, pausing, b.dt)
-    # search_run's first steps and its dense branch, then search_call's end, written out
-    st = b.counts[0]
-    goal = b.ends[1]
+        return _NOT_DENSE, 0
+    # search_run's first steps and its dense branch, written out
+    st = counts[0]
+    goal = ends[1]
     if st.nodes == 0:
-        start = b.ends[0]
+        start = ends[0]
         status = 0
         if not occ_free(occ, start[0], start[1], start[2]):
             status = RUN_BAD_START
@@ -80,16 +85,51 @@ def search_bound(b, params, pausing):  # pragma: no cover - compiled
             status = RUN_BAD_GOAL
         if status != 0:
             st.status = status
-            path, cost, exp, n, look = finish(b.nodes, b.slots, b.counts, False)
-            return status, path, cost, exp, n, look
-        search_init(start, goal, ms, b.walk.g, b.nodes, b.heap, b.slots, st)
-    status = dense_astar(occ.grid, occ.lo, occ.dims, ms, b.nodes, b.heap, dsl, st,
-                         params.max_nodes, params.max_expansions, goal, b.dt)
+            return status, 0
+        search_init(start, goal, ms, walk.g, nodes, heap, slots, st)
+    status = dense_astar(occ.grid, occ.lo, occ.dims, ms, nodes, heap, slots.dense, st,
+                         params.max_nodes, params.max_expansions, goal, dt)
     st.status = status
+    return status, path_length(nodes, st.goal) if status == RUN_FOUND else 0
+
+
+@njit_cached(_nrt=False, nogil=True)
+def _dense_end(b, path):  # pragma: no cover - compiled
+    """:func:`~planner.search._nodes.end_search` on the arrays of ``b``."""
+    occ, walk, ms, nodes, heap, slots, sc, ufree, ends, counts, dt = borrow_fields(b)
+    return end_search(nodes, slots, counts, path)
+
+
+@njit_cached(nogil=True)  # threads search in parallel (search_many)
+def search_bound(b, params, pausing):  # pragma: no cover - compiled
+    """:func:`~planner.search.astar.kernel.search_call` on the arrays of ``b``: the same
+    answer, and for lattice A* / Dijkstra on a dense grid the same steps without the calls
+    between, in kernels that count no references (module docstring)."""
+    status, k = _dense_run(b, params, pausing)
+    if status == _NOT_DENSE:
+        return search_call(b.occ, b.walk, b.ms, b.nodes, b.heap, b.slots, b.sc, b.ufree, params,
+                           b.ends, b.counts, pausing, b.dt)
     if status == RUN_GROW or (pausing and status == RUN_BUDGET):
         return status, np.empty((0, 3), np.int64), np.inf, 0, 0, 0
-    path, cost, exp, n, look = finish(b.nodes, b.slots, b.counts, status == RUN_FOUND)
+    path = np.empty((k, 3), np.int64)
+    cost, exp, n, look = _dense_end(b, path)
     return status, path, cost, exp, n, look
+
+
+@njit_cached(_nrt=False)
+def _put_ends(b, s0, s1, s2, g0, g1, g2):  # pragma: no cover - compiled
+    ends = borrow_fields(b)[8]
+    ends[0, 0], ends[0, 1], ends[0, 2] = s0, s1, s2
+    ends[1, 0], ends[1, 1], ends[1, 2] = g0, g1, g2
+
+
+@njit_cached(nogil=True)
+def search_cells(b, params, pausing, s0, s1, s2, g0, g1, g2):  # pragma: no cover - compiled
+    """:func:`search_bound` from cell (s0, s1, s2) to cell (g0, g1, g2), written to
+    ``b.ends`` first: Python passes six integers for less than it takes to copy two small
+    arrays into ``b.ends``."""
+    _put_ends(b, s0, s1, s2, g0, g1, g2)
+    return search_bound(b, params, pausing)
 
 
 @njit_cached(nogil=True)

@@ -9,26 +9,21 @@ Arrays grown past :data:`KEEP_NODES` for a long search are dropped afterwards, s
 thread never holds more than a short search's memory.
 
 A search like the context's last one (same structs, settings and owner: the usual query
-loop) takes :func:`run`'s short path: copy the two end cells, one compiled call, the
-answer. Anything else (another world or move set, grown arrays, a pause, a search that
-needs room) takes the general path, which also sets the short path up for the next one.
+loop) takes :func:`run`'s short path: one compiled call, given the end cells as six
+integers, and the answer. Anything else (another world or move set, grown arrays, a
+pause, a search that needs room) takes the general path, which also sets the short path
+up for the next one.
 :func:`run_points` is the short path from two points instead of two cells: a plan's two
 endpoint lookups made in the same compiled call.
 """
 
 from __future__ import annotations
 
-import threading
-import weakref
-
 import numpy as np
 
-from planner._entry import entry_point
-from planner.lattice import Lattice
-from planner.occupancy.walk import walk_of
+from planner._entry import entry_point, raw_entry_point, signal_cause
 from planner.search._grow import grown
 from planner.search._heap import Heap, new_heap
-from planner.search._los import is_cubic, new_scratch
 from planner.search._nodes import (
     ASTAR_STATE,
     PAGE,
@@ -40,96 +35,28 @@ from planner.search._nodes import (
     rehash,
 )
 from planner.search._state import new_state
+from planner.search.astar._context import (
+    _CAP,
+    _LOCAL,
+    _PCAP,
+    KEEP_NODES,
+    _Context,
+    _context,
+    _no_sight,
+    _settle,
+    _sight,
+)
 from planner.search.astar._pool import give, lazy_zeros, take
-from planner.search.astar.bound import new_bound, search_bound, search_points
+from planner.search.astar.bound import new_bound, search_bound, search_cells, search_points
 from planner.search.result import RUN_BUDGET, RUN_GROW, RUN_STOPPED
 
-__all__ = ["run", "run_points", "DENSE_SLOT_BUDGET", "KEEP_NODES"]
+__all__ = ["run", "run_points", "repeat", "DENSE_SLOT_BUDGET", "KEEP_NODES"]
 
 #: largest dense cell -> slot array (bytes, int32 per grid cell); bigger grids use pages.
 DENSE_SLOT_BUDGET = 512 * 2**20
-#: node capacity a thread keeps between searches (larger arrays are dropped after use)
-KEEP_NODES = 1 << 16
-_CAP, _PCAP = 4096, 64  # initial node and page capacity (powers of 2)
 _ROW_BYTES = sum(a.itemsize for a in (*new_nodes(1), *new_heap(1)))  # per node slot
 _PAGE_BYTES = PAGE * 4 + 2 * 8 + 8  # a page of int32 slots, its 2 table entries and key
 _STATE_BYTES = new_state(ASTAR_STATE).nbytes
-
-
-class _Context:
-    """One thread's kernel arrays, reused by its next search (module docstring)."""
-
-    __slots__ = ("nodes", "heap", "slots", "state", "ufree", "ends", "end0", "end1", "sc",
-                 "sc_key", "bound", "owner", "held", "fast", "points", "__weakref__")
-
-    def __init__(self):
-        self.nodes = new_nodes(_CAP)
-        self.heap = new_heap(_CAP)
-        self.slots = new_slots(_PCAP)
-        self.state = new_state(ASTAR_STATE)
-        self.ufree = np.empty(64, np.bool_)
-        self.ends = np.empty((2, 3), np.int64)
-        self.end0, self.end1 = self.ends  # its rows: ``row[...] = cell`` is the fastest copy
-        self.sc = _no_sight()
-        self.sc_key = None
-        self.bound = None  # (its structs..., params, their types, Bound, entry point): _bound
-        self.owner = 0  # id of the owner of the bound world (see run)
-        self.held = None  # (grid, its dense slot array, owner id) last searched: _dense
-        self.fast = None  # what run's short path needs to repeat the last search (_run)
-        self.points = None  # (compiled search_bound, rounding's ginv, its search_points)
-
-    def keep(self) -> None:
-        """Drop arrays a long search grew past the kept size (module docstring)."""
-        if len(self.nodes.key) > KEEP_NODES:
-            self.nodes, self.heap = new_nodes(_CAP), new_heap(_CAP)
-        if len(self.slots.bkeys) > KEEP_NODES // 8:
-            self.slots = new_slots(_PCAP)
-        self.bound = self.fast = None
-
-
-_LOCAL = threading.local()
-_CONTEXTS: weakref.WeakSet = weakref.WeakSet()  # every thread's contexts (see _unbind)
-_OWNERS: set[int] = set()  # ids of the owners _unbind watches
-
-
-def _context() -> _Context:
-    """This thread's free context (a new one when a search is already running on it, e.g.
-    the goal probe inside a paused search)."""
-    free = getattr(_LOCAL, "free", None)
-    if free is None:
-        free = _LOCAL.free = []
-    if free:
-        return free.pop()
-    ctx = _Context()
-    _CONTEXTS.add(ctx)
-    return ctx
-
-
-def _release(ctx: _Context) -> None:
-    free = _LOCAL.free
-    if len(free) < 2:
-        free.append(ctx)
-
-
-_NO_SIGHT: list = []
-
-
-def _no_sight():
-    """A tiny sight scratch for lattice A* / Dijkstra (they never walk): allocated once."""
-    if not _NO_SIGHT:
-        _NO_SIGHT.append(new_scratch(0.0, walk_of(Lattice.named("cubic", 1.0))))
-    return _NO_SIGHT[0]
-
-
-def _sight(ctx: _Context, walk, span: float):
-    """The any-angle sight scratch for ``walk`` and ``span``: kept in the context while the
-    thread searches the same world."""
-    if span <= 0 or is_cubic(walk.g):
-        return _no_sight()  # cubic sight lines need no scratch
-    key = (id(walk), span)
-    if ctx.sc_key != key:
-        ctx.sc, ctx.sc_key = new_scratch(span, walk), key
-    return ctx.sc
 
 
 def _dense(ctx: _Context, occ, owner) -> np.ndarray | None:
@@ -156,7 +83,7 @@ def _dense(ctx: _Context, occ, owner) -> np.ndarray | None:
 
 
 def run(occ, walk, ms, start, goal, params, span: float, owner=None, dense: bool = True,
-        pause_at: int = 0, keep_going=None):
+        pause_at: int = 0, keep_going=None, tag=None):
     """Run one search to completion. ``span``: longest sight line (m) the any-angle scratch
     is sized for (0 for lattice A*).
 
@@ -165,10 +92,15 @@ def run(occ, walk, ms, start, goal, params, span: float, owner=None, dense: bool
     freed; without, the next search makes it again.
 
     ``dense=False`` keeps the search off the pooled dense slot array (a short search run
-    while another search on the same grid holds it). With ``keep_going`` (a callable
-    taking the start and goal cells, returning bool), a search still going after
+    while another search on the same grid holds it). With ``keep_going``, ``(fn, *args)``
+    with ``fn(*args, start_cell, goal_cell)`` returning bool (a tuple, not a closure: it
+    is made on every call), a search still going after
     ``pause_at`` expansions pauses once and asks it whether to go on; False stops it with
     :data:`RUN_STOPPED`. Most searches are shorter and never pay for the question.
+
+    ``tag``: an object that stands for every argument but the cells, ``owner`` and
+    ``keep_going``: a caller that passes the same tag again passes the same arguments, so
+    :func:`repeat` with that tag can skip comparing them.
 
     Returns
     -------
@@ -193,19 +125,45 @@ def run(occ, walk, ms, start, goal, params, span: float, owner=None, dense: bool
             and (keep_going is None) is f[6]):
         # the short path (module docstring): the context's arrays, bound and dense slot
         # array are those of its last search, which was like this one
-        ctx.end0[...] = start
-        ctx.end1[...] = goal
-        out = f[8](f[7], f[9], f[10])
+        out = f[13](f[7], f[9], f[10], *start.tolist(), *goal.tolist())
         status = out[0]
         if status != RUN_GROW and not (f[10] and status == RUN_BUDGET):
             if len(free) < 2:
                 free.append(ctx)  # _release
             return out, (f[11] if out[4] <= _CAP else _fresh_bytes(out[4], 0) + f[12])
         out = _run(ctx, occ, walk, ms, start, goal, params, span, owner, dense, pause_at,
-                   keep_going, out)
+                   keep_going, out, tag)
     else:
         out = _run(ctx, occ, walk, ms, start, goal, params, span, owner, dense, pause_at,
-                   keep_going)
+                   keep_going, None, tag)
+    _settle(ctx, owner)
+    return out
+
+
+def repeat(owner, tag, start, goal, keep_going=None):
+    """:func:`run` with the arguments of this thread's last search, given by its ``tag``
+    and ``owner``, between two other cells: the same answer for less than the comparison
+    of every argument that :func:`run`'s short path makes. None, having done nothing, when
+    this thread's last search had another tag or owner (the caller then calls
+    :func:`run`, with ``tag``, which sets this up for the next call)."""
+    free = getattr(_LOCAL, "free", None)
+    if not free:
+        return None
+    f = free[-1].fast
+    if f is None or f[14] is not tag or f[3] != id(owner) or tag is None:
+        return None
+    ctx = free.pop()  # taken while it searches: a search started meanwhile takes another
+    try:
+        out = f[15](f[7], f[9], f[10], *start.tolist(), *goal.tolist())
+    except SystemError as exc:  # as entry_point's wrapper, which this call saves
+        raise signal_cause(exc) from None  # the context, left mid-search, is dropped
+    status = out[0]
+    if status != RUN_GROW and not (f[10] and status == RUN_BUDGET):
+        if len(free) < 2:
+            free.append(ctx)  # _release
+        return out, (f[11] if out[4] <= _CAP else _fresh_bytes(out[4], 0) + f[12])
+    out = _run(ctx, f[0], f[4], f[1], start, goal, f[2], 0.0, owner, True, f[5], keep_going,
+               out, tag)
     _settle(ctx, owner)
     return out
 
@@ -266,25 +224,8 @@ def run_points(occ, walk, ms, params, owner, rounding, pts, pause_at: int = 0,
 _POINTS: dict[tuple, tuple] = {}
 
 
-def _settle(ctx: _Context, owner) -> None:
-    """After a search of ``ctx`` for ``owner`` (see :func:`run`): keep its bound for the
-    owner's next search, or drop what only the owner's lifetime would free; release it."""
-    if owner is None:
-        ctx.bound = ctx.fast = None
-        h = ctx.held
-        if h is not None:  # nothing would drop it when the grid is freed: back to the pool
-            ctx.held = None
-            give(h[0], h[1])
-    else:
-        ctx.owner = id(owner)
-        if ctx.owner not in _OWNERS:
-            _OWNERS.add(ctx.owner)
-            weakref.finalize(owner, _unbind, ctx.owner)
-    _release(ctx)  # not after an exception: a context left mid-search is dropped
-
-
 def _run(ctx, occ, walk, ms, start, goal, params, span, owner, dense, pause_at, keep_going,
-         out=None):
+         out=None, tag=None):
     """:func:`run`'s general path; ``out``: the kernel's answer to the short path's call
     (a request for room or a pause) when it started there. Also sets the short path up for
     the next search when this one may take it."""
@@ -304,7 +245,7 @@ def _run(ctx, occ, walk, ms, start, goal, params, span, owner, dense, pause_at, 
     pausing = first is not params
     out = _loop(ctx, occ, walk, ms, sc, dslot, first, pausing, out)
     if pausing and out[0] == RUN_BUDGET:
-        if keep_going(ctx.ends[0].copy(), ctx.ends[1].copy()):
+        if keep_going[0](*keep_going[1:], ctx.ends[0].copy(), ctx.ends[1].copy()):
             out = _loop(ctx, occ, walk, ms, sc, dslot, params, False)
         else:
             nodes, state, slots = ctx.nodes, ctx.state, _slots(ctx, occ, dslot)
@@ -320,7 +261,7 @@ def _run(ctx, occ, walk, ms, start, goal, params, span, owner, dense, pause_at, 
     bd = ctx.bound
     if bd is not None and owner is not None and sc is nos and dense and bd[8] is first:
         ctx.fast = (occ, ms, params, id(owner), walk, pause_at, keep_going is None, bd[10], bd[11],
-                    first, pausing, _fresh_bytes(0, 0) + rest, rest)
+                    first, pausing, _fresh_bytes(0, 0) + rest, rest, bd[12], tag, bd[13])
     else:
         ctx.fast = None
     return out, _fresh_bytes(n, 0) + rest
@@ -363,20 +304,8 @@ def _nbytes(struct) -> int:
 # and the helpers, whose arguments the driver alone builds.
 _HELPERS: dict[object, object] = {}
 _NO_DENSE = new_slots(1).dense  # the paged slot map's placeholder dense array
-_CALLS: dict[object, object] = {}  # (Bound type, params' field types) -> search_bound
-
-
-def _unbind(owner_id: int) -> None:
-    """The owner ``owner_id`` of a world's structs was freed: drop every context's
-    :class:`Bound` of them (it holds the world's arrays, and the dense slot array pooled for
-    them, which would otherwise outlive the world)."""
-    _OWNERS.discard(owner_id)
-    for ctx in list(_CONTEXTS):
-        if ctx.owner == owner_id:
-            ctx.bound, ctx.fast, ctx.owner = None, None, 0
-        h = ctx.held
-        if h is not None and h[2] == owner_id:
-            ctx.held = ctx.fast = None
+#: (Bound type, params' field types) -> (search_bound, search_cells)
+_CALLS: dict[object, tuple] = {}
 
 
 def _bound(ctx: _Context, occ, walk, ms, sc, dslot, params):
@@ -400,12 +329,15 @@ def _bound(ctx: _Context, occ, walk, ms, sc, dslot, params):
     b = new_bound(occ, walk, ms, ctx.nodes, ctx.heap, _slots(ctx, occ, dslot), sc, ctx.ufree,
                   ctx.ends, ctx.state)
     key = (b._type, ptypes)
-    call = _CALLS.get(key)
-    if call is None:
-        call = _CALLS[key] = entry_point(search_bound, (b, params, False))
+    calls = _CALLS.get(key)
+    if calls is None:
+        calls = _CALLS[key] = (entry_point(search_bound, (b, params, False)),
+                               entry_point(search_cells, (b, params, False, 0, 0, 0, 0, 0, 0)),
+                               raw_entry_point(search_cells, (b, params, False, 0, 0, 0, 0,
+                                                              0, 0)))
     ctx.bound = (occ, walk, ms, sc, dense, ctx.nodes, ctx.slots, ctx.ufree, params, ptypes, b,
-                 call)
-    return b, call
+                 *calls)
+    return b, calls[0]
 
 
 def _slots(ctx: _Context, occ, dslot) -> SlotMap:

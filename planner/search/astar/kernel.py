@@ -65,7 +65,7 @@ class SearchParams(NamedTuple):
     h_weight: float = 1.0  # the straight-line heuristic's factor (any-angle only)
 
 
-@njit_cached
+@njit_cached(_nrt=False)
 def search_init(start, goal, ms, g, nodes, heap, slots, st):  # pragma: no cover - compiled
     """Put the start node in empty node arrays (slot 0), the slot map and the heap."""
     bmask = slots.btab.shape[0] - 1
