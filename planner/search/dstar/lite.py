@@ -48,7 +48,6 @@ from planner.search._heap import Heap, new_heap
 from planner.search._state import new_state
 from planner.search.dstar import kernel as dk
 from planner.search.dstar import replan as dr
-from planner.search.dstar.rest import keep_path
 from planner.search.heuristic import H_GAUGE, gauge_np
 from planner.search.moves import carries_guarantee, move_set
 from planner.search.result import RUN_FOUND, RUN_GROW, STATUS_OF_RUN, SearchResult
@@ -125,7 +124,7 @@ class DStarLite:
         self._kept: list[tuple[np.ndarray, bool]] = []  # blocked, not repaired (_keep)
         self._kept_n = 0  # cells in _kept
         self._state = None  # (occupancy, its ReplanState, entry point): see _call
-        self._keep_call = None  # keep_path's entry point (_keep)
+        self._keep_call = None  # keep_state's entry point (_keep)
         self._fl = {True: np.ones(1024, np.bool_), False: np.zeros(1024, np.bool_)}
         self._peak = 0
         self._ordered = 0  # node count at the last renumbering (_compact)
@@ -314,15 +313,13 @@ class DStarLite:
         unrepaired, with those kept before. None when it cannot be kept."""
         cells = pend[0][0] if len(pend) == 1 else (
             np.concatenate([p[0] for p in pend]) if pend else _NONE)
-        sv, sc = self._sv, self._sc
+        sv = self._sv
         flags = self._flags(len(cells), True)
+        _, state = self._call()
         if self._keep_call is None:  # its argument types never change
-            self._keep_call = entry_point(keep_path, (self._bx, self._state_array, self._fs,
-                                                      self.start, sc.path, sc.step, cells,
-                                                      flags))
+            self._keep_call = entry_point(dr.keep_state, (state, cells, flags))
         t0 = time.perf_counter()
-        kept = self._keep_call(self._bx, self._state_array, self._fs, self.start, sc.path,
-                               sc.step, cells, flags)
+        kept = self._keep_call(state, cells, flags)
         self._seconds += time.perf_counter() - t0
         if not kept:
             return None

@@ -17,7 +17,7 @@ import numpy as np
 from numba import types
 from numba.experimental import structref
 
-from planner._numba import njit_cached
+from planner._numba import borrow_fields, njit_cached
 from planner.occupancy.keys import unpack3
 from planner.search.astar.dense import grid_offsets
 from planner.search.dstar.kernel import (
@@ -29,7 +29,7 @@ from planner.search.dstar.kernel import (
     node,
     update_vertex,
 )
-from planner.search.dstar.rest import mark_path
+from planner.search.dstar.rest import keep_path, mark_path
 from planner.search.result import RUN_BLOCKED, RUN_EXHAUSTED, RUN_FOUND, RUN_GROW
 
 PH_COLLECT, PH_APPLY, PH_SEARCH, PH_PATH = 0, 1, 2, 3
@@ -73,6 +73,21 @@ structref.define_proxy(ReplanState, _StateType,
 def new_state(occ, ms, bx, nd, heap, sc, st, fs, start):  # pragma: no cover - compiled
     """:class:`ReplanState` of these arrays (shared, not copied)."""
     return ReplanState(occ, ms, bx, nd, heap, sc, st, fs, start)
+
+
+@njit_cached(_nrt=False)
+def _keep(state, cells, blocked):  # pragma: no cover - compiled
+    occ, ms, bx, nd, heap, sc, counts, fs, start = borrow_fields(state)
+    return keep_path(bx, counts, fs, start, sc.path, sc.step, cells, blocked)
+
+
+@njit_cached
+def keep_state(state, cells, blocked):  # pragma: no cover - compiled
+    """:func:`~planner.search.dstar.rest.keep_path` on the planner's arrays in ``state``
+    (:class:`ReplanState`): a kept replan is this call alone. Right after a scan the
+    arguments' Python objects are out of cache: one object to unbox instead of eight
+    arrays, and its fields read without counting references."""
+    return _keep(state, cells, blocked)
 
 
 @njit_cached

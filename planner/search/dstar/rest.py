@@ -59,8 +59,8 @@ def keep_path(bx, counts, fs, start, path, step, cells, blocked):  # pragma: no 
     ``[st.path_from, st.path_to)`` of ``path``, cost ``fs[1]``; ``st`` is ``counts[0]``,
     the planner's state record). Reads one bit per cell, no lookup.
 
-    Called on its own (a kept replan is this call alone): a few arrays to unbox, and the
-    state as its (1,) array (a record argument costs microseconds to unbox)."""
+    A kept replan is this function alone, called through
+    :func:`planner.search.dstar.replan.keep_state` (one object to unbox)."""
     st = counts[0]
     if st.path_valid != 1:
         return False
