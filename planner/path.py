@@ -20,7 +20,7 @@ import numpy as np
 from planner.errors import PlanError
 from planner.fsutil import atomic_path
 
-__all__ = ["headings", "path_length", "path_record", "write_path"]
+__all__ = ["SHORT_PATH", "headings", "path_length", "path_record", "rows_length", "write_path"]
 
 _DIGITS = 6
 
@@ -100,14 +100,19 @@ def write_path(path: str, res, world, start, goal) -> None:
             tmp.write_text(json.dumps(rec, indent=1))
 
 
-#: longest 3D path (points) measured in Python floats: below 8 segments numpy sums the
-#: segment lengths in order, so this gives the same float with a few numpy calls fewer
-_SHORT = 8
+#: longest 3D path (points) :func:`path_length` measures with :func:`rows_length`: below 8
+#: segments numpy sums the segment lengths in order, so that gives the same float with a few
+#: numpy calls fewer
+SHORT_PATH = 8
+_F8 = np.dtype(np.float64)  # compared by identity: a float64 array's own dtype
 
 
-def _short_length(rows: list) -> float:
-    """:func:`path_length` of a few (x, y, z) rows, in numpy's order of operations (each
-    segment's squares summed left to right, then the segments): the identical float."""
+def rows_length(rows: list) -> float:
+    """:func:`path_length` (m) of a path of at most :data:`SHORT_PATH` points given as
+    ``(x, y, z)`` rows of Python floats (``ndarray.tolist()``), in numpy's order of
+    operations (each segment's squares summed left to right, then the segments): the
+    identical float, without numpy's per-call cost. A caller that has already checked its
+    array uses it instead of :func:`path_length`'s own checks."""
     tot = 0.0
     a0, a1, a2 = rows[0]
     for b0, b1, b2 in rows[1:]:
@@ -125,9 +130,9 @@ def path_length(path: np.ndarray, empty: float = math.nan) -> float:
     >>> path_length(np.zeros((1, 3)), empty=0.0)
     0.0
     """
-    if (type(path) is np.ndarray and 2 <= len(path) <= _SHORT and path.ndim == 2
-            and path.shape[1] == 3 and path.dtype == np.float64):
-        return _short_length(path.tolist())
+    if (type(path) is np.ndarray and 2 <= len(path) <= SHORT_PATH and path.ndim == 2
+            and path.shape[1] == 3 and path.dtype is _F8):
+        return rows_length(path.tolist())
     p = np.asarray(path, dtype=float)
     if len(p) < 2:
         return float(empty)

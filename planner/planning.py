@@ -16,14 +16,12 @@ from planner import ompl, search
 from planner.errors import PlanError
 from planner.lattice import Lattice
 from planner.ompl import check_seed
-from planner.path import _SHORT, _short_length, path_length
+from planner.path import SHORT_PATH, path_length, rows_length
 from planner.search.run import search_points
 from planner.world import World, as_point
 from planner.world.build import build_world
 
 __all__ = ["PlanResult", "build_world", "describe", "plan", "unknown_on_path"]
-
-_I8 = np.dtype(np.int64)
 
 
 @dataclass
@@ -195,9 +193,9 @@ def plan(
     checks = res.cell_checks
     seconds = res.seconds
     path = _path_points(lat, s, path_cells, g)
-    # path_length's arithmetic; a short path's rows as Python floats, without its checks
-    length = raw_length = _short_length(path.tolist()) if len(path) <= _SHORT else path_length(
-        path, 0.0)
+    # a short path's length from its rows (path_length's float, without its checks)
+    length = raw_length = (rows_length(path.tolist()) if len(path) <= SHORT_PATH
+                           else path_length(path, 0.0))
     if shortcut and method in ("astar", "dijkstra"):
         t0 = time.perf_counter()
         before = world.cell_checks
@@ -223,12 +221,7 @@ def _path_points(lat: Lattice, s: np.ndarray, cells: np.ndarray, g: np.ndarray) 
     path = np.empty((len(cells) + 2, 3))
     path[0] = s
     path[-1] = g
-    if cells.dtype is _I8 and cells.ndim == 2 and cells.shape[1] == 3:
-        # to_world's product ``cells @ G.T``, the identical floats (both go to BLAS for
-        # 2-D float64; tests/test_plan_points.py compares them) at less dispatch cost
-        np.dot(cells, lat.generator.T, out=path[1:-1])
-    else:
-        lat.to_world(cells, out=path[1:-1])
+    lat.to_world(cells, out=path[1:-1])
     return path
 
 

@@ -140,3 +140,6 @@ def test_path_points_are_the_cell_centres_to_world_gives(name):
             s, g = rng.uniform(-5, 5, 3), rng.uniform(-5, 5, 3)
             want = np.concatenate([s[None], lat.to_world(cells), g[None]])
             assert np.array_equal(_path_points(lat, s, cells, g), want)
+            # to_world writes the same floats to any ``out`` (np.dot or np.matmul inside)
+            for out in (np.empty((k, 3)), np.empty((k, 3), order="F"), np.empty((k, 4))[:, :3]):
+                assert np.array_equal(lat.to_world(cells, out=out), want[1:-1])
