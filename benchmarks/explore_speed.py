@@ -5,6 +5,7 @@ Usage::
     python benchmarks/explore_speed.py                       # bundled office, every lattice
     python benchmarks/explore_speed.py --maps office geb079  # and the geb079 OctoMap scan
     python benchmarks/explore_speed.py --plots results/      # one summary PNG per run
+    python benchmarks/explore_speed.py --lattices bcc --near-median 8  # the replans at the median
 
 For each map and lattice the robot explores from the query's start to its goal
 (:func:`planner.explore.explore`); after every sensing step that changed the known map the
@@ -78,6 +79,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--vertical", type=float, default=30.0, help="+- vertical fov, deg (30)")
     p.add_argument("--neighbors", default="full")
     p.add_argument("--plots", type=Path, help="folder for one summary PNG per run")
+    p.add_argument("--near-median", type=int, default=0, metavar="N",
+                   help="also list the N replans either side of each run's median time "
+                        "ratio: which replan, whether it kept the path, both times")
     a = p.parse_args(argv)
     head = (f"{'map':<12} {'lattice':<7} {'status':<11} {'moves':>5} {'dist m':>7} "
             f"{'replans':>7} {'D*chk':>6} {'A*chk':>6} {'D*ms':>6} {'A*ms':>6} "
@@ -112,12 +116,25 @@ def main(argv: list[str] | None = None) -> int:
                   f"{q['total_time_ratio']:>6.3f} "
                   f"{q['total_checks_ratio']:>7.4f} {r.mismatches:>4} {r.contacts:>4} "
                   f"{secs:>6.1f}", flush=True)
+            if a.near_median and r.replans > 1:
+                _near_median(r, kept, a.near_median)
             bad += r.mismatches
             if a.plots:
                 r.plot(a.plots / f"explore_{label.replace(' ', '_')}_{lat}.png")
     if bad:
         print(f"FAIL: {bad} replans whose D* Lite cost differs from A*", file=sys.stderr)
     return 1 if bad else 0
+
+
+def _near_median(r, kept: np.ndarray, n: int) -> None:
+    """The ``n`` replans (after the first) either side of the median time ratio of the
+    exploration ``r``: replan number, kept (no repair), D* Lite and A* engine times (us)."""
+    d, t = r.dstar_seconds[1:], r.astar_seconds[1:]
+    order = np.argsort(d / t, kind="stable")
+    mid = len(order) // 2
+    for i in order[max(0, mid - n):mid + n]:
+        print(f"    replan {i + 1:>4}  {'kept' if kept[i] else 'repair':<6} D* {d[i] * 1e6:8.1f} us"
+              f"  A* {t[i] * 1e6:8.1f} us  ratio {d[i] / t[i]:6.3f}")
 
 
 if __name__ == "__main__":
