@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from planner import argtypes as T
+from planner._interrupt import install_sigint
 from planner.budget import ENV
 from planner.commands.outputs import check_outputs
 from planner.errors import PlannerError
@@ -336,6 +337,8 @@ def main(argv: list[str] | None = None) -> int:
     """The ``planner`` program (``argv`` None: ``sys.argv[1:]``, and an interrupted run
     ends the process at once with 130 / 143; with ``argv`` given it returns the status)."""
     standalone = argv is None
+    if standalone:  # the process is ours: a Ctrl-C during a kernel's load is not lost
+        install_sigint()
     argv = sys.argv[1:] if argv is None else list(argv)
     a = build_parser().parse_args(_hoist_global_options(_join_negative_values(argv)))
     if a.memory_budget is not None:  # the one budget model reads it (and so do workers)

@@ -304,3 +304,32 @@ def test_ctrl_c_during_a_build_exits_130_with_one_line():
     lines = text.strip().splitlines()  # progress lines may come first, nothing else
     assert lines[-1] == "planner: interrupted", text[-500:]
     assert all(line.startswith("progress ") for line in lines[:-1]), text[-500:]
+
+
+def test_ctrl_c_inside_a_kernel_load_callback_still_interrupts():
+    """numba loads and compiles kernels through llvmlite, which calls back into Python from
+    C and drops a callback's exception: the KeyboardInterrupt of a Ctrl-C that lands there
+    must still stop the program once the callback returns."""
+    script = "\n".join([
+        "import os, signal, sys, time",
+        "from planner._interrupt import install_sigint",
+        "install_sigint()",
+        "src = ('def callback():\\n'",
+        "       '    try:\\n'",
+        "       '        os.kill(os.getpid(), signal.SIGINT)\\n'",
+        "       '        for _ in range(100000):\\n'",
+        "       '            pass\\n'",
+        "       '    except BaseException:\\n'",  # what ctypes does with a callback's error
+        "       '        pass\\n')",
+        "ns = {'os': os, 'signal': signal}",
+        "exec(compile(src, '/site-packages/llvmlite/binding/callback.py', 'exec'), ns)",
+        "try:",
+        "    ns['callback']()",
+        "    time.sleep(5)",
+        "except KeyboardInterrupt:",
+        "    sys.exit(130)",
+    ])
+    env = dict(os.environ, PYTHONPATH=str(REPO))
+    proc = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True,
+                          timeout=60)
+    assert proc.returncode == 130, proc.stderr.decode()[-500:]

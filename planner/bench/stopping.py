@@ -8,6 +8,8 @@ import contextlib
 import signal
 import time
 
+from planner._interrupt import deferred
+
 __all__ = ["Interrupted", "interruption", "signals_raise", "stop_processes", "worker_init"]
 
 
@@ -36,7 +38,8 @@ def signals_raise():
         # worker) are re-parented and could no longer be found
         raise Interrupted(signum, _descendants())
 
-    old = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM)}
+    # deferred: not lost when it comes while a kernel compiles or loads (planner._interrupt)
+    old = {s: signal.signal(s, deferred(handler)) for s in (signal.SIGINT, signal.SIGTERM)}
     try:
         yield
     except SystemError as exc:
