@@ -128,12 +128,16 @@ def main(argv: list[str] | None = None) -> int:
 
 def _near_median(r, kept: np.ndarray, n: int) -> None:
     """The ``n`` replans (after the first) either side of the median time ratio of the
-    exploration ``r``: replan number, kept (no repair), D* Lite and A* engine times (us)."""
+    exploration ``r``: replan number, kept (no repair), cells the scan changed, which search
+    ran first after the map update (it finds the caches cold), D* Lite and A* engine times
+    (us)."""
     d, t = r.dstar_seconds[1:], r.astar_seconds[1:]
     order = np.argsort(d / t, kind="stable")
     mid = len(order) // 2
     for i in order[max(0, mid - n):mid + n]:
-        print(f"    replan {i + 1:>4}  {'kept' if kept[i] else 'repair':<6} D* {d[i] * 1e6:8.1f} us"
+        first = "A*" if (i + 1) % 2 else "D*"  # explore(): D* Lite first on even replans
+        print(f"    replan {i + 1:>4}  {'kept' if kept[i] else 'repair':<6} "
+              f"changed {r.changed[i + 1]:>5}  {first} first  D* {d[i] * 1e6:8.1f} us"
               f"  A* {t[i] * 1e6:8.1f} us  ratio {d[i] / t[i]:6.3f}")
 
 

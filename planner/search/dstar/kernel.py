@@ -84,6 +84,10 @@ class DBox(NamedTuple):
     ext: np.ndarray  # (3,) int64 largest |union-stencil offset| per axis
     inv: np.ndarray  # (M,) int64 the move back: moves[inv[m]] = -moves[m]
     rest: np.ndarray  # (prod(dims) / 8,) uint8 bit set: a cell the stored path rests on
+    # (prod((dims + 3) // 4) / 8,) uint8 bit set: a 4x4x4 block of the box holds a rest
+    # cell. A kept replan reads it first for each changed cell: right after a scan both maps
+    # are out of cache, and this one is 64 times smaller (rest.py)
+    rest_blocks: np.ndarray
 
 
 def new_box(lo: np.ndarray, dims: np.ndarray, ms) -> DBox:
@@ -93,9 +97,11 @@ def new_box(lo: np.ndarray, dims: np.ndarray, ms) -> DBox:
     ext = np.abs(union).max(axis=0).astype(np.int64) if len(union) else np.zeros(3, np.int64)
     back = {tuple(m): i for i, m in enumerate((-moves).tolist())}
     inv = np.array([back[tuple(m)] for m in moves.tolist()], np.int64)
-    return DBox(np.full(int(np.prod(dims)), -1, np.int32), np.asarray(lo, np.int64).copy(),
-                dims, np.zeros((int(np.prod(dims)) + 7) // 8, np.uint8), ext, inv,
-                np.zeros((int(np.prod(dims)) + 7) // 8, np.uint8))
+    cells = int(np.prod(dims))
+    blocks = int(np.prod((dims + 3) >> 2))
+    return DBox(np.full(cells, -1, np.int32), np.asarray(lo, np.int64).copy(), dims,
+                np.zeros((cells + 7) // 8, np.uint8), ext, inv,
+                np.zeros((cells + 7) // 8, np.uint8), np.zeros((blocks + 7) // 8, np.uint8))
 
 
 #: one node's record: the fields of :class:`DNodes` and padding to a cache line

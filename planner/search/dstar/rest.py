@@ -11,7 +11,11 @@ the robot off it) repairs every pending cell in one batch, then searches. A pend
 never reaches a search: nothing is looked up or expanded while one is pending.
 
 The cells are bits of ``DBox.rest`` (one bit per cell of the index box), set when a path
-is extracted and cleared when the next one replaces it.
+is extracted and cleared when the next one replaces it; ``DBox.rest_blocks`` has a bit per
+4x4x4 block of the box, set while one of its cells is a rest cell. A kept replan reads a
+changed cell's block bit first and its own bit only when that is set: right after a scan
+both maps are out of cache, a scan's cells mostly lie away from the path, and the block
+map is 64 times smaller (fewer cache lines to fetch).
 """
 
 from __future__ import annotations
@@ -23,19 +27,32 @@ from planner.search.dstar.kernel import _box
 
 
 @njit_cached(_nrt=False)
+def _block(bx, a, b, c):  # pragma: no cover - compiled
+    """Index in ``bx.rest_blocks`` of box cell (a, b, c) (offsets from ``bx.lo``)."""
+    return ((a >> 2) * ((bx.dims[1] + 3) >> 2) + (b >> 2)) * ((bx.dims[2] + 3) >> 2) + (c >> 2)
+
+
+@njit_cached(_nrt=False)
 def _bit(bx, v0, v1, v2, value):  # pragma: no cover - compiled
+    """Set or clear the rest bit of cell (v0, v1, v2), and its block's. Clearing the block
+    bit is right because a path's bits are cleared all at once, before the next path's
+    are set (:func:`mark_path`): no other rest cell is left in the block."""
     b = _box(bx, v0, v1, v2)
     if b >= 0:
+        q = _block(bx, v0 - bx.lo[0], v1 - bx.lo[1], v2 - bx.lo[2])
         if value:
             bx.rest[b >> 3] |= np.uint8(1 << (b & 7))
+            bx.rest_blocks[q >> 3] |= np.uint8(1 << (q & 7))
         else:
             bx.rest[b >> 3] &= np.uint8(~(1 << (b & 7)) & 0xFF)
+            bx.rest_blocks[q >> 3] &= np.uint8(~(1 << (q & 7)) & 0xFF)
 
 
 @njit_cached(_nrt=False)
 def mark_path(ms, bx, path, k, value):  # pragma: no cover - compiled
     """Set (``value``) or clear the rest bits of the path ``path[:k]`` ((>= k, 3) int64):
-    each cell, and each move's safe-rule cells."""
+    each cell, and each move's safe-rule cells. A path is cleared whole, before the next
+    one is set (:func:`_bit`)."""
     nm = ms.moves.shape[0]
     for i in range(k):
         p0, p1, p2 = path[i, 0], path[i, 1], path[i, 2]
@@ -57,7 +74,7 @@ def keep_path(bx, counts, fs, start, path, step, cells, blocked):  # pragma: no 
     changes ``cells`` ((K, 3) int64; ``blocked`` (K,) bool what each became) that the
     planner has not repaired (module docstring): then the replan's path is set (rows
     ``[st.path_from, st.path_to)`` of ``path``, cost ``fs[1]``; ``st`` is ``counts[0]``,
-    the planner's state record). Reads one bit per cell, no lookup.
+    the planner's state record). Reads one or two bits per cell, no lookup.
 
     A kept replan is this function alone, called through
     :func:`planner.search.dstar.replan.keep_state` (one object to unbox)."""
@@ -66,15 +83,18 @@ def keep_path(bx, counts, fs, start, path, step, cells, blocked):  # pragma: no 
         return False
     lo0, lo1, lo2 = bx.lo[0], bx.lo[1], bx.lo[2]
     d0, d1, d2 = bx.dims[0], bx.dims[1], bx.dims[2]
-    rest = bx.rest
+    rest, blocks = bx.rest, bx.rest_blocks
+    e1, e2 = (d1 + 3) >> 2, (d2 + 3) >> 2
     for i in range(cells.shape[0]):
         if not blocked[i]:
             return False
         a, b, c = cells[i, 0] - lo0, cells[i, 1] - lo1, cells[i, 2] - lo2
         if 0 <= a < d0 and 0 <= b < d1 and 0 <= c < d2:
-            k = (a * d1 + b) * d2 + c
-            if (rest[k >> 3] >> (k & 7)) & 1:
-                return False
+            q = ((a >> 2) * e1 + (b >> 2)) * e2 + (c >> 2)  # its block first (module docstring)
+            if (blocks[q >> 3] >> (q & 7)) & 1:
+                k = (a * d1 + b) * d2 + c
+                if (rest[k >> 3] >> (k & 7)) & 1:
+                    return False
     k = st.path_len
     for j in range(st.path_at, k):
         if path[j, 0] == start[0] and path[j, 1] == start[1] and path[j, 2] == start[2]:
@@ -87,3 +107,4 @@ def keep_path(bx, counts, fs, start, path, step, cells, blocked):  # pragma: no 
             fs[1] = cost
             return True
     return False
+
