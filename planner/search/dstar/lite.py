@@ -39,7 +39,7 @@ import time
 
 import numpy as np
 
-from planner._entry import entry_point
+from planner._entry import entry_point, raw_entry_point, signal_cause
 from planner.errors import PlanError
 from planner.occupancy.keys import unpack
 from planner.occupancy.walk import as_cells
@@ -314,12 +314,14 @@ class DStarLite:
         cells = pend[0][0] if len(pend) == 1 else (
             np.concatenate([p[0] for p in pend]) if pend else _NONE)
         sv = self._sv
-        flags = self._flags(len(cells), True)
         _, state = self._call()
         if self._keep_call is None:  # its argument types never change
-            self._keep_call = entry_point(dr.keep_state, (state, cells, flags))
+            self._keep_call = raw_entry_point(dr.keep_state, (state, cells))
         t0 = time.perf_counter()
-        kept = self._keep_call(state, cells, flags)
+        try:  # the raw entry point: a Python call less than entry_point's wrapper
+            kept = self._keep_call(state, cells)
+        except SystemError as exc:
+            raise signal_cause(exc) from None
         self._seconds += time.perf_counter() - t0
         if not kept:
             return None

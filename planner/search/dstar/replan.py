@@ -76,18 +76,19 @@ def new_state(occ, ms, bx, nd, heap, sc, st, fs, start):  # pragma: no cover - c
 
 
 @njit_cached(_nrt=False)
-def _keep(state, cells, blocked):  # pragma: no cover - compiled
+def _keep(state, cells):  # pragma: no cover - compiled
     occ, ms, bx, nd, heap, sc, counts, fs, start = borrow_fields(state)
-    return keep_path(bx, counts, fs, start, sc.path, sc.step, cells, blocked)
+    return keep_path(bx, counts, fs, start, sc.path, sc.step, cells)
 
 
 @njit_cached
-def keep_state(state, cells, blocked):  # pragma: no cover - compiled
+def keep_state(state, cells):  # pragma: no cover - compiled
     """:func:`~planner.search.dstar.rest.keep_path` on the planner's arrays in ``state``
-    (:class:`ReplanState`): a kept replan is this call alone. Right after a scan the
-    arguments' Python objects are out of cache: one object to unbox instead of eight
-    arrays, and its fields read without counting references."""
-    return _keep(state, cells, blocked)
+    (:class:`ReplanState`) for the blocked cells ``cells``: a kept replan is this call
+    alone. Right after a scan every object is out of cache, and each argument to unbox
+    costs about a microsecond (``benchmarks/cold_call.py``): two here instead of nine
+    arrays, and the struct's fields read without counting references."""
+    return _keep(state, cells)
 
 
 @njit_cached

@@ -69,10 +69,10 @@ def mark_path(ms, bx, path, k, value):  # pragma: no cover - compiled
 
 
 @njit_cached(_nrt=False)
-def keep_path(bx, counts, fs, start, path, step, cells, blocked):  # pragma: no cover
+def keep_path(bx, counts, fs, start, path, step, cells):  # pragma: no cover
     """True when the stored path from ``start`` on is still a shortest path after the
-    changes ``cells`` ((K, 3) int64; ``blocked`` (K,) bool what each became) that the
-    planner has not repaired (module docstring): then the replan's path is set (rows
+    cells ``cells`` ((K, 3) int64), all of them blocked (the caller knows), were blocked
+    and the planner has not repaired them (module docstring): then the replan's path is set (rows
     ``[st.path_from, st.path_to)`` of ``path``, cost ``fs[1]``; ``st`` is ``counts[0]``,
     the planner's state record). Reads one or two bits per cell, no lookup.
 
@@ -86,8 +86,6 @@ def keep_path(bx, counts, fs, start, path, step, cells, blocked):  # pragma: no 
     rest, blocks = bx.rest, bx.rest_blocks
     e1, e2 = (d1 + 3) >> 2, (d2 + 3) >> 2
     for i in range(cells.shape[0]):
-        if not blocked[i]:
-            return False
         a, b, c = cells[i, 0] - lo0, cells[i, 1] - lo1, cells[i, 2] - lo2
         if 0 <= a < d0 and 0 <= b < d1 and 0 <= c < d2:
             q = ((a >> 2) * e1 + (b >> 2)) * e2 + (c >> 2)  # its block first (module docstring)

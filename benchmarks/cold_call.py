@@ -1,0 +1,124 @@
+"""What a call costs right after the caches were swept (cold) against the same call again at
+once (hot): the floor under a D* Lite replan that keeps its path, which runs right after a
+scan and a map update have swept the caches (``benchmarks/explore_speed.py``).
+
+Usage::
+
+    python benchmarks/cold_call.py [--calls 300] [--sweep-mb 64]
+
+Each row: the median over ``--calls`` rounds of (sweep ``--sweep-mb`` MB of memory, time
+the call, time it again). The calls: a ``perf_counter()`` pair; a compiled (numba) function
+of one integer, and of three arrays; a D* Lite replan that keeps its path (a cell blocked
+far from it; ``SearchResult.seconds``, the engine time ``explore_speed.py`` compares) and
+an A* ``search()`` of a short query on the same world (its ``seconds``, and the whole call).
+No assertions: this prints figures.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+
+import numpy as np
+from numba import njit
+
+from planner import search as S
+from planner.lattice import Lattice
+from planner.search import DStarLite
+from planner.world import World
+
+
+@njit(cache=False)
+def _one_int(x):
+    return x > 0
+
+
+@njit(cache=False)
+def _three_arrays(a, b, c):
+    return a.shape[0] + b.shape[0] + c.shape[0] > 0
+
+
+def _rows(calls: int, sweep_mb: int) -> list[tuple[str, float, float]]:
+    """(name, median cold s, median hot s) of each call (module docstring)."""
+    big = np.zeros(sweep_mb << 20, np.uint8)
+
+    def sweep():
+        big[::64] += 1  # one write per cache line
+
+    a = np.zeros((300, 3), np.int64)
+    f = np.ones(300, np.bool_)
+    _one_int(1)
+    _three_arrays(a, f, a)
+    one = _one_int.overloads[_one_int.signatures[0]].entry_point
+    three = _three_arrays.overloads[_three_arrays.signatures[0]].entry_point
+    clock = time.perf_counter
+
+    world = World(Lattice.named("bcc", 1.0), np.zeros((0, 3), np.int64),
+                  [[0, 0, 0], [40, 40, 8]])
+    start = world.endpoint(np.array([1.0, 1.0, 1.0]), "start")[1]
+    goal = world.endpoint(np.array([38.0, 38.0, 6.0]), "goal")[1]
+    # two cells far off the path: blocking either keeps it
+    far = [world.endpoint(np.array(p), "cell")[1][None] for p in ([1.0, 38.0, 1.0],
+                                                                 [38.0, 1.0, 1.0])]
+    state = {"planner": _fresh(world, start, goal)}
+    near = state["planner"].plan().cells[4]  # a short A* query: four moves
+    S.search(world, start, near)
+
+    def timed(fn):
+        t0 = clock()
+        fn()
+        return clock() - t0
+
+    def replan(k):
+        p = state["planner"]
+        p.update(world.set_cells(far[k], True), blocked=True)
+        return p.plan().seconds
+
+    def undo():  # outside the timing: free both cells, a new planner (a freed cell repairs)
+        for c in far:
+            world.set_cells(c, False)
+        state["planner"] = _fresh(world, start, goal)
+
+    out = []
+    for name, fn, undo_after in (
+            ("perf_counter() pair", lambda k: timed(lambda: None), None),
+            ("compiled call, one int", lambda k: timed(lambda: one(1)), None),
+            ("compiled call, three arrays", lambda k: timed(lambda: three(a, f, a)), None),
+            ("D* Lite replan that keeps its path (seconds)", replan, undo),
+            ("A* search(), short query (seconds)",
+             lambda k: S.search(world, start, near).seconds, None),
+            ("A* search(), short query (whole call)",
+             lambda k: timed(lambda: S.search(world, start, near)), None)):
+        cold, hot = np.empty(calls), np.empty(calls)
+        for i in range(calls):
+            sweep()
+            cold[i] = fn(0)
+            hot[i] = fn(1)
+            if undo_after is not None:
+                undo_after()
+        out.append((name, float(np.median(cold)), float(np.median(hot))))
+    return out
+
+
+def _fresh(world, start, goal) -> DStarLite:
+    """A D* Lite planner on the world as it is, its first plan made."""
+    p = DStarLite(world, start, goal)
+    p.plan()
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--calls", type=int, default=300, help="rounds per row")
+    ap.add_argument("--sweep-mb", type=int, default=64, help="memory swept before a call")
+    a = ap.parse_args(argv)
+    print(f"median of {a.calls} rounds; cold: right after sweeping {a.sweep_mb} MB")
+    print(f"{'call':<46} {'cold us':>8} {'hot us':>8}")
+    for name, cold, hot in _rows(a.calls, a.sweep_mb):
+        print(f"{name:<46} {cold * 1e6:8.2f} {hot * 1e6:8.2f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
