@@ -291,11 +291,18 @@ def test_compare_reports_a_corrupt_scenario_file(tmp_path, capsys):
 
 
 # -- 7. an interrupt ends the program cleanly -----------------------------------------------------
+def _sigint_as_from_a_terminal() -> None:
+    """In the child, before it runs: Ctrl-C's default disposition, as in a terminal. A test
+    run started in the background leaves SIGINT ignored, and Python keeps it ignored."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def test_ctrl_c_during_a_build_exits_130_with_one_line():
     env = dict(os.environ, PYTHONPATH=str(REPO))
     proc = subprocess.Popen([sys.executable, "-m", "planner", "compare", "office",
                              "--cell-volume", "0.0001", *QUERY], env=env,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            preexec_fn=_sigint_as_from_a_terminal)
     time.sleep(4)  # inside the imports, the map build or a kernel: each must end cleanly
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=120)
@@ -331,5 +338,5 @@ def test_ctrl_c_inside_a_kernel_load_callback_still_interrupts():
     ])
     env = dict(os.environ, PYTHONPATH=str(REPO))
     proc = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True,
-                          timeout=60)
+                          timeout=60, preexec_fn=_sigint_as_from_a_terminal)
     assert proc.returncode == 130, proc.stderr.decode()[-500:]
