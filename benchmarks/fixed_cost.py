@@ -93,7 +93,7 @@ def parts(calls: int = 2000) -> dict:
     for _ in range(50):
         r = S.search(world, s, g)
     f = _LOCAL.free[-1].fast  # the short path's tuple (planner.search.astar.driver._run)
-    compiled, b, params, pausing = f[15], f[7], f[9], f[10]
+    compiled, b, params, pausing = f[13], f[7], f[9], f[10]
     cells = r.cells
     return _medians(calls, (
         ("search", lambda: S.search(world, s, g)),

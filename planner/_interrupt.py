@@ -48,13 +48,10 @@ def deferred(handler: Callable) -> Callable:
     return run
 
 
-def install_sigint() -> Callable[[], None]:
-    """Make Ctrl-C raise KeyboardInterrupt through :func:`deferred` while the caller runs;
-    returns the function that restores the previous handler. Nothing to do (and nothing is
-    changed) outside the main thread, or when SIGINT is not handled by Python's default
-    handler (a caller that installed its own, or ignores it)."""
-    if (threading.current_thread() is not threading.main_thread()
-            or signal.getsignal(signal.SIGINT) is not signal.default_int_handler):
-        return lambda: None
-    signal.signal(signal.SIGINT, deferred(signal.default_int_handler))
-    return lambda: signal.signal(signal.SIGINT, signal.default_int_handler)
+def install_sigint() -> None:
+    """Make Ctrl-C raise KeyboardInterrupt through :func:`deferred` for the rest of the
+    process. Nothing is changed outside the main thread, or when SIGINT is not handled by
+    Python's default handler (a caller that installed its own, or ignores it)."""
+    if (threading.current_thread() is threading.main_thread()
+            and signal.getsignal(signal.SIGINT) is signal.default_int_handler):
+        signal.signal(signal.SIGINT, deferred(signal.default_int_handler))

@@ -45,7 +45,7 @@ class _Context:
         self.end0, self.end1 = self.ends  # its rows: ``row[...] = cell`` is the fastest copy
         self.sc = _no_sight()
         self.sc_key = None
-        self.bound = None  # (its structs..., params, their types, Bound, entry point): _bound
+        self.bound = None  # (its structs..., params, their types, Bound, its two entry points)
         self.owner = 0  # id of the owner of the bound world (see run)
         self.held = None  # (grid, its dense slot array, owner id) last searched: _dense
         self.fast = None  # what run's short path needs to repeat the last search (_run)

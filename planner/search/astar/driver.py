@@ -125,7 +125,10 @@ def run(occ, walk, ms, start, goal, params, span: float, owner=None, dense: bool
             and (keep_going is None) is f[6]):
         # the short path (module docstring): the context's arrays, bound and dense slot
         # array are those of its last search, which was like this one
-        out = f[13](f[7], f[9], f[10], *start.tolist(), *goal.tolist())
+        try:
+            out = f[13](f[7], f[9], f[10], *start.tolist(), *goal.tolist())
+        except SystemError as exc:  # as entry_point's wrapper, which this call saves
+            raise signal_cause(exc) from None  # the context, left mid-search, is dropped
         status = out[0]
         if status != RUN_GROW and not (f[10] and status == RUN_BUDGET):
             if len(free) < 2:
@@ -154,7 +157,7 @@ def repeat(owner, tag, start, goal, keep_going=None):
         return None
     ctx = free.pop()  # taken while it searches: a search started meanwhile takes another
     try:
-        out = f[15](f[7], f[9], f[10], *start.tolist(), *goal.tolist())
+        out = f[13](f[7], f[9], f[10], *start.tolist(), *goal.tolist())
     except SystemError as exc:  # as entry_point's wrapper, which this call saves
         raise signal_cause(exc) from None  # the context, left mid-search, is dropped
     status = out[0]
@@ -261,7 +264,7 @@ def _run(ctx, occ, walk, ms, start, goal, params, span, owner, dense, pause_at, 
     bd = ctx.bound
     if bd is not None and owner is not None and sc is nos and dense and bd[8] is first:
         ctx.fast = (occ, ms, params, id(owner), walk, pause_at, keep_going is None, bd[10], bd[11],
-                    first, pausing, _fresh_bytes(0, 0) + rest, rest, bd[12], tag, bd[13])
+                    first, pausing, _fresh_bytes(0, 0) + rest, rest, bd[12], tag)
     else:
         ctx.fast = None
     return out, _fresh_bytes(n, 0) + rest
@@ -332,7 +335,6 @@ def _bound(ctx: _Context, occ, walk, ms, sc, dslot, params):
     calls = _CALLS.get(key)
     if calls is None:
         calls = _CALLS[key] = (entry_point(search_bound, (b, params, False)),
-                               entry_point(search_cells, (b, params, False, 0, 0, 0, 0, 0, 0)),
                                raw_entry_point(search_cells, (b, params, False, 0, 0, 0, 0,
                                                               0, 0)))
     ctx.bound = (occ, walk, ms, sc, dense, ctx.nodes, ctx.slots, ctx.ufree, params, ptypes, b,
