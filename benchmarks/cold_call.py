@@ -24,6 +24,7 @@ import numpy as np
 from numba import njit
 
 from planner import search as S
+from planner._entry import raw_entry_point
 from planner.lattice import Lattice
 from planner.search import DStarLite
 from planner.world import World
@@ -48,10 +49,8 @@ def _rows(calls: int, sweep_mb: int) -> list[tuple[str, float, float]]:
 
     a = np.zeros((300, 3), np.int64)
     f = np.ones(300, np.bool_)
-    _one_int(1)
-    _three_arrays(a, f, a)
-    one = _one_int.overloads[_one_int.signatures[0]].entry_point
-    three = _three_arrays.overloads[_three_arrays.signatures[0]].entry_point
+    one = raw_entry_point(_one_int, (1,))  # compiled here, called without argument typing
+    three = raw_entry_point(_three_arrays, (a, f, a))
     clock = time.perf_counter
 
     world = World(Lattice.named("bcc", 1.0), np.zeros((0, 3), np.int64),
