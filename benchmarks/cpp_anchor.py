@@ -1,194 +1,309 @@
-"""A minimal C++ A* compiled at run time: the floor our engine is measured against.
+"""The strongest compiled A* floor we can build, called in this process: what our engine's
+A* is measured against.
 
-Cubic lattice, 26 neighbours with MovingAI's no-corner-cutting rule (a move is allowed
-only when every voxel of its bounding box is free), step costs 1, sqrt(2), sqrt(3), the
-exact octile heuristic and the project's tie-break (lower f first, f rounded to 1e-9 so
-that equal-cost paths tie exactly, then larger g). It is
-written to be as fast as a minimal A* can be, so that a ratio against it is a fair one:
-a dense byte grid padded by one voxel (no bounds tests), the 26-neighbourhood read once
-per expansion into a bit mask and each move's required cells tested as one mask, heap
-entries that carry the node's coordinates (the heuristic needs no division), per-cell
-state (g, query stamp, heap index) in one calloc'd record, stamped with the query number
-(nothing cleared between queries), and a binary heap with decrease-key. Built with the
-system compiler (``g++ -O3 -march=native``) into a temporary directory; :func:`available`
-says whether a compiler exists (callers skip with a note when it does not).
+Usage::
 
-Used by ``benchmarks/search_speed.py``; also runnable alone::
+    python benchmarks/cpp_anchor.py                      # every map: ours / the floor
+    python benchmarks/cpp_anchor.py --queries 200 --repeat 3 --maps DA1
+    python benchmarks/cpp_anchor.py --check-all          # the floor on all Warframe costs
+    python benchmarks/cpp_anchor.py --axes natural       # both sides in the map's own order
+    python benchmarks/cpp_anchor.py --smoke              # a small synthetic map, seconds
 
-    python benchmarks/cpp_anchor.py ../shared/data/warframe/Simple.3dmap   # optimal-cost check
+The floor: cubic lattice, 26 neighbours with MovingAI's no-corner-cutting rule (a move is
+allowed only when every voxel of its bounding box is free), step costs 1, sqrt(2), sqrt(3),
+the exact octile heuristic and the project's tie-break (lower f first, f rounded to 1e-9 so
+that equal-cost paths tie exactly, then larger g). Written with every trick we know for a
+grid A* of this kind:
+
+* a bit grid padded by one blocked voxel (no bounds tests; 1/8 of a byte grid's cache
+  footprint): the 27-cell neighbourhood is nine 3-bit reads, one per row, into a mask,
+  and each move's required cells are one AND and compare against it;
+* an int32 slot map (cell -> node record, -1 untouched; reset per query by walking the
+  records made, so nothing proportional to the map is cleared) and compact 24-byte node
+  records (g, cell, heap position, coordinates: the heuristic needs no division);
+* a 4-ary heap with decrease-key for nodes above the current f, and a side heap (larger g
+  first) for the current f plateau: on a grid with an octile heuristic most generated nodes
+  keep their parent's f, so they never enter the main heap;
+* the map's longest axis made the fastest-varying one (``--axes longest``, the default):
+  the floor and our planner get the same permutation of the map (our planner by permuted
+  coordinates: the same world, turned), so neither side pays for a badly ordered map.
+
+Built with the system compiler (``g++ -O3 -march=native``) into a shared library and called
+through ctypes: no separate process. The query loop is a library function (not ``main``).
+Both sides are timed the same way, by this thread's CPU time around one call (ours:
+``planner.search.search``; the floor: one ctypes call), taking turns per query, the fastest
+of ``--repeat`` rounds each. It must reproduce the MovingAI Warframe optimal costs
+(``../shared/data/warframe/*.3dmap`` and ``.3dscen``): mismatches are printed and make the
+exit status 1. geb079 is read by the package's OctoMap reader at 0.08 m.
+
+Also the floor behind ``search_speed.py`` (:func:`run`) and ``scaling.py``
+(:func:`run_measured`). Skipped with one line when there is no C++ compiler.
 """
 
 from __future__ import annotations
 
+import argparse
+import ctypes
 import functools
+import math
 import shutil
 import subprocess
 import sys
 import tempfile
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import harness  # noqa: E402  (the sibling module)
+
 SOURCE = r"""
-#include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdint>
-#include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <vector>
+#include <ctime>
 
-// Input (binary, little endian): int64 nx ny nz, uint8 free[nx*ny*nz] (x fastest),
-// int64 nq, then nq x 6 int64 (sx sy sz gx gy gz). Output: one line per query:
-// cost expansions seconds.
-//
-// Per expansion: one read of the 26 neighbours into a bit mask; each move is allowed when
-// its required cells (the voxels of its bounding box) are all set in it, one AND and one
-// compare. Heap entries carry the node's coordinates, so the heuristic needs no division.
-// Per-cell state is stamped with the query number (nothing is cleared between queries).
-struct Entry { double f, g; int64_t v; int32_t x, y, z, pad; };
-// Per-cell state in one record (one cache line visit per neighbour, not two).
-struct Cell { double g; uint32_t stamp; int32_t at; };  // stamp 2k+1 open, 2k+2 closed
+// One map: a padded bit grid in C order (the last axis fastest) and the per-query arrays.
+struct Node { double g; int32_t v; int32_t pos; int16_t x, y, z, pad; };  // 24 bytes
+struct Entry { double f, g; int32_t n, pad; };                               // 24 bytes
+static const int32_t CLOSED = -1, SIDE = -2;
 
-static inline bool before(const Entry& a, const Entry& b) {  // the project's order:
-    return a.f < b.f || (a.f == b.f && a.g > b.g);             // lower f, then larger g
-}
-
-struct Heap {  // binary min-heap with decrease-key (each cell's heap index in Cell::at)
-    std::vector<Entry> a;
-    Cell* cell;
-    void clear() { a.clear(); }
-    bool empty() const { return a.empty(); }
-    void up(size_t i, const Entry& e) {
-        while (i > 0) {
-            size_t p = (i - 1) >> 1;
-            if (!before(e, a[p])) break;
-            a[i] = a[p]; cell[a[i].v].at = (int32_t)i; i = p;
-        }
-        a[i] = e; cell[e.v].at = (int32_t)i;
-    }
-    void push(const Entry& e) { a.push_back(e); up(a.size() - 1, e); }
-    void decrease(const Entry& e) { up((size_t)cell[e.v].at, e); }
-    Entry pop() {
-        Entry top = a[0], last = a.back(); a.pop_back();
-        size_t n = a.size(), i = 0;
-        if (n) {
-            for (;;) {
-                size_t c = 2 * i + 1;
-                if (c >= n) break;
-                if (c + 1 < n && before(a[c + 1], a[c])) ++c;
-                if (!before(a[c], last)) break;
-                a[i] = a[c]; cell[a[i].v].at = (int32_t)i; i = c;
-            }
-            a[i] = last; cell[last.v].at = (int32_t)i;
-        }
-        return top;
-    }
+struct Floor {
+    int64_t A, B, C;            // padded dims; cell v = (a * B + b) * C + c
+    uint8_t* bits;              // bit v set = free (8 bytes of slack at the end)
+    int32_t* slot;              // cell -> node index, -1 untouched
+    Node* nodes; int64_t nn, ncap;
+    Entry* heap; int64_t hn, hcap;   // main heap: f above the plateau (4-ary)
+    Entry* side; int64_t sn, scap;   // plateau heap: f == the current f (binary, larger g)
+    int64_t roff[9];            // row offsets of the neighbourhood's 9 rows, minus 1
+    int64_t mv[26]; int mda[26], mdb[26], mdc[26]; double mc[26]; uint32_t need[26];
+    int64_t bytes;
 };
 
-int main(int argc, char** argv) {
-    if (argc < 2) return 2;
-    FILE* in = std::fopen(argv[1], "rb");
-    if (!in) return 2;
-    int64_t d[3];
-    if (std::fread(d, 8, 3, in) != 3) return 2;
-    const int64_t X = d[0] + 2, Y = d[1] + 2, Z = d[2] + 2;  // padded by one blocked voxel
-    std::vector<uint8_t> raw(d[0] * d[1] * d[2]);
-    if (std::fread(raw.data(), 1, raw.size(), in) != raw.size()) return 2;
-    uint8_t* fr = (uint8_t*)std::calloc(X * Y * Z, 1);
-    for (int64_t z = 0; z < d[2]; ++z)
-        for (int64_t y = 0; y < d[1]; ++y)
-            std::memcpy(&fr[((z + 1) * Y + (y + 1)) * X + 1], &raw[(z * d[1] + y) * d[0]], d[0]);
-    std::vector<uint8_t>().swap(raw);
-    int64_t nq;
-    if (std::fread(&nq, 8, 1, in) != 1) return 2;
-    std::vector<int64_t> q(6 * nq);
-    if (std::fread(q.data(), 8, 6 * nq, in) != (size_t)(6 * nq)) return 2;
-    std::fclose(in);
+static inline bool before(const Entry& a, const Entry& b) {   // lower f, then larger g
+    return a.f < b.f || (a.f == b.f && a.g > b.g);
+}
 
-    // Bit b of a neighbourhood mask is the voxel at offset (b % 3 - 1, b / 3 % 3 - 1, b / 9 - 1).
-    int64_t off[27]; int mdx[26], mdy[26], mdz[26]; int64_t mv[26]; double mc[26];
-    uint32_t need[26]; int nm = 0;
-    for (int b = 0; b < 27; ++b) off[b] = ((b / 9 - 1) * Y + (b / 3 % 3 - 1)) * X + (b % 3 - 1);
-    for (int dz = -1; dz <= 1; ++dz)
-    for (int dy = -1; dy <= 1; ++dy)
-    for (int dx = -1; dx <= 1; ++dx) {
-        if (!dx && !dy && !dz) continue;
-        uint32_t m = 0;
-        for (int cz = std::min(0, dz); cz <= std::max(0, dz); ++cz)
-            for (int cy = std::min(0, dy); cy <= std::max(0, dy); ++cy)
-                for (int cx = std::min(0, dx); cx <= std::max(0, dx); ++cx)
-                    if (cx || cy || cz) m |= 1u << ((cz + 1) * 9 + (cy + 1) * 3 + cx + 1);
-        mdx[nm] = dx; mdy[nm] = dy; mdz[nm] = dz; need[nm] = m;
-        mv[nm] = (dz * Y + dy) * X + dx;
-        mc[nm] = std::sqrt((double)(dx * dx + dy * dy + dz * dz));
-        ++nm;
+template <class T> static T* grow(T* p, int64_t& cap, Floor* F) {
+    int64_t n = cap ? 2 * cap : 1024;
+    F->bytes += (n - cap) * (int64_t)sizeof(T);
+    cap = n;
+    return (T*)std::realloc(p, n * sizeof(T));
+}
+
+// 4-ary main heap with decrease-key (positions in Node::pos).
+static inline void h_up(Floor* F, int64_t i, const Entry& e) {
+    Entry* a = F->heap;
+    while (i > 0) {
+        int64_t p = (i - 1) >> 2;
+        if (!before(e, a[p])) break;
+        a[i] = a[p]; F->nodes[a[i].n].pos = (int32_t)i; i = p;
     }
+    a[i] = e; F->nodes[e.n].pos = (int32_t)i;
+}
+static inline void h_down(Floor* F, int64_t i, const Entry& e) {
+    Entry* a = F->heap; const int64_t n = F->hn;
+    for (;;) {
+        int64_t c = 4 * i + 1;
+        if (c >= n) break;
+        int64_t best = c, end = c + 4 < n ? c + 4 : n;
+        for (int64_t k = c + 1; k < end; ++k) if (before(a[k], a[best])) best = k;
+        if (!before(a[best], e)) break;
+        a[i] = a[best]; F->nodes[a[i].n].pos = (int32_t)i; i = best;
+    }
+    a[i] = e; F->nodes[e.n].pos = (int32_t)i;
+}
+static inline void h_push(Floor* F, const Entry& e) {
+    if (F->hn == F->hcap) F->heap = grow(F->heap, F->hcap, F);
+    h_up(F, F->hn++, e);
+}
+static inline Entry h_pop(Floor* F) {
+    Entry top = F->heap[0];
+    Entry last = F->heap[--F->hn];
+    if (F->hn) h_down(F, 0, last);
+    return top;
+}
+static inline void h_remove(Floor* F, int64_t i) {   // take out the entry at i
+    Entry last = F->heap[--F->hn];
+    if (i == F->hn) return;
+    if (before(last, F->heap[i])) h_up(F, i, last); else h_down(F, i, last);
+}
+// Side heap: the plateau, larger g first; lazy (a better g pushes again, stale skipped).
+static inline void s_push(Floor* F, const Entry& e) {
+    if (F->sn == F->scap) F->side = grow(F->side, F->scap, F);
+    Entry* a = F->side; int64_t i = F->sn++;
+    while (i > 0) { int64_t p = (i - 1) >> 1; if (a[p].g >= e.g) break; a[i] = a[p]; i = p; }
+    a[i] = e;
+}
+static inline Entry s_pop(Floor* F) {
+    Entry* a = F->side; Entry top = a[0], last = a[--F->sn];
+    int64_t n = F->sn, i = 0;
+    for (;;) {
+        int64_t c = 2 * i + 1;
+        if (c >= n) break;
+        if (c + 1 < n && a[c + 1].g > a[c].g) ++c;
+        if (a[c].g <= last.g) break;
+        a[i] = a[c]; i = c;
+    }
+    if (n) a[i] = last;
+    return top;
+}
+
+extern "C" {
+
+// free: uint8 (na, nb, nc) C order, nonzero = free. Returns NULL when the map is too large.
+Floor* floor_new(const uint8_t* free, int64_t na, int64_t nb, int64_t nc) {
+    if (na > 32000 || nb > 32000 || nc > 32000) return nullptr;
+    Floor* F = (Floor*)std::calloc(1, sizeof(Floor));
+    F->A = na + 2; F->B = nb + 2; F->C = nc + 2;
+    const int64_t cells = F->A * F->B * F->C;
+    if (cells >= (int64_t)1 << 31) { std::free(F); return nullptr; }
+    const int64_t nbytes = (cells + 7) / 8 + 8;
+    F->bits = (uint8_t*)std::calloc(nbytes, 1);
+    for (int64_t a = 0; a < na; ++a)
+        for (int64_t b = 0; b < nb; ++b) {
+            const uint8_t* row = free + (a * nb + b) * nc;
+            int64_t v = ((a + 1) * F->B + (b + 1)) * F->C + 1;
+            for (int64_t c = 0; c < nc; ++c, ++v)
+                if (row[c]) F->bits[v >> 3] |= (uint8_t)(1u << (v & 7));
+        }
+    F->slot = (int32_t*)std::malloc(cells * sizeof(int32_t));
+    std::memset(F->slot, 0xff, cells * sizeof(int32_t));
+    F->bytes = nbytes + cells * (int64_t)sizeof(int32_t) + (int64_t)sizeof(Floor);
+    // Mask bit (da + 1) * 9 + (db + 1) * 3 + (dc + 1) is the cell at offset (da, db, dc).
+    for (int r = 0; r < 9; ++r) F->roff[r] = ((r / 3 - 1) * F->B + (r % 3 - 1)) * F->C - 1;
+    int m = 0;
+    for (int da = -1; da <= 1; ++da)
+    for (int db = -1; db <= 1; ++db)
+    for (int dc = -1; dc <= 1; ++dc) {
+        if (!da && !db && !dc) continue;
+        uint32_t need = 0;
+        for (int ca = (da < 0 ? da : 0); ca <= (da > 0 ? da : 0); ++ca)
+        for (int cb = (db < 0 ? db : 0); cb <= (db > 0 ? db : 0); ++cb)
+        for (int cc = (dc < 0 ? dc : 0); cc <= (dc > 0 ? dc : 0); ++cc)
+            if (ca || cb || cc) need |= 1u << ((ca + 1) * 9 + (cb + 1) * 3 + cc + 1);
+        F->need[m] = need; F->mda[m] = da; F->mdb[m] = db; F->mdc[m] = dc;
+        F->mv[m] = (da * F->B + db) * F->C + dc;
+        F->mc[m] = std::sqrt((double)(da * da + db * db + dc * dc));
+        ++m;
+    }
+    return F;
+}
+
+void floor_free(Floor* F) {
+    if (!F) return;
+    std::free(F->bits); std::free(F->slot); std::free(F->nodes); std::free(F->heap);
+    std::free(F->side); std::free(F);
+}
+
+int64_t floor_bytes(const Floor* F) { return F->bytes; }
+
+// One query, cells in the unpadded box. Returns expansions; *cost = path cost in cells
+// (-1 when unreachable or an end is blocked or outside).
+int64_t floor_search(Floor* F, int64_t sa, int64_t sb, int64_t sc,
+                     int64_t ga, int64_t gb, int64_t gc, double* cost) {
+    *cost = -1.0;
+    const int64_t B = F->B, C = F->C;
+    if (sa < 0 || sb < 0 || sc < 0 || ga < 0 || gb < 0 || gc < 0 || sa >= F->A - 2 ||
+        ga >= F->A - 2 || sb >= B - 2 || gb >= B - 2 || sc >= C - 2 || gc >= C - 2) return 0;
+    const int32_t s = (int32_t)(((sa + 1) * B + sb + 1) * C + sc + 1);
+    const int32_t t = (int32_t)(((ga + 1) * B + gb + 1) * C + gc + 1);
+    const uint8_t* bits = F->bits;
+    if (!((bits[s >> 3] >> (s & 7)) & 1) || !((bits[t >> 3] >> (t & 7)) & 1)) return 0;
+    const int32_t tx = (int32_t)ga + 1, ty = (int32_t)gb + 1, tz = (int32_t)gc + 1;
     const double s2m1 = std::sqrt(2.0) - 1.0, s3m2 = std::sqrt(3.0) - std::sqrt(2.0);
-    // f on a 1e-9 grid, as ours: equal-cost paths then tie exactly (float noise would
-    // otherwise decide) and the larger-g tie-break dives along them.
-    const double fq = 1e-9, fq_inv = 1.0 / fq;
-    auto fkey = [&](double f) { return std::floor(f * fq_inv + 0.5) * fq; };
-    Cell* cell = (Cell*)std::calloc(X * Y * Z, sizeof(Cell));
-    Heap open; open.a.reserve(1 << 16); open.cell = cell;
-    for (int64_t k = 0; k < nq; ++k) {
-        auto t0 = std::chrono::steady_clock::now();
-        const uint32_t seen = (uint32_t)(2 * k + 1), done = seen + 1;
-        const int32_t sx = q[6 * k] + 1, sy = q[6 * k + 1] + 1, sz = q[6 * k + 2] + 1;
-        const int32_t gx = q[6 * k + 3] + 1, gy = q[6 * k + 4] + 1, gz = q[6 * k + 5] + 1;
-        const int64_t s = ((int64_t)sz * Y + sy) * X + sx, t = ((int64_t)gz * Y + gy) * X + gx;
-        // octile: a >= b >= c -> a + (sqrt2 - 1) b + (sqrt3 - sqrt2) c
-        auto h = [&](int32_t x, int32_t y, int32_t z) {
-            int32_t a = std::abs(x - gx), b = std::abs(y - gy), c = std::abs(z - gz);
-            int32_t hi = std::max(a, std::max(b, c)), lo = std::min(a, std::min(b, c));
-            int32_t mid = a + b + c - hi - lo;
-            return (double)hi + s2m1 * mid + s3m2 * lo;
-        };
-        double cost = -1; int64_t exp = 0;
-        open.clear();
-        if (fr[s] && fr[t]) {
-            cell[s].g = 0; cell[s].stamp = seen;
-            open.push({fkey(h(sx, sy, sz)), 0.0, s, sx, sy, sz, 0});
-            while (!open.empty()) {
-                const Entry n = open.pop();
-                cell[n.v].stamp = done; ++exp;
-                if (n.v == t) { cost = n.g; break; }
-                const uint8_t* c = fr + n.v;
-                uint32_t nb = 0;
-                for (int b = 0; b < 27; ++b) nb |= (uint32_t)c[off[b]] << b;
-                for (int m = 0; m < 26; ++m) {
-                    if ((nb & need[m]) != need[m]) continue;
-                    const int64_t w = n.v + mv[m];
-                    Cell& cw = cell[w];
-                    if (cw.stamp == done) continue;
-                    const double ng = n.g + mc[m];
-                    if (cw.stamp != seen) {
-                        cw.stamp = seen; cw.g = ng;
-                        const int32_t x = n.x + mdx[m], y = n.y + mdy[m], z = n.z + mdz[m];
-                        open.push({fkey(ng + h(x, y, z)), ng, w, x, y, z, 0});
-                    } else if (ng < cw.g) {
-                        cw.g = ng;
-                        const int32_t x = n.x + mdx[m], y = n.y + mdy[m], z = n.z + mdz[m];
-                        open.decrease({fkey(ng + h(x, y, z)), ng, w, x, y, z, 0});
-                    }
-                }
+    auto h = [&](int32_t x, int32_t y, int32_t z) {   // octile: hi + (r2-1) mid + (r3-r2) lo
+        int32_t a = std::abs(x - tx), b = std::abs(y - ty), c = std::abs(z - tz);
+        int32_t hi = a > b ? a : b; hi = hi > c ? hi : c;
+        int32_t lo = a < b ? a : b; lo = lo < c ? lo : c;
+        return (double)hi + s2m1 * (double)(a + b + c - hi - lo) + s3m2 * (double)lo;
+    };
+    // f on a 1e-9 grid, as ours: equal-cost paths tie exactly.
+    auto fkey = [](double f) { return std::floor(f * 1e9 + 0.5) * 1e-9; };
+    F->nn = 0; F->hn = 0; F->sn = 0;
+    if (F->ncap == 0) F->nodes = grow(F->nodes, F->ncap, F);
+    F->nodes[0] = {0.0, s, SIDE, (int16_t)(sa + 1), (int16_t)(sb + 1), (int16_t)(sc + 1), 0};
+    F->slot[s] = 0; F->nn = 1;
+    double fcur = fkey(h((int32_t)sa + 1, (int32_t)sb + 1, (int32_t)sc + 1));
+    s_push(F, {fcur, 0.0, 0, 0});
+    int64_t exp = 0;
+    int32_t* slot = F->slot;
+    for (;;) {
+        int32_t n;
+        if (F->sn && (F->hn == 0 || F->heap[0].f > fcur || F->side[0].g >= F->heap[0].g)) {
+            const Entry e = s_pop(F);
+            Node& nd = F->nodes[e.n];
+            if (nd.pos != SIDE || e.g != nd.g) continue;   // stale: closed or bettered
+            n = e.n;
+        } else if (F->hn) {
+            const Entry e = h_pop(F);
+            fcur = e.f; n = e.n;
+        } else break;
+        Node cur = F->nodes[n];
+        F->nodes[n].pos = CLOSED; ++exp;
+        if (cur.v == t) { *cost = cur.g; break; }
+        uint32_t nb = 0;
+        for (int r = 0; r < 9; ++r) {
+            const int64_t i = cur.v + F->roff[r];
+            uint32_t w; std::memcpy(&w, bits + (i >> 3), 4);
+            nb |= ((w >> (i & 7)) & 7u) << (3 * r);
+        }
+        for (int m = 0; m < 26; ++m) {
+            if ((nb & F->need[m]) != F->need[m]) continue;
+            const int32_t w = cur.v + (int32_t)F->mv[m];
+            const double ng = cur.g + F->mc[m];
+            const int32_t k = slot[w];
+            if (k < 0) {
+                if (F->nn == F->ncap) F->nodes = grow(F->nodes, F->ncap, F);
+                const int16_t x = cur.x + F->mda[m], y = cur.y + F->mdb[m], z = cur.z + F->mdc[m];
+                const int32_t j = (int32_t)F->nn++;
+                slot[w] = j;
+                const double f = fkey(ng + h(x, y, z));
+                F->nodes[j] = {ng, w, SIDE, x, y, z, 0};
+                if (f <= fcur) s_push(F, {f, ng, j, 0}); else h_push(F, {f, ng, j, 0});
+                continue;
+            }
+            Node& nw = F->nodes[k];
+            if (nw.pos == CLOSED || ng >= nw.g) continue;
+            nw.g = ng;
+            const double f = fkey(ng + h(nw.x, nw.y, nw.z));
+            if (nw.pos == SIDE) { s_push(F, {f, ng, k, 0}); continue; }
+            if (f <= fcur) {
+                h_remove(F, nw.pos);
+                F->nodes[k].pos = SIDE;
+                s_push(F, {f, ng, k, 0});
+            } else {
+                h_up(F, nw.pos, {f, ng, k, 0});
             }
         }
-        double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-        std::printf("%.9f %lld %.9f\n", cost, (long long)exp, sec);
     }
-    // This image's own peak resident memory on stderr (its getrusage would also count the
-    // parent's pages mapped before exec).
-    if (FILE* f = std::fopen("/proc/self/status", "r")) {
-        char line[256];
-        while (std::fgets(line, sizeof line, f))
-            if (!std::strncmp(line, "VmHWM:", 6)) std::fputs(line, stderr);
-        std::fclose(f);
-    }
-    return 0;
+    for (int64_t i = 0; i < F->nn; ++i) slot[F->nodes[i].v] = -1;
+    return exp;
 }
+
+// Queries (nq, 6) int64 cells; out (nq, 3): cost (cells, -1 unreachable), expansions,
+// this thread's CPU seconds of the search.
+void floor_batch(Floor* F, const int64_t* q, int64_t nq, double* out) {
+    for (int64_t k = 0; k < nq; ++k) {
+        timespec t0, t1;
+        clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t0);
+        const int64_t* p = q + 6 * k;
+        double cost;
+        int64_t e = floor_search(F, p[0], p[1], p[2], p[3], p[4], p[5], &cost);
+        clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t1);
+        out[3 * k] = cost; out[3 * k + 1] = (double)e;
+        out[3 * k + 2] = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
+    }
+}
+
+}  // extern "C"
 """
+
+
+def _compiler() -> str | None:
+    return shutil.which("g++") or shutil.which("c++")
 
 
 def available() -> bool:
@@ -196,27 +311,84 @@ def available() -> bool:
     return _compiler() is not None
 
 
-def _compiler() -> str | None:
-    return shutil.which("g++") or shutil.which("c++")
-
-
 @functools.lru_cache(maxsize=1)
-def binary() -> Path:
-    """Compile the anchor once per process; returns the executable's path."""
+def library() -> ctypes.CDLL:
+    """Compile the floor once per process into a shared library and load it."""
     cxx = _compiler()
     if cxx is None:
-        raise RuntimeError("no C++ compiler (g++) on PATH: the C++ anchor is skipped")
-    tmp = Path(tempfile.mkdtemp(prefix="cpp_anchor_"))
-    src = tmp / "astar.cpp"
+        raise RuntimeError("no C++ compiler (g++) on PATH: the C++ floor is skipped")
+    tmp = Path(tempfile.mkdtemp(prefix="cpp_floor_"))
+    src, lib = tmp / "floor.cpp", tmp / "libfloor.so"
     src.write_text(SOURCE)
-    exe = tmp / "astar"
-    subprocess.run([cxx, "-O3", "-march=native", "-std=c++17", "-o", str(exe), str(src)],
-                   check=True, capture_output=True)
-    return exe
+    subprocess.run([cxx, "-O3", "-march=native", "-std=c++17", "-shared", "-fPIC", "-o",
+                    str(lib), str(src)], check=True, capture_output=True)
+    dll = ctypes.CDLL(str(lib))
+    i64, vp = ctypes.c_int64, ctypes.c_void_p
+    dll.floor_new.restype = vp
+    dll.floor_new.argtypes = [vp, i64, i64, i64]
+    dll.floor_free.restype = None
+    dll.floor_free.argtypes = [vp]
+    dll.floor_bytes.restype = i64
+    dll.floor_bytes.argtypes = [vp]
+    dll.floor_search.restype = i64
+    dll.floor_search.argtypes = [vp] + [i64] * 6 + [ctypes.POINTER(ctypes.c_double)]
+    dll.floor_batch.restype = None
+    dll.floor_batch.argtypes = [vp, vp, i64, vp]
+    return dll
+
+
+class Floor:
+    """The floor on one map, held in this process.
+
+    Parameters
+    ----------
+    free : ndarray of bool, shape (na, nb, nc)
+        True where a voxel is free, in the order the floor should store it (the last axis
+        varies fastest; :func:`longest_last` gives the order that puts the map's longest
+        axis there).
+    """
+
+    def __init__(self, free: np.ndarray):
+        self._dll = library()
+        grid = np.ascontiguousarray(free, dtype=np.uint8)
+        self.shape = grid.shape
+        self._h = self._dll.floor_new(grid.ctypes.data, *grid.shape)
+        if not self._h:
+            raise ValueError(f"map of {grid.shape} voxels is too large for the floor")
+        self._cost = ctypes.c_double()
+        self._ref = ctypes.byref(self._cost)
+        self._search = self._dll.floor_search
+
+    def search(self, s, g) -> tuple[float, int]:
+        """(cost in cells, -1 when unreachable; expansions) of one query (cells (3,))."""
+        e = self._search(self._h, int(s[0]), int(s[1]), int(s[2]), int(g[0]), int(g[1]),
+                         int(g[2]), self._ref)
+        return self._cost.value, int(e)
+
+    def batch(self, queries: np.ndarray) -> np.ndarray:
+        """(Q, 3): cost (cells, -1 unreachable), expansions, thread CPU seconds per query
+        (measured inside the library, around the search alone)."""
+        q = np.ascontiguousarray(queries, dtype=np.int64).reshape(-1, 6)
+        out = np.empty((len(q), 3))
+        self._dll.floor_batch(self._h, q.ctypes.data, len(q), out.ctypes.data)
+        return out
+
+    @property
+    def nbytes(self) -> int:
+        """Bytes the floor holds: bit grid, slot map, node records and heaps."""
+        return int(self._dll.floor_bytes(self._h))
+
+    def close(self) -> None:
+        if self._h:
+            self._dll.floor_free(self._h)
+            self._h = None
+
+    def __del__(self):
+        self.close()
 
 
 def run(free: np.ndarray, queries: np.ndarray) -> np.ndarray:
-    """Run the anchor on a dense grid.
+    """The floor on a dense grid, every query once.
 
     Parameters
     ----------
@@ -228,50 +400,252 @@ def run(free: np.ndarray, queries: np.ndarray) -> np.ndarray:
     Returns
     -------
     ndarray, shape (Q, 3)
-        Per query: path cost (-1 when unreachable), expansions, seconds (search only:
-        loading and padding the grid are outside the clock).
+        Per query: path cost (-1 when unreachable), expansions, thread CPU seconds of the
+        search (the map's loading outside it). The map is stored with its longest axis
+        fastest (:func:`longest_last`).
     """
     return run_measured(free, queries)[0]
 
 
-def run_measured(free: np.ndarray, queries: np.ndarray) -> tuple[np.ndarray, int | None]:
-    """:func:`run`, and the anchor process's own peak resident memory (bytes; its VmHWM
-    after exec, None where /proc is not there)."""
+def run_measured(free: np.ndarray, queries: np.ndarray) -> tuple[np.ndarray, int]:
+    """:func:`run`, and the bytes the floor held at the end (bit grid, slot map, node
+    records and heaps)."""
     free = np.asarray(free, dtype=bool)
-    q = np.ascontiguousarray(queries, dtype=np.int64).reshape(-1, 6)
-    with tempfile.TemporaryDirectory(prefix="cpp_anchor_in_") as tmp:
-        path = Path(tmp) / "in.bin"
-        with open(path, "wb") as f:
-            f.write(np.asarray(free.shape, dtype="<i8").tobytes())
-            for z in range(free.shape[2]):  # x fastest, one z slab at a time (no full copy)
-                f.write(np.ascontiguousarray(free[:, :, z].T, dtype=np.uint8).tobytes())
-            f.write(np.int64(len(q)).tobytes())
-            f.write(q.astype("<i8").tobytes())
-        res = subprocess.run([str(binary()), str(path)], check=True, capture_output=True,
-                             text=True)
-    peak = [int(line.split()[1]) * 1024 for line in res.stderr.splitlines()
-            if line.startswith("VmHWM:")]
-    return np.loadtxt(res.stdout.splitlines(), ndmin=2).reshape(-1, 3), (peak or [None])[0]
+    perm = longest_last(free.shape)
+    q = np.asarray(queries, dtype=np.int64).reshape(-1, 6)
+    fl = Floor(free.transpose(perm))
+    try:
+        res = fl.batch(np.concatenate([q[:, :3][:, perm], q[:, 3:6][:, perm]], axis=1))
+        return res, fl.nbytes
+    finally:
+        fl.close()
 
 
-def main(argv: list[str] | None = None) -> int:
-    """Check the anchor against a MovingAI map's listed optimal costs."""
-    args = sys.argv[1:] if argv is None else argv
-    if not args:
-        print(__doc__)
-        return 2
-    path = Path(args[0])
+def longest_last(shape) -> tuple[int, int, int]:
+    """The axis order (a permutation of 0, 1, 2) that puts the longest axis last (fastest
+    in C order), the others in their own order."""
+    k = int(np.argmax(shape))
+    return tuple([i for i in range(3) if i != k] + [k])
+
+
+# ----------------------------------------------------------------------------------------
+# Ours against the floor on the Warframe maps and geb079.
+
+WARFRAME_MAPS = ("Simple", "Complex", "DA1", "A1", "BC1", "DA2")
+LONG = 10_000  # expansions: the long queries, where the fixed cost per call no longer counts
+
+
+@dataclass
+class Map:
+    """One benchmark map: a free grid, its queries and (MovingAI) their optimal costs."""
+
+    name: str
+    free: np.ndarray       # (nx, ny, nz) bool, True = free
+    queries: np.ndarray    # (Q, 6) int64 cells
+    optimal: np.ndarray | None  # (Q,) cost in cells, or None
+
+
+def read_warframe(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """A MovingAI ``.3dmap`` as a free grid (nx, ny, nz) and its ``.3dscen`` as (Q, 7)."""
     dims = np.loadtxt(path, max_rows=1, usecols=(1, 2, 3), dtype=np.int64)
     blocked = np.loadtxt(path, skiprows=1, dtype=np.int64, ndmin=2)
     free = np.ones(dims, dtype=bool)
     free[tuple(blocked.T)] = False
     scen = np.loadtxt(f"{path}.3dscen", skiprows=2, ndmin=2)
-    n = int(args[1]) if len(args) > 1 else 1000
-    res = run(free, scen[:n, :6].astype(np.int64))
-    bad = int(np.sum(np.abs(res[:, 0] - scen[:n, 6]) > 1e-6 * np.maximum(1, scen[:n, 6])))
-    print(f"{path.name}: {n} queries, {bad} cost mismatches, "
-          f"{res[:, 1].sum() / res[:, 2].sum() / 1e6:.2f} M expansions/s")
-    return 0
+    return free, scen
+
+
+def warframe(path: Path, n: int | None) -> Map:
+    """``n`` queries spread evenly over the scenario file (all when None)."""
+    free, scen = read_warframe(path)
+    if n is not None:
+        scen = scen[:: max(1, len(scen) // n)][:n]
+    return Map(path.stem, free, scen[:, :6].astype(np.int64), scen[:, 6])
+
+
+def geb079(path: Path, n: int, seed: int = 0) -> Map:
+    """geb079 on the cubic lattice at 0.08 m (the package's OctoMap reader and world build,
+    radius 0), its free cells as a grid over the world's index box, and ``n`` random free
+    start/goal pairs at least 10 m apart."""
+    from planner import build_world
+
+    w = build_world(path, "cubic", cell_volume=0.08**3, radius=0.0)
+    lo = np.ceil(w.bounds[0] / 0.08 - 1e-9).astype(np.int64)
+    hi = np.floor(w.bounds[1] / 0.08 + 1e-9).astype(np.int64)
+    dims = hi - lo + 1
+    idx = np.indices(dims).reshape(3, -1).T + lo
+    free = w.is_free(idx).reshape(tuple(dims))
+    rng = np.random.default_rng(seed)
+    q = []
+    while len(q) < n:
+        c = rng.integers(0, dims, size=(2, 3))
+        if free[tuple(c.T)].all() and np.linalg.norm(c[0] - c[1]) * 0.08 >= 10.0:
+            q.append(np.r_[c[0], c[1]])
+    return Map("geb079", free, np.array(q, np.int64).reshape(-1, 6), None)
+
+
+def synthetic(n: int = 40, seed: int = 0, queries: int = 12) -> Map:
+    """A seeded field of boxes in an (n, n/2, n/4) box map (its longest axis first, so the
+    axis order matters), ``queries`` random free pairs (smoke runs; no optimal costs)."""
+    rng = np.random.default_rng(seed)
+    dims = np.array([n, max(4, n // 2), max(4, n // 4)])
+    free = np.ones(dims, dtype=bool)
+    for _ in range(n):
+        c = rng.integers(0, dims)
+        e = rng.integers(1, np.maximum(2, dims // 4) + 1)
+        free[tuple(slice(a, a + b) for a, b in zip(c, e, strict=True))] = False
+    q = []
+    while len(q) < queries:
+        c = rng.integers(0, dims, size=(2, 3))
+        if free[tuple(c.T)].all():
+            q.append(np.r_[c[0], c[1]])
+    return Map("synthetic", free, np.array(q, np.int64), None)
+
+
+def our_world(free: np.ndarray):
+    """Our cubic world (1 m cells) on the free grid: blocked cells and the grid's box."""
+    from planner.lattice import Lattice
+    from planner.world import World
+
+    blocked = np.argwhere(~free)
+    return World(Lattice.named("cubic", 1.0), blocked,
+                 np.array([[0.0, 0.0, 0.0], np.array(free.shape) - 1.0]))
+
+
+@dataclass
+class Row:
+    """Ours against the floor on one map."""
+
+    name: str
+    perm: tuple
+    ours: np.ndarray       # (Q,) thread CPU s per query, fastest round
+    floor: np.ndarray      # (Q,) the same for the floor
+    exp_ours: np.ndarray   # (Q,) expansions
+    exp_floor: np.ndarray
+    mismatches: int        # ours vs floor, and each vs the listed optimal cost
+    checked: int
+
+
+def compare(m: Map, repeat: int, axes: str = "longest") -> Row:
+    """Both sides on the same permuted map, taking turns per query, best of ``repeat``."""
+    from planner.search import search
+
+    perm = longest_last(m.free.shape) if axes == "longest" else (0, 1, 2)
+    free = np.ascontiguousarray(m.free.transpose(perm))
+    s = m.queries[:, :3][:, perm]
+    g = m.queries[:, 3:6][:, perm]
+    world = our_world(free)
+    fl = Floor(free)
+    search(world, s[0], g[0])  # kernels loaded, the world's arrays made: outside the clock
+    n = len(s)
+    cost_o, cost_f = np.empty(n), np.empty(n)
+    exp_o, exp_f = np.zeros(n, np.int64), np.zeros(n, np.int64)
+    clock = harness.cpu_clock
+
+    def ours(i):
+        t0 = clock()
+        r = search(world, s[i], g[i])
+        t = clock() - t0
+        cost_o[i], exp_o[i] = (r.cost if r.found else -1.0), r.expansions
+        return t
+
+    def floor(i):
+        t0 = clock()
+        c, e = fl.search(s[i], g[i])
+        t = clock() - t0
+        cost_f[i], exp_f[i] = c, e
+        return t
+
+    best = harness.interleaved({"ours": ours, "floor": floor}, range(n), repeat)
+    fl.close()
+    bad = ~np.isclose(cost_o, cost_f, rtol=1e-9, atol=1e-9)
+    if m.optimal is not None:
+        bad |= ~np.isclose(cost_f, m.optimal, rtol=1e-6, atol=1e-6)
+    return Row(m.name, perm, best["ours"], best["floor"], exp_o, exp_f, int(bad.sum()), n)
+
+
+def check_all(path: Path) -> tuple[int, int, float]:
+    """The floor alone on every query of a Warframe map: (queries, mismatches, M exp/s)."""
+    free, scen = read_warframe(path)
+    res = run(free, scen[:, :6].astype(np.int64))
+    bad = int(np.sum(~np.isclose(res[:, 0], scen[:, 6], rtol=1e-6, atol=1e-6)))
+    return len(scen), bad, res[:, 1].sum() / max(res[:, 2].sum(), 1e-12) / 1e6
+
+
+def print_rows(rows: list[Row]) -> None:
+    """The table, then one ratio line per map (ours speed / the floor's)."""
+    print(f"{'map':10s} {'axes':>5s} {'queries':>7s} {'floor ms':>9s} {'ours ms':>9s} "
+          f"{'speed':>6s} {'exp ratio':>9s} {'long':>5s} {'speed':>6s} {'cost!=':>6s}")
+    for r in rows:
+        speed = (r.exp_ours.sum() / r.ours.sum()) / (r.exp_floor.sum() / r.floor.sum())
+        long = r.exp_floor >= LONG
+        ls = ((r.exp_ours[long].sum() / r.ours[long].sum())
+              / (r.exp_floor[long].sum() / r.floor[long].sum())) if long.any() else math.nan
+        print(f"{r.name:10s} {''.join('xyz'[i] for i in r.perm):>5s} {r.checked:7d} "
+              f"{1e3 * r.floor.sum():9.2f} {1e3 * r.ours.sum():9.2f} {speed:6.2f} "
+              f"{r.exp_ours.sum() / max(1, r.exp_floor.sum()):9.3f} {int(long.sum()):5d} "
+              f"{ls:6.2f} {r.mismatches:6d}")
+    print("speed: ours expansions/s / the floor's over all queries (sum/sum); long: queries "
+          f"of >= {LONG:,} floor expansions and the speed over them; axes: the map's axes "
+          "from slowest to fastest")
+    for r in rows:
+        speed = (r.exp_ours.sum() / r.ours.sum()) / (r.exp_floor.sum() / r.floor.sum())
+        # per query: ours expansions/s over the floor's = (floor s / exp) / (ours s / exp)
+        print(harness.ratio_line(f"A* speed ours/floor {r.name}",
+                                 r.floor / np.maximum(r.exp_floor, 1),
+                                 r.ours / np.maximum(r.exp_ours, 1), goal=">= 0.9",
+                                 overall=speed, note="per query, expansions/s"))
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    harness.add_arguments(ap, repeat=3, data=True)
+    ap.add_argument("--maps", nargs="+", default=list(WARFRAME_MAPS) + ["geb079"],
+                    help="Warframe maps present under DATA/warframe, and geb079")
+    ap.add_argument("--queries", type=int, default=100, help="queries per Warframe map")
+    ap.add_argument("--geb-queries", type=int, default=20, help="geb079 queries (>= 10 m)")
+    ap.add_argument("--axes", choices=("longest", "natural"), default="longest",
+                    help="longest: the map's longest axis fastest on both sides (default); "
+                         "natural: the map's own x, y, z order")
+    ap.add_argument("--check-all", action="store_true",
+                    help="the floor alone on every query of each Warframe map present")
+    a = ap.parse_args(argv)
+    with harness.session("A*, cubic-26, ours vs the strongest C++ floor (in process, "
+                         "thread CPU time)", smoke=a.smoke):
+        if not available():
+            return harness.skip("no C++ compiler (g++ / c++) on PATH: the C++ floor")
+        if a.smoke:
+            print_rows([compare(synthetic(), a.repeat, a.axes)])
+            return 0
+        wf = a.data / "warframe"
+        if a.check_all:
+            total = 0
+            for name in a.maps:
+                p = wf / f"{name}.3dmap"
+                if p.is_file():
+                    n, bad, mps = check_all(p)
+                    total += bad
+                    print(f"{name}: {n} queries, {bad} cost mismatches, {mps:.2f} M exp/s")
+            return 1 if total else 0
+        rows = []
+        for name in a.maps:
+            if name == "geb079":
+                p = a.data / "octomap" / "geb079.bt"
+                m = geb079(p, a.geb_queries) if p.is_file() else None
+            else:
+                p = wf / f"{name}.3dmap"
+                m = warframe(p, a.queries) if p.is_file() else None
+            if m is None:
+                print(f"{name}: not under {a.data}, skipped")
+                continue
+            rows.append(compare(m, a.repeat, a.axes))
+            print(f"{name} done", file=sys.stderr, flush=True)
+        if not rows:
+            return harness.skip(f"no maps under {a.data}")
+        print_rows(rows)
+        bad = sum(r.mismatches for r in rows)
+        print(f"cost mismatches (ours vs floor vs listed optimal): {bad}")
+        return 1 if bad else 0
 
 
 if __name__ == "__main__":
