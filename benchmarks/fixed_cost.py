@@ -2,29 +2,41 @@
 
 Usage::
 
-    python benchmarks/fixed_cost.py [--calls 2000] [--parts]
+    python benchmarks/fixed_cost.py [--calls 3000] [--parts] [--smoke]
 
 The query is one move long (start and goal are neighbouring free cells of a 64^3 cubic
 world with a few obstacles), so the two expansions it makes (26 nodes generated) cost a small
 share: the figure is what every call pays whatever its length (argument checks, endpoint
-checks, the kernel call, building the result). The same search with the goal at the start
-(one expansion, no node generated) is the fixed cost with no expansion work at all. Each
-figure is the median per call of ``--calls`` calls, after warm-up (compilation is never
-counted). ``search_speed.py`` prints the same line.
+checks, the kernel call, building the result). ``plan()`` is timed with its endpoints given
+three ways, as users write them: a tuple of floats (the README's example), a list, and a
+float64 array. The same search with the goal at the start (one expansion, no node
+generated) is the fixed cost with no expansion work at all.
+
+Timing (``benchmarks/harness.py``): this thread's CPU time over batches of 100 calls, the
+median per call over the batches (a CPU clock read costs about a microsecond, so single
+short calls are not timed one by one); the kinds of call take turns batch by batch. After
+warm-up: compilation is never counted. ``search_speed.py`` prints :func:`line`.
+Goals (issue 41): ``search()`` <= 5 us, ``plan()`` <= 15 us with any of the three endpoint
+kinds.
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
-import time
+from pathlib import Path
 
 import numpy as np
 
-from planner import search as S
-from planner.lattice import Lattice
-from planner.planning import plan
-from planner.world import World
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import harness  # noqa: E402  (the sibling module)
+
+from planner import search as S  # noqa: E402
+from planner.lattice import Lattice  # noqa: E402
+from planner.planning import plan  # noqa: E402
+from planner.world import World  # noqa: E402
+
+BATCH = 100
 
 
 def _query():
@@ -39,81 +51,86 @@ def _query():
     return world, s, g
 
 
-def _medians(calls: int, named: tuple) -> dict:
-    """Median wall time per call (s) of each ``(name, call)`` of ``named``, and as
-    ``"engine"`` that of the ``seconds`` the ``"search"`` call's results report."""
-    out = {}
-    for name, call in named:
-        t = np.empty(calls)
-        k = np.empty(calls)
-        for i in range(calls):
-            t0 = time.perf_counter()
-            r = call()
-            t[i] = time.perf_counter() - t0
-            k[i] = getattr(r, "seconds", 0.0)
-        out[name] = float(np.median(t))
-        if name == "search":
-            out["engine"] = float(np.median(k))
+def _per_call(named: dict, calls: int) -> dict:
+    """Median thread CPU seconds per call of each callable of ``named``: ``calls`` calls
+    each, in batches of :data:`BATCH`, the callables taking turns batch by batch."""
+    batches = max(3, calls // BATCH)
+
+    def batch(fn):
+        def run(_):
+            t0 = harness.cpu_clock()
+            for _ in range(BATCH):
+                fn()
+            return (harness.cpu_clock() - t0) / BATCH
+        return run
+
+    sides = {k: batch(fn) for k, fn in named.items()}
+    per = {k: np.empty(batches) for k in named}
+    for i in range(batches):
+        for k, side in sides.items():
+            per[k][i] = side(i)
+    return {k: float(np.median(v)) for k, v in per.items()}
+
+
+def fixed_cost(calls: int = 3000) -> dict:
+    """Median thread CPU seconds per call of ``search()`` (``search``), of the engine time it
+    reports (``engine``, ``SearchResult.seconds``), of ``search()`` from a cell to itself
+    (``same``) and of ``plan()`` with tuple, list and array endpoints (``plan tuple``,
+    ``plan list``, ``plan array``)."""
+    world, s, g = _query()
+    ps, pg = world.lattice.to_world(np.array([s, g]))
+    ts, tg = tuple(float(v) for v in ps), tuple(float(v) for v in pg)
+    ls, lg = list(ts), list(tg)
+    ps, pg = np.ascontiguousarray(ps, dtype=np.float64), np.ascontiguousarray(pg, np.float64)
+    for _ in range(50):
+        S.search(world, s, g)
+        plan(world, ts, tg)
+        plan(world, ls, lg)
+        plan(world, ps, pg)
+    out = _per_call({"search": lambda: S.search(world, s, g),
+                     "same": lambda: S.search(world, s, s),
+                     "plan tuple": lambda: plan(world, ts, tg),
+                     "plan list": lambda: plan(world, ls, lg),
+                     "plan array": lambda: plan(world, ps, pg)}, calls)
+    out["engine"] = float(np.median([S.search(world, s, g).seconds for _ in range(BATCH)]))
     return out
 
 
-def fixed_cost(calls: int = 2000) -> dict:
-    """Median wall time per call (s) of ``search()`` and ``plan()`` on a one-move query, of
-    the kernel time ``search()`` reports (``SearchResult.seconds``, ``engine``) and of
-    ``search()`` from a cell to itself (``same``)."""
-    world, s, g = _query()
-    ps, pg = world.lattice.to_world(np.array([s, g]))
-    for _ in range(50):
-        S.search(world, s, g)
-        plan(world, ps, pg)
-    return _medians(calls, (("search", lambda: S.search(world, s, g)),
-                            ("plan", lambda: plan(world, ps, pg)),
-                            ("same", lambda: S.search(world, s, s))))
-
-
-def line(calls: int = 2000) -> str:
+def line(calls: int = 3000) -> str:
     """One printed line of :func:`fixed_cost` (microseconds)."""
     r = fixed_cost(calls)
-    return (f"fixed cost per call on a prebuilt world (one-move query, median of {calls}): "
-            f"search() {r['search'] * 1e6:.1f} us (its kernel call {r['engine'] * 1e6:.1f} us; "
-            f"goal <= 10 us outside the expansions; {r['same'] * 1e6:.1f} us from a cell to "
-            f"itself), plan() {r['plan'] * 1e6:.1f} us (goal <= 50 us)")
-
-
-def parts(calls: int = 2000) -> dict:
-    """Where ``search()``'s time goes on the one-move query: the median (s) of ``search()``,
-    of its engine call (``SearchResult.seconds``: the driver's repeat of the thread's last
-    search and its compiled call), of the compiled call alone (read from the thread's
-    search context, as the driver makes it: engine internals), and of building a
-    ``SearchResult`` like the one it returns."""
-    from planner.search.astar._context import _LOCAL
-    from planner.search.result import SearchResult
-
-    world, s, g = _query()
-    for _ in range(50):
-        r = S.search(world, s, g)
-    f = _LOCAL.free[-1].fast  # the short path's tuple (planner.search.astar.driver._run)
-    compiled, b, params, pausing = f[13], f[7], f[9], f[10]
-    cells = r.cells
-    return _medians(calls, (
-        ("search", lambda: S.search(world, s, g)),
-        ("compiled", lambda: compiled(b, params, pausing, *s.tolist(), *g.tolist())),
-        ("result", lambda: SearchResult(True, cells, 1.0, 54, 2, 27, 1e-6, 4096, "", {},
-                                        "found", True, 0.0))))
+    return (f"fixed cost per call on a prebuilt world (one-move query; thread CPU time, median "
+            f"per call over batches of {BATCH}, {calls} calls): search() "
+            f"{r['search'] * 1e6:.1f} us (goal <= 5; its engine call "
+            f"{r['engine'] * 1e6:.1f} us; {r['same'] * 1e6:.1f} us from a cell to itself), "
+            f"plan() with tuple / list / array endpoints {r['plan tuple'] * 1e6:.1f} / "
+            f"{r['plan list'] * 1e6:.1f} / {r['plan array'] * 1e6:.1f} us (goal <= 15 each)")
 
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--calls", type=int, default=2000, help="calls per figure")
+    harness.add_arguments(ap, repeat=None)
+    ap.add_argument("--calls", type=int, default=3000, help="calls per figure")
     ap.add_argument("--parts", action="store_true",
-                    help="also where search()'s time goes (engine internals)")
+                    help="also search()'s engine call against the rest of the call")
     a = ap.parse_args(argv)
-    print(line(a.calls))
-    if a.parts:
-        r = parts(a.calls)
-        print(f"search() {r['search'] * 1e6:.1f} us: its engine call {r['engine'] * 1e6:.1f} us "
-              f"(the compiled call alone {r['compiled'] * 1e6:.1f} us), the rest its own Python "
-              f"(building its SearchResult alone {r['result'] * 1e6:.1f} us)")
+    calls = 300 if a.smoke else a.calls
+    with harness.session("fixed cost per call on a prebuilt world", smoke=a.smoke):
+        r = fixed_cost(calls)
+        print(f"search()            {r['search'] * 1e6:7.2f} us   (goal <= 5)")
+        print(f"search() to itself  {r['same'] * 1e6:7.2f} us")
+        for k in ("tuple", "list", "array"):
+            print(f"plan() {k:5s} ends   {r['plan ' + k] * 1e6:7.2f} us   (goal <= 15)")
+        if a.parts:
+            print(f"search()'s engine call (SearchResult.seconds, its own clock) "
+                  f"{r['engine'] * 1e6:.2f} us; the rest of the call "
+                  f"{(r['search'] - r['engine']) * 1e6:.2f} us")
+        for k in ("tuple", "list"):
+            print(harness.single_ratio(f"plan() {k} / array endpoints", r["plan " + k],
+                                       r["plan array"], goal="1: no endpoint kind pays more",
+                                       note="medians per call"))
+        print(harness.single_ratio("plan() array / search()", r["plan array"], r["search"],
+                                   note="medians per call: what plan() adds to a search"))
     return 0
 
 
