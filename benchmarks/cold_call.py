@@ -4,13 +4,18 @@ scan and a map update have swept the caches (``benchmarks/explore_speed.py``).
 
 Usage::
 
-    python benchmarks/cold_call.py [--calls 300] [--sweep-mb 64]
+    python benchmarks/cold_call.py [--calls 300] [--sweep-mb 64] [--smoke]
 
 Each row: the median over ``--calls`` rounds of (sweep ``--sweep-mb`` MB of memory, time
 the call, time it again). The calls: a ``perf_counter()`` pair; a compiled (numba) function
-of one integer, and of three arrays; a D* Lite replan that keeps its path (a cell blocked
-far from it; ``SearchResult.seconds``, the engine time ``explore_speed.py`` compares) and
-an A* ``search()`` of a short query on the same world (its ``seconds``, and the whole call).
+of one integer, and of three arrays, called through numba's dispatcher (the engine calls
+its kernels' raw entry points, which skip the dispatcher's argument typing: a little
+less); a D* Lite replan that keeps its path (a cell blocked far from it;
+``SearchResult.seconds``, the engine time ``explore_speed.py`` compares) and an A*
+``search()`` of a short query on the same world (its ``seconds``, and the whole call).
+The clock is ``time.perf_counter`` (wall), not the CPU clock the other scripts use
+(``benchmarks/harness.py``): the calls last 0.1-50 us and a thread CPU clock read costs
+about a microsecond itself. Each row's ``ratio`` line: cold / hot, paired per round.
 No assertions: this prints figures.
 """
 
@@ -19,15 +24,18 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 from numba import njit
 
-from planner import search as S
-from planner._entry import raw_entry_point
-from planner.lattice import Lattice
-from planner.search import DStarLite
-from planner.world import World
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import harness  # noqa: E402  (the sibling module)
+
+from planner import search as S  # noqa: E402
+from planner.lattice import Lattice  # noqa: E402
+from planner.search import DStarLite  # noqa: E402
+from planner.world import World  # noqa: E402
 
 
 @njit(cache=False)
@@ -40,8 +48,8 @@ def _three_arrays(a, b, c):
     return a.shape[0] + b.shape[0] + c.shape[0] > 0
 
 
-def _rows(calls: int, sweep_mb: int) -> list[tuple[str, float, float]]:
-    """(name, median cold s, median hot s) of each call (module docstring)."""
+def _rows(calls: int, sweep_mb: int) -> list[tuple[str, np.ndarray, np.ndarray]]:
+    """(name, cold s per round, hot s per round) of each call (module docstring)."""
     big = np.zeros(sweep_mb << 20, np.uint8)
 
     def sweep():
@@ -49,8 +57,9 @@ def _rows(calls: int, sweep_mb: int) -> list[tuple[str, float, float]]:
 
     a = np.zeros((300, 3), np.int64)
     f = np.ones(300, np.bool_)
-    one = raw_entry_point(_one_int, (1,))  # compiled here, called without argument typing
-    three = raw_entry_point(_three_arrays, (a, f, a))
+    one, three = _one_int, _three_arrays
+    one(1)  # compiled here, outside the rounds
+    three(a, f, a)
     clock = time.perf_counter
 
     world = World(Lattice.named("bcc", 1.0), np.zeros((0, 3), np.int64),
@@ -96,7 +105,7 @@ def _rows(calls: int, sweep_mb: int) -> list[tuple[str, float, float]]:
             hot[i] = fn(1)
             if undo_after is not None:
                 undo_after()
-        out.append((name, float(np.median(cold)), float(np.median(hot))))
+        out.append((name, cold, hot))
     return out
 
 
@@ -111,11 +120,18 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--calls", type=int, default=300, help="rounds per row")
     ap.add_argument("--sweep-mb", type=int, default=64, help="memory swept before a call")
+    harness.add_arguments(ap, repeat=None)
     a = ap.parse_args(argv)
-    print(f"median of {a.calls} rounds; cold: right after sweeping {a.sweep_mb} MB")
-    print(f"{'call':<46} {'cold us':>8} {'hot us':>8}")
-    for name, cold, hot in _rows(a.calls, a.sweep_mb):
-        print(f"{name:<46} {cold * 1e6:8.2f} {hot * 1e6:8.2f}")
+    calls, sweep = (20, 8) if a.smoke else (a.calls, a.sweep_mb)
+    with harness.session("a call right after the caches were swept against the same call "
+                         "hot", smoke=a.smoke):
+        print(f"median of {calls} rounds; cold: right after sweeping {sweep} MB")
+        print(f"{'call':<46} {'cold us':>8} {'hot us':>8}")
+        rows = _rows(calls, sweep)
+        for name, cold, hot in rows:
+            print(f"{name:<46} {np.median(cold) * 1e6:8.2f} {np.median(hot) * 1e6:8.2f}")
+        for name, cold, hot in rows:
+            print(harness.ratio_line(f"cold/hot {name}", cold, hot, note="paired per round"))
     return 0
 
 

@@ -6,6 +6,7 @@ Usage::
     python benchmarks/cold_start.py --install editable  # brand-new venv, pip install -e SRC
     python benchmarks/cold_start.py            # no install-time cache: every kernel compiles
     python benchmarks/cold_start.py --runs 3   # warm runs to take the median of
+    python benchmarks/cold_start.py --smoke    # planner --help, the package's own cache
 
 Each run is a new Python process (``python -m planner compare office``).
 
@@ -22,8 +23,9 @@ whose shipped cache does not match (another CPU or numba version, or ``PLANNER_N
 the warm runs reuse what it wrote.
 
 Also prints the time of ``import planner`` alone, and the "compile s" / "search s" columns
-the command reports (JIT time is reported apart from search time). No assertions: this
-prints figures.
+the command reports (JIT time is reported apart from search time). Times are wall seconds
+(what a user waits for at a first command) with the processes' CPU seconds beside them
+(``os.times`` of the waited-for children). No assertions: this prints figures.
 """
 
 from __future__ import annotations
@@ -38,14 +40,20 @@ import tempfile
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import harness  # noqa: E402  (the sibling module)
+
+ROOT = harness.ROOT
 COMMAND = ["-m", "planner", "compare", "office"]
+SMOKE_COMMAND = ["-m", "planner", "--help"]
+CPU: list[float] = []  # CPU seconds of each timed() process, in order
 
 
 def timed(args: list[str], cache: str | None, site: Path = ROOT,
           home: str | None = None) -> tuple[float, str]:
     """Wall seconds and stdout of ``python args`` importing planner from ``site``, with
-    ``NUMBA_CACHE_DIR=cache`` (None: unset, numba's in-tree cache) and ``HOME=home``."""
+    ``NUMBA_CACHE_DIR=cache`` (None: unset, numba's in-tree cache) and ``HOME=home``; its
+    CPU seconds are appended to :data:`CPU`."""
     env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
     env["PYTHONPATH"] = str(site)
     if cache is not None:
@@ -53,9 +61,10 @@ def timed(args: list[str], cache: str | None, site: Path = ROOT,
     if home is not None:
         env.update(HOME=home, XDG_CACHE_HOME=os.path.join(home, ".cache"))
     t = time.perf_counter()
-    out = subprocess.run([sys.executable, *args], capture_output=True, text=True, env=env,
-                         cwd=home or ROOT)
+    out, cpu = harness.process_cpu(lambda: subprocess.run(
+        [sys.executable, *args], capture_output=True, text=True, env=env, cwd=home or ROOT))
     secs = time.perf_counter() - t
+    CPU.append(cpu)
     if out.returncode != 0:
         raise SystemExit(f"{' '.join(args)} failed ({out.returncode}): {out.stderr.strip()}")
     return secs, out.stdout
@@ -110,6 +119,8 @@ def fresh_install(runs: int, mode: str) -> int:
     print(f"first run after install: {cold:.1f} s")
     print(f"warm run (median of {max(1, runs)}): {warm:.1f} s")
     print(stats.stderr.strip().splitlines()[-1])
+    print(harness.single_ratio("first run after install / warm run", cold, warm,
+                               note="wall"))
     print("\nthe first run's table:")
     print(first.stdout.rstrip())
     return 0
@@ -121,22 +132,37 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--install", nargs="?", const="wheel", choices=("wheel", "editable"),
                     help="install into a brand-new venv first (pip install SRC, or -e SRC with "
                          "'editable'); time the command from the install")
+    harness.add_arguments(ap, repeat=None)
     a = ap.parse_args(argv)
-    if a.install:
-        return fresh_install(a.runs, a.install)
-    with tempfile.TemporaryDirectory(prefix="planner_numba_") as cache:
-        imp = import_time(cache)
-        cold, table = timed(COMMAND, cache)
-        warm = statistics.median(timed(COMMAND, cache)[0] for _ in range(max(1, a.runs)))
-        imp_warm = import_time(cache)
-    print(f"command: python {' '.join(COMMAND)}  (fresh NUMBA_CACHE_DIR: no install-time "
-          "cache; new process each)")
-    print(f"import planner: {imp:.2f} s (empty cache), {imp_warm:.2f} s (warm cache)")
-    print(f"first run (empty cache, every kernel compiles): {cold:.1f} s")
-    print(f"warm run (kernels from the cache, median of {max(1, a.runs)}): {warm:.1f} s")
-    print("\nthe first run's table (compile s = the search kernels' compilation, kept out of "
-          "search s):")
-    print(table.rstrip())
+    with harness.session("cold start: the README's first command", smoke=a.smoke):
+        if a.install:
+            return fresh_install(a.runs, a.install)
+        if a.smoke:  # the package's own kernel cache, a command that loads no kernel
+            return _runs(SMOKE_COMMAND, None, 1, "the package's kernel cache")
+        with tempfile.TemporaryDirectory(prefix="planner_numba_") as cache:
+            return _runs(COMMAND, cache, a.runs, "fresh NUMBA_CACHE_DIR: no install-time "
+                         "cache")
+
+
+def _runs(command: list[str], cache: str | None, runs: int, what: str) -> int:
+    """Import time, a first run and ``runs`` warm runs of ``command`` (printed)."""
+    imp = import_time(cache, runs=1 if cache is None else 5)
+    CPU.clear()
+    cold, table = timed(command, cache)
+    warm_runs = [timed(command, cache)[0] for _ in range(max(1, runs))]
+    cpu_cold, cpu_warm = CPU[0], statistics.median(CPU[1:])
+    warm = statistics.median(warm_runs)
+    imp_warm = import_time(cache, runs=1 if cache is None else 5)
+    print(f"command: python {' '.join(command)}  ({what}; new process each)")
+    print(f"import planner: {imp:.2f} s (first), {imp_warm:.2f} s (warm cache)")
+    print(f"first run: {cold:.1f} s wall, {cpu_cold:.1f} s CPU")
+    print(f"warm run (median of {max(1, runs)}): {warm:.1f} s wall, {cpu_warm:.1f} s CPU")
+    print(harness.single_ratio("first run / warm run", cold, warm, note="wall"))
+    print(harness.single_ratio("first run / warm run, CPU", cpu_cold, cpu_warm))
+    if command == COMMAND:
+        print("\nthe first run's table (compile s = the search kernels' compilation, kept out "
+              "of search s):")
+        print(table.rstrip())
     return 0
 
 
