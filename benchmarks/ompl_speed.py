@@ -13,22 +13,32 @@ Usage::
 
     python benchmarks/ompl_speed.py            # 5 seeds, 1 s and 5 s, first query (~3 min)
     python benchmarks/ompl_speed.py --quick    # 2 seeds, 1 s (~20 s)
+    python benchmarks/ompl_speed.py --smoke    # (a) on 5,000 states; (b) one 0.2 s run
+
+Rates in (a) are by this thread's CPU time (``benchmarks/harness.py``); (b) reports OMPL's
+own times (its time limit is wall time). (b) needs OMPL's Python bindings: without them it
+is skipped with one line.
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import json
 import statistics
-import time
+import sys
 from pathlib import Path
 
 import numpy as np
 
-from planner import ompl, search
-from planner import planning as api
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import harness  # noqa: E402  (the sibling module)
 
-ROOT = Path(__file__).resolve().parent.parent
+from planner import ompl, search  # noqa: E402
+from planner import planning as api  # noqa: E402
+
+ROOT = harness.ROOT
+clock = harness.cpu_clock
 PLANNERS = ("rrtconnect", "rrtstar", "informedrrtstar", "bitstar", "prmstar")
 
 
@@ -41,22 +51,22 @@ def checks_per_second(world, n: int, rng: np.random.Generator) -> dict:
     chk.is_valid(pts[0])  # load the kernels
     chk.check_motion(pts[0], pts[1])
     chk.checks = 0
-    t0 = time.perf_counter()
+    t0 = clock()
     for p in pts.tolist():
         chk.is_valid(p)
-    compiled = n / (time.perf_counter() - t0)
+    compiled = n / (clock() - t0)
     m = max(n // 10, 100)
-    t0 = time.perf_counter()
+    t0 = clock()
     for p in pts[:m]:
         world.points_free(p[None])
-    python = m / (time.perf_counter() - t0)
+    python = m / (clock() - t0)
     # Motions of ~1 m (RRT-like steps): cell lookups per second and motions per second.
     b = np.clip(pts[:m] + rng.normal(0, 0.6, size=(m, 3)), lo, hi)
     chk.checks = 0
-    t0 = time.perf_counter()
+    t0 = clock()
     for a, c in zip(pts[:m].tolist(), b.tolist(), strict=True):
         chk.check_motion(a, c)
-    dt = time.perf_counter() - t0
+    dt = clock() - t0
     return {"compiled_states_per_s": compiled, "python_states_per_s": python,
             "ratio": compiled / python, "motion_cells_per_s": chk.checks / dt,
             "motions_per_s": m / dt}
@@ -89,14 +99,22 @@ def main(argv=None) -> int:
     ap.add_argument("--checks", type=int, default=200_000, help="states for part (a)")
     ap.add_argument("--quick", action="store_true", help="2 seeds, 1 s, fewer checks")
     ap.add_argument("--json", help="write the rows here")
+    harness.add_arguments(ap, repeat=None)
     args = ap.parse_args(argv)
     if args.quick:
         args.seeds, args.limits, args.checks = 2, [1.0], 50_000
+    if args.smoke:
+        args.seeds, args.limits, args.checks = 1, [0.2], 5_000
+        args.planners = args.planners[:1]
+    with harness.session("OMPL baseline: validity checks and planners", smoke=args.smoke):
+        return _run(args)
 
-    t0 = time.perf_counter()
+
+def _run(args: argparse.Namespace) -> int:
+    t0 = clock()
     world = api.build_world(args.map, args.lattice, radius=args.radius)
     print(f"world: {world!r}, cell size {world.cell_size:.3f} m, "
-          f"built in {time.perf_counter() - t0:.1f} s")
+          f"built in {clock() - t0:.1f} s")
     side = Path(args.map).with_suffix(".json")
     queries = json.loads(side.read_text()).get("queries", []) if side.is_file() else []
     if not queries:
@@ -111,9 +129,15 @@ def main(argv=None) -> int:
     print(f"  compiled callable  {cps['compiled_states_per_s']:12,.0f} states/s")
     print(f"  world.points_free  {cps['python_states_per_s']:12,.0f} states/s (one per call)")
     print(f"  ratio              {cps['ratio']:12.1f} x")
+    print(harness.single_ratio("compiled callable / world.points_free states per s",
+                               cps["compiled_states_per_s"], cps["python_states_per_s"],
+                               note="thread CPU"))
     print(f"  exact motion check {cps['motions_per_s']:12,.0f} motions/s "
           f"({cps['motion_cells_per_s']:,.0f} cells/s)")
 
+    if importlib.util.find_spec("ompl") is None:
+        print("\n(b) skipped: OMPL's Python bindings (module ompl) are not installed")
+        return 0
     print("\n(b) planners (medians over seeds; ratio = OMPL length / Theta* length)")
     hdr = (f"{'q':>2} {'planner':<16}{'limit':>6}{'succ':>6}{'t_first':>9}{'raw':>8}"
            f"{'simp':>8}{'theta':>8}{'raw/th':>8}{'simp/th':>8}{'checks/s':>11}")
@@ -142,7 +166,11 @@ def main(argv=None) -> int:
                       f"{raw / th:>8.3f}{simp / th:>8.3f}{row['checks_per_s']:>11,.0f}")
                 for why in row["reasons"]:
                     print(f"{'':>3}  note: {why}")
-    print(f"\ntotal {time.perf_counter() - t0:.0f} s")
+    for row in rows:
+        print(harness.single_ratio(f"OMPL {row['planner']} {row['limit']:g} s simplified "
+                                   f"length / Theta*, query {row['query']}",
+                                   row["simplified"], row["theta"], note="median of seeds"))
+    print(f"\ntotal {clock() - t0:.0f} s CPU")
     if args.json:
         Path(args.json).write_text(json.dumps({"checks": cps, "rows": rows}, indent=1))
     return 0

@@ -1,50 +1,54 @@
 """Quantization throughput per lattice, against a straightforward numpy eq. (2).
 
     python benchmarks/quantize_speed.py [--n 10000000] [--stream] [--stream-n 100000000]
+    python benchmarks/quantize_speed.py --smoke     # 10^5 points, seconds
 
 For every named lattice (cell volume 1 m^3, points uniform in a 16-cell cube):
 
 * ``Lattice.quantize`` rate (points/s, best of 3) and the rate of the paper's eq. (2)
   written plainly in numpy (``round(G^-1 x)``, then the nearest of the 27 candidates
   ``w + Delta``, ``Delta = {-1, 0, 1}^3``, 16,384 points per chunk), both in this process,
-  and whether the two agree;
+  and whether the two agree (this thread's CPU time, ``benchmarks/harness.py``);
 * how often eq. (2) with the paper's own Delta sets (eqs. 3-7, plus the zero offset)
   returns a lattice point that is not the nearest, and the largest extra distance.
 
 Goals: >= 10 M points/s per lattice and >= 5x the numpy eq. (2).
 ``--stream`` quantizes ``--stream-n`` points generated and consumed in chunks and reports
-the peak resident set size (``resource.getrusage``), showing memory stays bounded.
+the peak resident set size (``VmHWM``, :func:`harness.peak_rss`), showing memory stays
+bounded.
 """
 
 from __future__ import annotations
 
 import argparse
-import resource
 import sys
-import time
 from collections.abc import Sequence
+from pathlib import Path
 
 import numpy as np
 
-from planner.analysis.measure import NAMED, format_table, paper_delta_errors, quantize_eq2_numpy
-from planner.lattice import Lattice
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import harness  # noqa: E402  (the sibling module)
+
+from planner.analysis.measure import (  # noqa: E402
+    NAMED,
+    format_table,
+    paper_delta_errors,
+    quantize_eq2_numpy,
+)
+from planner.lattice import Lattice  # noqa: E402
 
 CUBE27 = np.array(np.meshgrid(*[(-1, 0, 1)] * 3, indexing="ij")).reshape(3, -1).T
 
 
 def peak_rss_mb() -> float:
-    """Peak resident set size of this process so far, MiB (Linux reports KiB)."""
-    kb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    return kb / 1024 if sys.platform != "darwin" else kb / 2**20
+    """Peak resident set size of this process so far, MiB (NaN without /proc)."""
+    b = harness.peak_rss()
+    return b / 2**20 if b is not None else float("nan")
 
 
 def _best_rate(fn, n: int, repeat: int) -> float:
-    best = float("inf")
-    for _ in range(repeat):
-        t = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t)
-    return n / best
+    return n / harness.best_of(fn, repeat)
 
 
 def speed_rows(n: int, n_numpy: int, n_check: int, seed: int = 0) -> list[dict]:
@@ -79,7 +83,7 @@ def stream(n_total: int, chunk: int, seed: int = 0) -> list[dict]:
         rng = np.random.default_rng(seed)
         buf = np.empty((chunk, 3))
         checksum = 0
-        t = time.perf_counter()
+        t = harness.cpu_clock()
         done = 0
         while done < n_total:
             m = min(chunk, n_total - done)
@@ -90,7 +94,7 @@ def stream(n_total: int, chunk: int, seed: int = 0) -> list[dict]:
             w = lat.quantize(x)
             checksum ^= int(np.bitwise_xor.reduce(w[:, 0]))  # consume the result
             done += m
-        dt = time.perf_counter() - t
+        dt = harness.cpu_clock() - t
         rows.append({"lattice": name, "points": done, "seconds": dt,
                      "pts_s_incl_rng": done / dt, "peak_rss_mib": peak_rss_mb()})
     return rows
@@ -107,7 +111,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--stream-n", type=int, default=10**8, help="stream points (default 1e8)")
     ap.add_argument("--chunk", type=int, default=10**6, help="stream chunk size (default 1e6)")
     ap.add_argument("--seed", type=int, default=0)
+    harness.add_arguments(ap, repeat=None)
     args = ap.parse_args(argv)
+    if args.smoke:
+        args.n, args.n_numpy, args.n_check = 10**5, 2 * 10**4, 10**4
+        args.stream_n, args.chunk = 10**6, 10**5
+    with harness.session("quantization throughput per lattice", smoke=args.smoke):
+        return _run(ap, args)
+
+
+def _run(ap: argparse.ArgumentParser, args: argparse.Namespace) -> int:
     if min(args.n, args.n_numpy, args.n_check, args.stream_n, args.chunk) < 1:
         ap.error("sizes must be positive")
     n_numpy = min(args.n_numpy, args.n)
@@ -125,7 +138,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     print(format_table(rows))
     print("agree_27: fraction identical to the numpy eq. (2) with all 27 offsets; "
           "paper_max_extra: worst extra distance / cell size with the paper's Delta")
-    print(f"peak RSS {peak_rss_mb():.0f} MiB")
+    print(f"peak RSS {peak_rss_mb():.0f} MiB (VmHWM)")
+    for r in rows:
+        print(harness.single_ratio(f"quantize / numpy eq. (2) points per s, {r['lattice']}",
+                                   r["quantize_pts_s"], r["numpy_eq2_pts_s"], goal=">= 5",
+                                   note="best of 3 and of 1, thread CPU"))
     return 0
 
 
