@@ -6,6 +6,7 @@ Usage::
     python benchmarks/scaling.py                         # 64, 128, 256, 512
     python benchmarks/scaling.py --sizes 64,128 --fcc    # also FCC at the same cell volume
     python benchmarks/scaling.py --sizes 256 --density 0.2 --seed 3
+    python benchmarks/scaling.py --smoke                 # 32^3, seconds
 
 World: ``n^3`` cubic cells of 1 m, a seeded field of random axis-aligned boxes (edges
 ``n/32 .. n/8`` cells) blocking about ``--density`` of the cells, with a clear cube at two
@@ -15,17 +16,19 @@ checked against the anchor's.
 
 Measured, each engine in a process of its own (peak memory is per process):
 
-* ours: ``SearchResult.seconds`` (the kernel, after the warm-up: no JIT) of the world's
-  first query and of the same query again ("repeat": the world's cell -> node map is then
-  reused; the anchor allocates its arrays before its clock starts); the world's bytes
+* ours: this thread's CPU seconds of ``search()`` (after the warm-up: no JIT) on the
+  world's first query and on the same query again ("repeat": the world's cell -> node map
+  is then reused; the floor allocates its grid and slot map before its clock starts); the
+  world's bytes
   (occupancy bits or hash set, and its unknown-cell bits or blocked-cell list); the
   search's own arrays (``SearchResult.peak_bytes``); and the peak resident memory during
   the two searches above the process's memory before the world was built (the kernel's
   high-water mark, reset after the build with ``/proc/self/clear_refs``, freed build
   temporaries handed back first): world + search, without the interpreter, numpy and numba;
-* the anchor (``benchmarks/cpp_anchor.py``, g++ -O3, compiled at run time; skipped with a
-  note when there is no compiler): its own search seconds and its process's peak resident
-  memory (its VmHWM: input grid, padded grid, g, stamps and heap).
+* the floor (``benchmarks/cpp_anchor.py``, g++ -O3, compiled at run time, called through
+  ctypes; skipped with a note when there is no compiler): its thread CPU seconds of the
+  search and, measured as ours, the peak resident memory above the process before the map
+  was made (bit grid, slot map, node records and heaps).
 
 Ratios are ours / anchor (time and memory; lower is better for us). The machine may be
 shared: trust the ratios of one run, not absolute times. No assertions: this prints figures.
@@ -36,13 +39,14 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import resource
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import harness  # noqa: E402  (the sibling module)
 
 HERE = Path(__file__).resolve().parent
 SIZES = (64, 128, 256, 512)
@@ -79,16 +83,6 @@ def _rss_now() -> int:
         return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
 
 
-def _reset_peak() -> bool:
-    """Reset the kernel's peak-RSS mark of this process to its current RSS (Linux >= 4.0)."""
-    try:
-        with open("/proc/self/clear_refs", "w") as f:
-            f.write("5")
-        return True
-    except OSError:
-        return False
-
-
 def _trim() -> None:
     """glibc's malloc_trim(0), where there is one (else nothing)."""
     import ctypes
@@ -100,14 +94,6 @@ def _trim() -> None:
         pass
 
 
-def _peak_rss() -> int:
-    with open("/proc/self/status") as f:
-        for line in f:
-            if line.startswith("VmHWM:"):
-                return int(line.split()[1]) * 1024
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
-
-
 def ours(n: int, lattice: str, density: float, seed: int, memory_budget: int | None) -> dict:
     """One query with our A* (run in a child process: see the module docstring)."""
     from planner.lattice import Lattice
@@ -116,7 +102,7 @@ def ours(n: int, lattice: str, density: float, seed: int, memory_budget: int | N
 
     warm_up()
     base = _rss_now()
-    t0 = time.perf_counter()
+    t0 = harness.cpu_clock()
     blocked = obstacle_field(n, density, seed)
     lat = Lattice.named(lattice, cell_volume=1.0)
     if lattice == "cubic":
@@ -127,16 +113,16 @@ def ours(n: int, lattice: str, density: float, seed: int, memory_budget: int | N
     world = World(lat, cells, np.array([[0.0] * 3, [n - 1.0] * 3]))
     del cells
     occ = world.occupancy  # built here, not inside the search
-    build = time.perf_counter() - t0
+    build = harness.cpu_clock() - t0
     _trim()  # hand the build's freed temporaries back to the OS: RSS = live memory
     s, g = query_points(n)
     sc, gc = lat.quantize(np.stack([s, g]))
-    reset = _reset_peak()
-    r = search(world, sc, gc, memory_budget=memory_budget)
-    again = search(world, sc, gc, memory_budget=memory_budget)  # the world's arrays reused
-    peak = _peak_rss()
+    reset = harness.reset_peak_rss()
+    r, sec = harness.cpu_result(lambda: search(world, sc, gc, memory_budget=memory_budget))
+    again = harness.cpu(lambda: search(world, sc, gc, memory_budget=memory_budget))  # reused
+    peak = harness.peak_rss()
     return dict(engine=f"ours {lattice}", n=n, status=r.status, cost=r.cost,
-                expansions=r.expansions, seconds=r.seconds, repeat_seconds=again.seconds,
+                expansions=r.expansions, seconds=sec, repeat_seconds=again,
                 build_seconds=build,
                 world_bytes=int(occ.grid.nbytes + occ.table.nbytes + (
                     world.unknown_bits.bits.nbytes if world.unknown_bits is not None
@@ -169,21 +155,25 @@ def _cells_in_blocked_voxels(lat, blocked: np.ndarray) -> np.ndarray:
     return np.concatenate(out) if out else np.zeros((0, 3), np.int64)
 
 
-def anchor(n: int, density: float, seed: int) -> dict | None:
-    """The C++ anchor on the same field and query (None without a compiler)."""
-    sys.path.insert(0, str(HERE))
+def anchor(n: int, density: float, seed: int) -> dict:
+    """The C++ floor on the same field and query (run in a child process, as ours)."""
     import cpp_anchor
 
-    if not cpp_anchor.available():
-        return None
+    cpp_anchor.library()  # compiled before the memory baseline
+    base = _rss_now()
     free = ~obstacle_field(n, density, seed)
+    fl = cpp_anchor.Floor(free)
+    del free
+    _trim()
     s, g = query_points(n)
-    q = np.concatenate([s, g]).astype(np.int64)[None]
-    res, rss = cpp_anchor.run_measured(free, q)
-    cost, exp, sec = res[0]
+    reset = harness.reset_peak_rss()
+    (cost, exp), sec = harness.cpu_result(lambda: fl.search(s.astype(np.int64),
+                                                            g.astype(np.int64)))
+    peak = harness.peak_rss()
     return dict(engine="C++ anchor", n=n, status="found" if cost >= 0 else "unreachable",
                 cost=float(cost) if cost >= 0 else float("inf"), expansions=int(exp),
-                seconds=float(sec), rss_bytes=int(rss))
+                seconds=float(sec), rss_bytes=peak - base if reset else None,
+                floor_bytes=fl.nbytes)
 
 
 def _child(n: int, lattice: str, a) -> dict:
@@ -237,15 +227,29 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--memory-budget", type=int, default=None,
                     help="bytes our search may use (default: planner's budget)")
     ap.add_argument("--child", help=argparse.SUPPRESS)
+    harness.add_arguments(ap, repeat=None)
     a = ap.parse_args(argv)
     if a.child:  # one engine run, in its own process: print its row as JSON
         n, lattice = a.child.split(":")
-        print(json.dumps(ours(int(n), lattice, a.density, a.seed, a.memory_budget)))
+        if lattice == "floor":
+            print(json.dumps(anchor(int(n), a.density, a.seed)))
+        else:
+            print(json.dumps(ours(int(n), lattice, a.density, a.seed, a.memory_budget)))
         return 0
+    if a.smoke:
+        a.sizes = "32"
+    with harness.session("one corner-to-corner A* query as the world grows, ours vs the "
+                         "C++ floor", smoke=a.smoke):
+        return _run(a)
+
+
+def _run(a) -> int:
+    import cpp_anchor
+
     sizes = [int(s) for s in a.sizes.split(",") if s.strip()]
     rows, notes = [], []
     for n in sizes:
-        an = anchor(n, a.density, a.seed)
+        an = _child(n, "floor", a) if cpp_anchor.available() else None
         if an is None:
             notes.append("C++ anchor skipped: no g++ / c++ on PATH")
         else:
@@ -261,13 +265,23 @@ def main(argv: list[str] | None = None) -> int:
           f"box field {a.density:.0%} blocked, seed {a.seed}; one query per world; each engine "
           "in its own process.\n")
     print(table(rows))
-    print("\nsearch s: kernel time (ours: after warm-up, no JIT, the world's first query; "
-          "repeat s: the same query again; anchor: its own clock). world MB: our occupancy "
-          "and blocked-cell list; search MB: our search arrays; peak RSS MB: ours = peak "
-          "during the searches above the process before the world was built (world + "
-          "search), anchor = its process's peak. Ratios: ours / anchor, first query.")
+    print("\nsearch s: thread CPU time of the search call (ours: after warm-up, no JIT, the "
+          "world's first query; repeat s: the same query again; anchor: one ctypes call). "
+          "world MB: our occupancy and blocked-cell list; search MB: our search arrays; peak "
+          "RSS MB: peak during the searches above the process before the map was made "
+          "(VmHWM; world + search), each in a process of its own. Ratios: ours / anchor, "
+          "first query.")
     for note in dict.fromkeys(notes):
         print(f"note: {note}")
+    for n in sizes:
+        an = next((r for r in rows if r["n"] == n and r["engine"] == "C++ anchor"), None)
+        cu = next((r for r in rows if r["n"] == n and r["engine"] == "ours cubic"), None)
+        if an is not None and cu is not None:
+            print(harness.single_ratio(f"search time ours cubic / floor, {n}^3",
+                                       cu["seconds"], an["seconds"], note="one query, CPU"))
+            if cu.get("rss_bytes") and an.get("rss_bytes"):
+                print(harness.single_ratio(f"peak memory ours cubic / floor, {n}^3",
+                                           cu["rss_bytes"], an["rss_bytes"], note="VmHWM"))
     return 0
 
 
