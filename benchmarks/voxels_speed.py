@@ -29,29 +29,44 @@ inflation, unknown-space classification and inflation), wall and CPU seconds, be
 build per lattice is split into its compiled stages (CPU seconds of each kernel, the rest
 being numpy and Python between them); ``--edge`` sets the cell edge (default 0.08 m).
 
+Times are this thread's CPU seconds (``benchmarks/harness.py``; the box table also gives
+wall seconds); the stages are the CPU seconds of the package's public build steps in one
+more build (:mod:`cProfile` with a CPU clock, inclusive times): the exact inflation of
+obstacle boxes (:func:`planner.voxels.inflate.box_inflation_grid`) and points
+(:func:`~planner.voxels.inflate.point_inflation_grid`), the unknown space's classification
+and inflation (:func:`planner.voxels.unknown.unknown_box_grid`), the world's bit sets
+(:meth:`planner.world.cells` ``block_marked`` and ``in_bounds_bits``), the rest being
+numpy and Python between them (reading the map included).
+
 Run: ``python benchmarks/voxels_speed.py [--lattices fcc bcc] [--baseline-seconds 60]``
 (``--only-boxes`` / ``--only-world`` for one table alone;
-``--only-world --stages --edge 0.02 --lattices fcc cubic`` for the stages at 2 cm).
+``--only-world --stages --edge 0.02 --lattices fcc cubic`` for the stages at 2 cm;
+``--smoke``: random points, and the world table on the bundled office map, seconds).
 """
 
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
-from planner.io import load_obstacles, load_points
-from planner.lattice import NAMED_LATTICES, Lattice
-from planner.voxels import (
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import harness  # noqa: E402  (the sibling module)
+
+from planner.io import load_obstacles, load_points  # noqa: E402
+from planner.lattice import NAMED_LATTICES, Lattice  # noqa: E402
+from planner.voxels import (  # noqa: E402
     OccupiedVoxelList,
     exact_box_inflation,
     exact_inflation,
     inflation_stencil,
 )
 
-DATA = (Path(__file__).resolve().parents[1] / ".." / "shared" / "data").resolve()
+DATA = harness.DATA
+RATIOS: list[str] = []  # ratio lines, printed at the end
 
 
 def _datasets(data: Path) -> list[tuple[str, np.ndarray | None, float]]:
@@ -67,9 +82,8 @@ def _datasets(data: Path) -> list[tuple[str, np.ndarray | None, float]]:
 
 
 def _timed(fn, *args, **kw):
-    t0 = time.perf_counter()
-    res = fn(*args, **kw)
-    return res, time.perf_counter() - t0
+    """``fn(*args, **kw)`` and its thread CPU seconds."""
+    return harness.cpu_result(lambda: fn(*args, **kw))
 
 
 def _warm_up(lat: Lattice) -> None:
@@ -82,9 +96,9 @@ def _warm_up(lat: Lattice) -> None:
 
 
 def _py_build(points: np.ndarray, lat: Lattice) -> tuple[set, float]:
-    t0 = time.perf_counter()
+    t0 = harness.cpu_clock()
     cells = {tuple(r) for r in lat.quantize(points).tolist()}
-    return cells, time.perf_counter() - t0
+    return cells, harness.cpu_clock() - t0
 
 
 def _py_inflate(cells: set, stencil: np.ndarray, cap: float) -> tuple[int | None, float, bool]:
@@ -92,7 +106,7 @@ def _py_inflate(cells: set, stencil: np.ndarray, cap: float) -> tuple[int | None
     offs = [tuple(o) for o in stencil.tolist()]
     todo = list(cells)
     out: set = set()
-    t0 = time.perf_counter()
+    t0 = harness.cpu_clock()
     done = 0
     step = 2000
     while done < len(todo):
@@ -101,10 +115,10 @@ def _py_inflate(cells: set, stencil: np.ndarray, cap: float) -> tuple[int | None
             for dx, dy, dz in offs:
                 out.add((x + dx, y + dy, z + dz))
         done = min(done + step, len(todo))
-        el = time.perf_counter() - t0
+        el = harness.cpu_clock() - t0
         if done < len(todo) and el / done * len(todo) > cap and el > 0.2 * cap:
             return None, el / done * len(todo), True
-    return len(out), time.perf_counter() - t0, False
+    return len(out), harness.cpu_clock() - t0, False
 
 
 def _row(label: str, name: str, points: np.ndarray, vol: float, args) -> dict:
@@ -129,6 +143,11 @@ def _row(label: str, name: str, points: np.ndarray, vol: float, args) -> dict:
         n, t_pi, extrap = _py_inflate(cells, inflation_stencil(lat, r), args.baseline_seconds)
         assert n is None or n == len(inflated)
         row.update(py_build=t_pb, py_infl=t_pi, py_extrap=extrap)
+        RATIOS.append(harness.single_ratio(f"Python set build / ours, {label} {name}", t_pb,
+                                           t_build, note="CPU"))
+        RATIOS.append(harness.single_ratio(
+            f"Python set inflation / ours, {label} {name}", t_pi, t_infl,
+            note="CPU" + (", Python side extrapolated from a prefix" if extrap else "")))
     return row
 
 
@@ -184,88 +203,74 @@ def _box_table(data: Path, names: list[str], radius: float) -> str:
         lat = Lattice.named(name, vol)
         exact_box_inflation(lo[:50], hi[:50], lat, radius)  # compile / load kernels
         exact_inflation(obst.boxes[:50], lat, radius)
-        t0, c0 = time.perf_counter(), time.process_time()
+        t0, c0 = time.perf_counter(), harness.cpu_clock()
         boxes = exact_box_inflation(lo, hi, lat, radius)
-        wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+        wall, cpu = time.perf_counter() - t0, harness.cpu_clock() - c0
         pts, t_pts = _timed(exact_inflation, obst.boxes, lat, radius)  # centres only
         lines.append(f"  {name:7s} {wall:7.3f} {cpu:7.3f} {len(boxes):11,}   {t_pts:19.3f} "
                      f"{len(pts):11,}")
     return "\n".join(lines)
 
 
-# The build's compiled stages: (module, kernel, label); several kernels may share a label.
+# The build's stages: (module file, function) of the package's public build steps, and a
+# label; several functions may share a label. Timed inclusively by cProfile (CPU clock).
 _STAGES = [
-    ("planner.voxels._box_kernels", "within_mark", "obstacle boxes: exact inflation"),
-    ("planner.voxels.kernels", "exact_mark", "obstacle points: exact inflation"),
-    ("planner.voxels._unknown_kernels", "fill_known", "unknown: known voxels"),
-    ("planner.voxels._unknown_kernels", "edge_voxels", "unknown: known voxels"),
-    ("planner.voxels._unknown_kernels", "mark_unknown_centres", "unknown: cell centres"),
-    ("planner.voxels._box_kernels", "overlap_mark", "unknown: cells on boundary voxels"),
-    ("planner.voxels.kernels", "dilate_runs", "unknown: inflation"),
-    ("planner.occupancy.bits", "fill_in_bounds", "world bits: in bounds"),
-    ("planner.occupancy.bits", "mark_from_grid", "world bits: from the grids"),
+    ("planner/voxels/inflate.py", "box_inflation_grid", "obstacle boxes: exact inflation"),
+    ("planner/voxels/inflate.py", "point_inflation_grid", "obstacle points: exact inflation"),
+    ("planner/voxels/unknown.py", "unknown_box_grid", "unknown space: cells and inflation"),
+    ("planner/world/cells.py", "block_marked", "world bits: from the grids"),
+    ("planner/world/cells.py", "in_bounds_bits", "world bits: in bounds"),
 ]
 
 
 def _stage_seconds(build) -> tuple[float, dict[str, float]]:
-    """CPU seconds of ``build()`` and of each stage of :data:`_STAGES` in it (the kernels
-    are wrapped for the call: their callers look them up on their modules)."""
-    import importlib
+    """CPU seconds of ``build()`` and of each stage of :data:`_STAGES` in it (cProfile's
+    inclusive time per function, with this process's CPU clock)."""
+    import cProfile
+    import pstats
 
+    prof = cProfile.Profile(time.process_time)
+    c0 = time.process_time()
+    prof.runcall(build)
+    total = time.process_time() - c0
     spent: dict[str, float] = {}
-    saved = []
-    for mod_name, name, label in _STAGES:
-        mod = importlib.import_module(mod_name)
-        kernel = getattr(mod, name)
-
-        def timed(*a, _k=kernel, _label=label):
-            c0 = time.process_time()
-            try:
-                return _k(*a)
-            finally:
-                spent[_label] = spent.get(_label, 0.0) + time.process_time() - c0
-
-        saved.append((mod, name, kernel))
-        setattr(mod, name, timed)
-    try:
-        c0 = time.process_time()
-        build()
-        total = time.process_time() - c0
-    finally:
-        for mod, name, kernel in saved:
-            setattr(mod, name, kernel)
+    stats = pstats.Stats(prof).stats  # (file, line, function) -> (cc, nc, tt, ct, callers)
+    for (path, _line, func), (_cc, _nc, _tt, ct, _callers) in stats.items():
+        for suffix, name, label in _STAGES:
+            if func == name and path.replace("\\", "/").endswith(suffix):
+                spent[label] = spent.get(label, 0.0) + ct
     return total, spent
 
 
 def _world_table(data: Path, names: list[str], radius: float, repeats: int,
-                 edge: float = 0.08, stages: bool = False) -> str:
+                 edge: float = 0.08, stages: bool = False, source=None) -> str:
     """:func:`planner.build_world` on geb079.bt at ``edge**3`` m^3 cells (0.08 m: the map's
     resolution cubed), radius ``radius``, unknown space blocked: load + quantize + exact
     inflation of the leaves + unknown-space classification and its inflation, per lattice
     (best of ``repeats``); with ``stages``, one more build split into its stages."""
-    import os
-
     from planner import build_world
 
-    geb = data / "octomap" / "geb079.bt"
-    if not geb.exists():
+    geb = data / "octomap" / "geb079.bt" if source is None else source
+    if source is None and not geb.exists():
         return f"geb079.bt: not found under {data}, world table skipped"
     vol = edge**3
-    lines = [f"build_world(geb079.bt, cell volume {edge:g}**3 m^3, radius {radius:g} m, unknown "
-             f"blocked), best of {repeats}; load average "
-             f"{', '.join(f'{x:.1f}' for x in os.getloadavg())}:",
+    map_label = Path(str(geb)).name
+    lines = [f"build_world({map_label}, cell volume {edge:g}**3 m^3, radius {radius:g} m, unknown "
+             f"blocked), best of {repeats}, CPU:",
              f"  {'lattice':7s} {'wall s':>7s} {'cpu s':>7s} {'blocked':>11s} {'unknown':>11s}"]
     split = []
+    cpu_by: dict[str, float] = {}
     for name in names:
         # Compile / load kernels and derive the lattice geometry at this scale first.
         build_world(geb, name, cell_volume=vol, radius=radius, bounds=[[0, 0, 0], [1, 1, 1]])
         best = (np.inf, np.inf)
         for _ in range(repeats):
-            t0, c0 = time.perf_counter(), time.process_time()
+            t0, c0 = time.perf_counter(), harness.cpu_clock()
             w = build_world(geb, name, cell_volume=vol, radius=radius)
-            best = min(best, (time.perf_counter() - t0, time.process_time() - c0))
+            best = min(best, (time.perf_counter() - t0, harness.cpu_clock() - c0))
         lines.append(f"  {name:7s} {best[0]:7.3f} {best[1]:7.3f} {w.n_blocked:11,} "
                      f"{w.n_unknown:11,}")
+        cpu_by[name] = best[1]
         del w
         if stages:
             split.append((name, *_stage_seconds(
@@ -282,6 +287,11 @@ def _world_table(data: Path, names: list[str], radius: float, repeats: int,
                     label, spent.get(label, 0.0))
                 row.append(f" {v:7.2f}")
             lines.append(f"  {label:36s}" + "".join(row))
+    first = names[0]
+    for name in names[1:]:
+        RATIOS.append(harness.single_ratio(f"world build CPU {name} / {first}, {map_label}",
+                                           cpu_by[name], cpu_by[first], note="best of "
+                                           f"{repeats}"))
     return "\n".join(lines)
 
 
@@ -303,7 +313,30 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--edge", type=float, default=0.08, help="cell edge (m) of the world table")
     p.add_argument("--stages", action="store_true",
                    help="world table: CPU seconds per stage of one more build")
+    harness.add_arguments(p, repeat=None)
     args = p.parse_args(argv)
+    with harness.session("occupied voxel lists and world builds", smoke=args.smoke):
+        code = _smoke(args) if args.smoke else _run(args)
+        for line in RATIOS:
+            print(line)
+        return code
+
+
+def _smoke(args) -> int:
+    """Random points on two lattices, the world table (with stages) on the bundled office."""
+    names = ["cubic", "bcc"]
+    pts = np.random.default_rng(3).uniform(0, 5, size=(20_000, 3))
+    args.queries, args.baseline_seconds = 10_000, 1.0
+    rows = [_row("random", name, pts, 0.1**3, args) for name in names]
+    print(_fmt(rows, True))
+    print()
+    print(_random_build(names, 10_000))
+    print()
+    print(_world_table(args.data, names, 0.2, 1, edge=0.2, stages=True, source="office"))
+    return 0
+
+
+def _run(args) -> int:
     if args.only_boxes:
         print(_box_table(args.data, args.lattices, args.box_radius))
         return 0

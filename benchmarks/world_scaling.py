@@ -5,6 +5,7 @@ Usage::
     python benchmarks/world_scaling.py                          # geb079 at 0.16, 0.08, 0.04 m
     python benchmarks/world_scaling.py --edges 0.16,0.08,0.04,0.02 --lattices cubic,fcc
     python benchmarks/world_scaling.py --synthetic 1e6,1e7,1e8  # box-field map instead
+    python benchmarks/world_scaling.py --smoke                  # the hall at 1e5, 3e5 cells
 
 Maps: ``geb079`` (``../shared/data/octomap/geb079.bt``, an OctoMap of a building corridor,
 robot radius 0.2 m, unknown space blocked), cell edge ``h`` (cell volume ``h**3``); or
@@ -21,7 +22,8 @@ warm-up (``/proc/self/clear_refs``):
 * file: bytes of the saved world (:func:`planner.world.file.save_world`);
 * query: one long A* query (:func:`planner.plan` defaults) between the free cells nearest
   to two fixed points (geb079: 11 m apart along the corridor; the hall: corner to corner):
-  search seconds, expansions and the search's own arrays (``PlanResult.peak_bytes``).
+  this thread's CPU seconds of the ``plan()`` call, expansions and the search's own arrays
+  (``PlanResult.peak_bytes``).
 
 The exponents are least-squares slopes of log(quantity) against log(blocked cells) over the
 rows of one lattice (1.0: grows as the blocked cells do). The machine may be shared: trust
@@ -41,25 +43,11 @@ from pathlib import Path
 
 import numpy as np
 
-HERE = Path(__file__).resolve().parent
-GEB = HERE.parent / ".." / "shared" / "data" / "octomap" / "geb079.bt"
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import harness  # noqa: E402  (the sibling module)
+
+GEB = harness.DATA / "octomap" / "geb079.bt"
 HALL = np.array([[0.0, 0.0, 0.0], [32.0, 32.0, 8.0]])
-
-
-def _reset_peak() -> None:
-    try:
-        with open("/proc/self/clear_refs", "w") as f:
-            f.write("5")
-    except OSError:
-        pass
-
-
-def _status(key: str) -> int:
-    with open("/proc/self/status") as f:
-        for line in f:
-            if line.startswith(key):
-                return int(line.split()[1]) * 1024
-    return 0
 
 
 def synthetic_map(cells: float, seed: int = 0):
@@ -95,48 +83,48 @@ def _endpoints(world, query: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return ends[0], ends[1]
 
 
-def child(spec: str) -> dict:
+def child(spec: str, geb: Path = GEB) -> dict:
     """One row (in this process): ``geb:<lattice>:<edge>`` or ``syn:<lattice>:<cells>``."""
     import planner
     from planner.world.file import save_world
 
     kind, lattice, value = spec.split(":")
-    warm = planner.build_world(GEB if kind == "geb" else synthetic_map(1e5)[0], lattice,
+    warm = planner.build_world(geb if kind == "geb" else synthetic_map(1e5)[0], lattice,
                                cell_volume=0.32**3 if kind == "geb" else 1.0, radius=0.2,
                                unknown="blocked" if kind == "geb" else "free")
     query = GEB_QUERY if kind == "geb" else HALL_QUERY
     planner.plan(warm, *_endpoints(warm, query))
     del warm
     if kind == "geb":
-        obst, edge, policy = planner.io.load_obstacles(GEB), float(value), "blocked"
+        obst, edge, policy = planner.io.load_obstacles(geb), float(value), "blocked"
     else:
         obst, edge = synthetic_map(float(value))
         policy = "free"
-    _reset_peak()
-    before = _status("VmRSS:")
+    harness.reset_peak_rss()
+    before = harness.rss() or 0
     t0 = time.process_time()
     world = planner.build_world(obst, lattice, cell_volume=edge**3, radius=0.2, unknown=policy)
     build = time.process_time() - t0
-    build_peak = _status("VmHWM:")
+    build_peak = harness.peak_rss() or 0
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "w.npz"
         save_world(world, path)
         size = path.stat().st_size
     a, b = _endpoints(world, query)
-    res = planner.plan(world, a, b)
+    res, query_cpu = harness.cpu_result(lambda: planner.plan(world, a, b))
     occ = world.occupancy
     return {"lattice": lattice, "edge": edge, "box": int(np.prod(occ.dims)),
             "blocked": world.n_blocked, "unknown": world.n_unknown, "build": build,
-            "build_peak": build_peak, "peak": _status("VmHWM:"), "before": before,
-            "file": size, "found": res.found, "search": res.seconds,
+            "build_peak": build_peak, "peak": harness.peak_rss() or 0, "before": before,
+            "file": size, "found": res.found, "search": query_cpu,
             "expansions": res.expansions, "search_bytes": res.peak_bytes,
             "storage": world.storage}
 
 
-def _run(spec: str) -> dict | str:
+def _run(spec: str, geb: Path) -> dict | str:
     """One row in a process of its own, or the last line of its error (the row failed)."""
-    out = subprocess.run([sys.executable, __file__, "--child", spec], capture_output=True,
-                         text=True, env=os.environ.copy())
+    out = subprocess.run([sys.executable, __file__, "--child", spec, "--geb", str(geb)],
+                         capture_output=True, text=True, env=os.environ.copy())
     if out.returncode != 0:
         lines = out.stderr.strip().splitlines() or ["no output"]
         return lines[-1]
@@ -183,13 +171,22 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--synthetic", default="", help="box cells of the synthetic hall, e.g. "
                     "1e6,1e7,1e8 (instead of geb079)")
     ap.add_argument("--child", help=argparse.SUPPRESS)
+    ap.add_argument("--geb", type=Path, help=argparse.SUPPRESS)
+    harness.add_arguments(ap, repeat=None, data=True)
     a = ap.parse_args(argv)
     if a.child:
-        print(json.dumps(child(a.child)))
+        print(json.dumps(child(a.child, a.geb)))
         return 0
-    if not a.synthetic and not GEB.is_file():
-        print(f"no geb079 at {GEB}; skipping")
-        return 0
+    if a.smoke:
+        a.synthetic, a.lattices = "1e5,3e5", "cubic"
+    with harness.session("world growth as cells shrink", smoke=a.smoke):
+        return _measure(a)
+
+
+def _measure(a) -> int:
+    geb = a.data / "octomap" / "geb079.bt"
+    if not a.synthetic and not geb.is_file():
+        return harness.skip(f"no geb079 at {geb}")
     rows, failed = [], []
     for lat in a.lattices.split(","):
         if a.synthetic:
@@ -197,7 +194,7 @@ def main(argv: list[str] | None = None) -> int:
         else:
             specs = [f"geb:{lat}:{v}" for v in a.edges.split(",")]
         for spec in specs:
-            got = _run(spec)
+            got = _run(spec, geb)
             if isinstance(got, str):  # printed under the table, left out of it
                 failed.append(f"{spec} failed: {got}")
                 print(f"  {failed[-1]}", file=sys.stderr, flush=True)
@@ -208,6 +205,13 @@ def main(argv: list[str] | None = None) -> int:
     print(table(rows))
     for line in failed:
         print(line)
+    for lat in dict.fromkeys(r["lattice"] for r in rows):
+        rs = sorted((r for r in rows if r["lattice"] == lat), key=lambda r: r["blocked"])
+        if len(rs) >= 2 and rs[0]["blocked"] and rs[-1]["blocked"]:
+            print(harness.single_ratio(
+                f"build CPU per blocked cell, largest / smallest row, {lat}",
+                rs[-1]["build"] / rs[-1]["blocked"], rs[0]["build"] / rs[0]["blocked"],
+                note="1: linear in the blocked cells"))
     return 0
 
 
