@@ -7,6 +7,7 @@ Usage::
     python benchmarks/cpp_anchor.py --queries 200 --repeat 3 --maps DA1
     python benchmarks/cpp_anchor.py --check-all          # the floor on all Warframe costs
     python benchmarks/cpp_anchor.py --axes natural       # both sides in the map's own order
+    python benchmarks/cpp_anchor.py --variants           # the floor with each trick off
     python benchmarks/cpp_anchor.py --smoke              # a small synthetic map, seconds
 
 The floor: cubic lattice, 26 neighbours with MovingAI's no-corner-cutting rule (a move is
@@ -65,6 +66,23 @@ SOURCE = r"""
 #include <cstring>
 #include <ctime>
 
+// Each trick can be switched off (benchmarks/cpp_anchor.py --variants measures each one):
+// ARITY 2 (a binary heap), SIDE_HEAP 0 (no plateau heap), BIT_GRID 0 (a byte grid).
+#ifndef ARITY
+#define ARITY 4
+#endif
+#ifndef SIDE_HEAP
+#define SIDE_HEAP 1
+#endif
+#ifndef BIT_GRID
+#define BIT_GRID 1
+#endif
+#if BIT_GRID
+#define FREE(v) ((F->bits[(v) >> 3] >> ((v) & 7)) & 1)
+#else
+#define FREE(v) (F->bits[v])
+#endif
+
 // One map: a padded bit grid in C order (the last axis fastest) and the per-query arrays.
 struct Node { double g; int32_t v; int32_t pos; int16_t x, y, z, pad; };  // 24 bytes
 struct Entry { double f, g; int32_t n, pad; };                               // 24 bytes
@@ -72,7 +90,7 @@ static const int32_t CLOSED = -1, SIDE = -2;
 
 struct Floor {
     int64_t A, B, C;            // padded dims; cell v = (a * B + b) * C + c
-    uint8_t* bits;              // bit v set = free (8 bytes of slack at the end)
+    uint8_t* bits;              // bit (byte) v set = free (8 bytes of slack at the end)
     int32_t* slot;              // cell -> node index, -1 untouched
     Node* nodes; int64_t nn, ncap;
     Entry* heap; int64_t hn, hcap;   // main heap: f above the plateau (4-ary)
@@ -97,7 +115,7 @@ template <class T> static T* grow(T* p, int64_t& cap, Floor* F) {
 static inline void h_up(Floor* F, int64_t i, const Entry& e) {
     Entry* a = F->heap;
     while (i > 0) {
-        int64_t p = (i - 1) >> 2;
+        int64_t p = (int64_t)((uint64_t)(i - 1) / ARITY);
         if (!before(e, a[p])) break;
         a[i] = a[p]; F->nodes[a[i].n].pos = (int32_t)i; i = p;
     }
@@ -106,9 +124,9 @@ static inline void h_up(Floor* F, int64_t i, const Entry& e) {
 static inline void h_down(Floor* F, int64_t i, const Entry& e) {
     Entry* a = F->heap; const int64_t n = F->hn;
     for (;;) {
-        int64_t c = 4 * i + 1;
+        int64_t c = ARITY * i + 1;
         if (c >= n) break;
-        int64_t best = c, end = c + 4 < n ? c + 4 : n;
+        int64_t best = c, end = c + ARITY < n ? c + ARITY : n;
         for (int64_t k = c + 1; k < end; ++k) if (before(a[k], a[best])) best = k;
         if (!before(a[best], e)) break;
         a[i] = a[best]; F->nodes[a[i].n].pos = (int32_t)i; i = best;
@@ -160,14 +178,20 @@ Floor* floor_new(const uint8_t* free, int64_t na, int64_t nb, int64_t nc) {
     F->A = na + 2; F->B = nb + 2; F->C = nc + 2;
     const int64_t cells = F->A * F->B * F->C;
     if (cells >= (int64_t)1 << 31) { std::free(F); return nullptr; }
-    const int64_t nbytes = (cells + 7) / 8 + 8;
+    const int64_t nbytes = (BIT_GRID ? (cells + 7) / 8 : cells) + 8;
     F->bits = (uint8_t*)std::calloc(nbytes, 1);
     for (int64_t a = 0; a < na; ++a)
         for (int64_t b = 0; b < nb; ++b) {
             const uint8_t* row = free + (a * nb + b) * nc;
             int64_t v = ((a + 1) * F->B + (b + 1)) * F->C + 1;
             for (int64_t c = 0; c < nc; ++c, ++v)
-                if (row[c]) F->bits[v >> 3] |= (uint8_t)(1u << (v & 7));
+                if (row[c]) {
+#if BIT_GRID
+                    F->bits[v >> 3] |= (uint8_t)(1u << (v & 7));
+#else
+                    F->bits[v] = 1;
+#endif
+                }
         }
     F->slot = (int32_t*)std::malloc(cells * sizeof(int32_t));
     std::memset(F->slot, 0xff, cells * sizeof(int32_t));
@@ -211,7 +235,7 @@ int64_t floor_search(Floor* F, int64_t sa, int64_t sb, int64_t sc,
     const int32_t s = (int32_t)(((sa + 1) * B + sb + 1) * C + sc + 1);
     const int32_t t = (int32_t)(((ga + 1) * B + gb + 1) * C + gc + 1);
     const uint8_t* bits = F->bits;
-    if (!((bits[s >> 3] >> (s & 7)) & 1) || !((bits[t >> 3] >> (t & 7)) & 1)) return 0;
+    if (!FREE(s) || !FREE(t)) return 0;
     const int32_t tx = (int32_t)ga + 1, ty = (int32_t)gb + 1, tz = (int32_t)gc + 1;
     const double s2m1 = std::sqrt(2.0) - 1.0, s3m2 = std::sqrt(3.0) - std::sqrt(2.0);
     auto h = [&](int32_t x, int32_t y, int32_t z) {   // octile: hi + (r2-1) mid + (r3-r2) lo
@@ -227,12 +251,13 @@ int64_t floor_search(Floor* F, int64_t sa, int64_t sb, int64_t sc,
     F->nodes[0] = {0.0, s, SIDE, (int16_t)(sa + 1), (int16_t)(sb + 1), (int16_t)(sc + 1), 0};
     F->slot[s] = 0; F->nn = 1;
     double fcur = fkey(h((int32_t)sa + 1, (int32_t)sb + 1, (int32_t)sc + 1));
-    s_push(F, {fcur, 0.0, 0, 0});
+    if (SIDE_HEAP) s_push(F, {fcur, 0.0, 0, 0}); else h_push(F, {fcur, 0.0, 0, 0});
     int64_t exp = 0;
     int32_t* slot = F->slot;
     for (;;) {
         int32_t n;
-        if (F->sn && (F->hn == 0 || F->heap[0].f > fcur || F->side[0].g >= F->heap[0].g)) {
+        if (SIDE_HEAP && F->sn &&
+            (F->hn == 0 || F->heap[0].f > fcur || F->side[0].g >= F->heap[0].g)) {
             const Entry e = s_pop(F);
             Node& nd = F->nodes[e.n];
             if (nd.pos != SIDE || e.g != nd.g) continue;   // stale: closed or bettered
@@ -247,8 +272,13 @@ int64_t floor_search(Floor* F, int64_t sa, int64_t sb, int64_t sc,
         uint32_t nb = 0;
         for (int r = 0; r < 9; ++r) {
             const int64_t i = cur.v + F->roff[r];
+#if BIT_GRID
             uint32_t w; std::memcpy(&w, bits + (i >> 3), 4);
             nb |= ((w >> (i & 7)) & 7u) << (3 * r);
+#else   // three bytes of 0/1 to three bits: one multiply gathers them at bits 14-16
+            uint32_t w; std::memcpy(&w, bits + i, 4);
+            nb |= ((((w & 0x010101u) * 0x4081u) >> 14) & 7u) << (3 * r);
+#endif
         }
         for (int m = 0; m < 26; ++m) {
             if ((nb & F->need[m]) != F->need[m]) continue;
@@ -262,7 +292,8 @@ int64_t floor_search(Floor* F, int64_t sa, int64_t sb, int64_t sc,
                 slot[w] = j;
                 const double f = fkey(ng + h(x, y, z));
                 F->nodes[j] = {ng, w, SIDE, x, y, z, 0};
-                if (f <= fcur) s_push(F, {f, ng, j, 0}); else h_push(F, {f, ng, j, 0});
+                if (SIDE_HEAP && f <= fcur) s_push(F, {f, ng, j, 0});
+                else h_push(F, {f, ng, j, 0});
                 continue;
             }
             Node& nw = F->nodes[k];
@@ -270,7 +301,7 @@ int64_t floor_search(Floor* F, int64_t sa, int64_t sb, int64_t sc,
             nw.g = ng;
             const double f = fkey(ng + h(nw.x, nw.y, nw.z));
             if (nw.pos == SIDE) { s_push(F, {f, ng, k, 0}); continue; }
-            if (f <= fcur) {
+            if (SIDE_HEAP && f <= fcur) {
                 h_remove(F, nw.pos);
                 F->nodes[k].pos = SIDE;
                 s_push(F, {f, ng, k, 0});
@@ -311,17 +342,25 @@ def available() -> bool:
     return _compiler() is not None
 
 
-@functools.lru_cache(maxsize=1)
-def library() -> ctypes.CDLL:
-    """Compile the floor once per process into a shared library and load it."""
+# The floor with one trick switched off each (the macros at the top of SOURCE).
+VARIANTS = {"strongest": (), "binary heap": ("ARITY=2",), "no side heap": ("SIDE_HEAP=0",),
+            "byte grid": ("BIT_GRID=0",),
+            "none of the three": ("ARITY=2", "SIDE_HEAP=0", "BIT_GRID=0")}
+
+
+@functools.cache
+def library(defines: tuple[str, ...] = ()) -> ctypes.CDLL:
+    """Compile the floor once per process (per set of ``-D`` macros, :data:`VARIANTS`) into
+    a shared library and load it."""
     cxx = _compiler()
     if cxx is None:
         raise RuntimeError("no C++ compiler (g++) on PATH: the C++ floor is skipped")
     tmp = Path(tempfile.mkdtemp(prefix="cpp_floor_"))
     src, lib = tmp / "floor.cpp", tmp / "libfloor.so"
     src.write_text(SOURCE)
-    subprocess.run([cxx, "-O3", "-march=native", "-std=c++17", "-shared", "-fPIC", "-o",
-                    str(lib), str(src)], check=True, capture_output=True)
+    subprocess.run([cxx, "-O3", "-march=native", "-std=c++17", "-shared", "-fPIC",
+                    *(f"-D{d}" for d in defines), "-o", str(lib), str(src)], check=True,
+                   capture_output=True)
     dll = ctypes.CDLL(str(lib))
     i64, vp = ctypes.c_int64, ctypes.c_void_p
     dll.floor_new.restype = vp
@@ -346,10 +385,12 @@ class Floor:
         True where a voxel is free, in the order the floor should store it (the last axis
         varies fastest; :func:`longest_last` gives the order that puts the map's longest
         axis there).
+    variant : str
+        A key of :data:`VARIANTS` (default: every trick on).
     """
 
-    def __init__(self, free: np.ndarray):
-        self._dll = library()
+    def __init__(self, free: np.ndarray, variant: str = "strongest"):
+        self._dll = library(VARIANTS[variant])
         grid = np.ascontiguousarray(free, dtype=np.uint8)
         self.shape = grid.shape
         self._h = self._dll.floor_new(grid.ctypes.data, *grid.shape)
@@ -564,6 +605,41 @@ def compare(m: Map, repeat: int, axes: str = "longest") -> Row:
     return Row(m.name, perm, best["ours"], best["floor"], exp_o, exp_f, int(bad.sum()), n)
 
 
+def variants(m: Map, repeat: int) -> None:
+    """The floor with each trick switched off (:data:`VARIANTS`, and the map's own axis
+    order), the variants taking turns per query, best of ``repeat``: time / the strongest's."""
+    perm = longest_last(m.free.shape)
+    free = np.ascontiguousarray(m.free.transpose(perm))
+    s, g = m.queries[:, :3][:, perm], m.queries[:, 3:6][:, perm]
+    floors = {k: (Floor(free, k), s, g) for k in VARIANTS}
+    if perm != (0, 1, 2):
+        floors["natural axes"] = (Floor(m.free), m.queries[:, :3], m.queries[:, 3:6])
+    n = len(s)
+    costs = {k: np.empty(n) for k in floors}
+
+    def side(k):
+        fl, a, b = floors[k]
+
+        def run(i):
+            t0 = harness.cpu_clock()
+            costs[k][i] = fl.search(a[i], b[i])[0]
+            return harness.cpu_clock() - t0
+        return run
+
+    best = harness.interleaved({k: side(k) for k in floors}, range(n), repeat)
+    for fl, _, _ in floors.values():
+        fl.close()
+    print(f"{m.name}: {n} queries, the floor's variants taking turns per query, best of "
+          f"{repeat}")
+    for k, t in best.items():
+        same = int(np.sum(np.isclose(costs[k], costs["strongest"], rtol=1e-9, atol=1e-9)))
+        print(f"  {k:14s} {1e3 * t.sum():9.2f} ms  costs equal to the strongest's: {same}/{n}")
+    for k, t in best.items():
+        if k != "strongest":
+            print(harness.ratio_line(f"floor time {k} / strongest, {m.name}", t,
+                                     best["strongest"], note="per query"))
+
+
 def check_all(path: Path) -> tuple[int, int, float]:
     """The floor alone on every query of a Warframe map: (queries, mismatches, M exp/s)."""
     free, scen = read_warframe(path)
@@ -609,6 +685,8 @@ def main(argv: list[str] | None = None) -> int:
                          "natural: the map's own x, y, z order")
     ap.add_argument("--check-all", action="store_true",
                     help="the floor alone on every query of each Warframe map present")
+    ap.add_argument("--variants", action="store_true",
+                    help="the floor alone with each trick switched off, per map")
     a = ap.parse_args(argv)
     with harness.session("A*, cubic-26, ours vs the strongest C++ floor (in process, "
                          "thread CPU time)", smoke=a.smoke):
@@ -616,6 +694,8 @@ def main(argv: list[str] | None = None) -> int:
             return harness.skip("no C++ compiler (g++ / c++) on PATH: the C++ floor")
         if a.smoke:
             print_rows([compare(synthetic(), a.repeat, a.axes)])
+            if a.variants:
+                variants(synthetic(), a.repeat)
             return 0
         wf = a.data / "warframe"
         if a.check_all:
@@ -638,8 +718,13 @@ def main(argv: list[str] | None = None) -> int:
             if m is None:
                 print(f"{name}: not under {a.data}, skipped")
                 continue
+            if a.variants:
+                variants(m, a.repeat)
+                continue
             rows.append(compare(m, a.repeat, a.axes))
             print(f"{name} done", file=sys.stderr, flush=True)
+        if a.variants:
+            return 0
         if not rows:
             return harness.skip(f"no maps under {a.data}")
         print_rows(rows)
