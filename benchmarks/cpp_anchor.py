@@ -686,6 +686,34 @@ def print_rows(rows: list[Row]) -> None:
                                  overall=speed, note="per query, expansions/s"))
 
 
+def maps(data: Path, names, queries: int, geb_queries: int):
+    """The named maps present under ``data`` (Warframe names, ``geb079``), one at a time
+    (a line for each one absent)."""
+    for name in names:
+        if name == "geb079":
+            p = data / "octomap" / "geb079.bt"
+            m = geb079(p, geb_queries) if p.is_file() else None
+        else:
+            p = data / "warframe" / f"{name}.3dmap"
+            m = warframe(p, queries) if p.is_file() else None
+        if m is None:
+            print(f"{name}: not under {data}, skipped")
+            continue
+        yield m
+
+
+def floor_rows(data: Path = harness.DATA, names=WARFRAME_MAPS + ("geb079",),
+               queries: int = 100, geb_queries: int = 20, repeat: int = 3,
+               axes: str = "longest") -> list[Row]:
+    """Ours against the floor on each named map present (:func:`compare`); print the rows
+    with :func:`print_rows`. What ``search_speed.py`` can call for its floor table."""
+    rows = []
+    for m in maps(data, names, queries, geb_queries):
+        rows.append(compare(m, repeat, axes))
+        print(f"{m.name} done", file=sys.stderr, flush=True)
+    return rows
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     harness.add_arguments(ap, repeat=3, data=True)
@@ -720,24 +748,11 @@ def main(argv: list[str] | None = None) -> int:
                     total += bad
                     print(f"{name}: {n} queries, {bad} cost mismatches, {mps:.2f} M exp/s")
             return 1 if total else 0
-        rows = []
-        for name in a.maps:
-            if name == "geb079":
-                p = a.data / "octomap" / "geb079.bt"
-                m = geb079(p, a.geb_queries) if p.is_file() else None
-            else:
-                p = wf / f"{name}.3dmap"
-                m = warframe(p, a.queries) if p.is_file() else None
-            if m is None:
-                print(f"{name}: not under {a.data}, skipped")
-                continue
-            if a.variants:
-                variants(m, a.repeat)
-                continue
-            rows.append(compare(m, a.repeat, a.axes))
-            print(f"{name} done", file=sys.stderr, flush=True)
         if a.variants:
+            for m in maps(a.data, a.maps, a.queries, a.geb_queries):
+                variants(m, a.repeat)
             return 0
+        rows = floor_rows(a.data, a.maps, a.queries, a.geb_queries, a.repeat, a.axes)
         if not rows:
             return harness.skip(f"no maps under {a.data}")
         print_rows(rows)

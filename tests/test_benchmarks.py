@@ -16,10 +16,12 @@ from __future__ import annotations
 import ast
 import os
 import re
+import shutil
 import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -80,3 +82,70 @@ def test_reads_public_api_only(name):
         assert found, f"benchmarks/{name} reads public API only now: take it off PRIVATE_YET"
         return
     assert not found, f"benchmarks/{name} imports private names: {found}"
+
+
+@pytest.fixture
+def bench_modules(monkeypatch):
+    """The benchmarks folder importable (its scripts import ``harness`` as a sibling)."""
+    monkeypatch.syspath_prepend(str(BENCH))
+    import harness
+
+    return harness
+
+
+def test_interleaved_takes_turns_and_keeps_each_items_fastest_round(bench_modules):
+    calls = []
+    times = {"a": iter([3.0, 1.0, 2.0, 5.0, 4.0, 6.0]), "b": iter([9.0, 7.0, 8.0, 1.0, 2.0,
+                                                                   3.0])}
+
+    def side(name):
+        def run(item):
+            calls.append((name, item))
+            return next(times[name])
+        return run
+
+    best = bench_modules.interleaved({"a": side("a"), "b": side("b")}, ["q0", "q1"], 3)
+    assert calls[:4] == [("a", "q0"), ("b", "q0"), ("a", "q0"), ("b", "q0")]
+    assert calls[-1] == ("b", "q1") and len(calls) == 12
+    assert best["a"].tolist() == [1.0, 4.0] and best["b"].tolist() == [7.0, 1.0]
+
+
+def test_ratio_line_reads_like_the_scripts_print_it(bench_modules):
+    x = [2.0, 4.0, 6.0, 8.0]
+    y = [1.0, 2.0, 3.0, 2.0]
+    line = bench_modules.ratio_line("ours/floor", x, y, goal=">= 0.9")
+    assert RATIO.match(line)
+    assert line.startswith("ratio ours/floor: median 2 [95% CI ")
+    assert "overall 2.5, n 4 (goal >= 0.9)" in line
+    assert bench_modules.single_ratio("x", 3.0, 2.0) == "ratio x: 1.5"
+
+
+def test_traced_peak_sees_an_array_made_in_the_call(bench_modules):
+    _, peak = bench_modules.traced_peak(lambda: np.ones(1 << 20).sum())
+    assert peak >= 8 << 20
+
+
+def test_floor_without_a_compiler_is_one_skipped_line(bench_modules, monkeypatch, capsys):
+    import cpp_anchor
+
+    monkeypatch.setattr(cpp_anchor.shutil, "which", lambda name: None)
+    assert cpp_anchor.main(["--smoke"]) == 0
+    out = capsys.readouterr().out
+    assert "skipped: no C++ compiler" in out and not RATIO.search(out)
+
+
+@pytest.mark.skipif(shutil.which("g++") is None and shutil.which("c++") is None,
+                    reason="no C++ compiler")
+def test_floor_agrees_with_our_search_on_a_small_map(bench_modules):
+    """The floor in process: optimal costs equal to ours, the same expansions, and its axis
+    permutation does not change a cost."""
+    import cpp_anchor
+
+    m = cpp_anchor.synthetic(n=24, seed=1, queries=6)
+    row = cpp_anchor.compare(m, repeat=1)
+    assert row.mismatches == 0 and row.checked == 6
+    assert (row.exp_ours == row.exp_floor).all()
+    res = cpp_anchor.run(m.free, m.queries)  # the map in its own order, a batch call
+    assert np.allclose(res[:, 0], cpp_anchor.run(m.free.transpose(2, 1, 0),
+                                                 m.queries[:, [2, 1, 0, 5, 4, 3]])[:, 0])
+    assert (res[:, 1] > 0).all() and (res[:, 2] >= 0).all()
