@@ -19,8 +19,9 @@ grid A* of this kind:
 * a bit grid padded by one blocked voxel (no bounds tests; 1/8 of a byte grid's cache
   footprint): the 27-cell neighbourhood is nine 3-bit reads, one per row, into a mask,
   and each move's required cells are one AND and compare against it;
-* an int32 slot map (cell -> node record, -1 untouched; reset per query by walking the
-  records made, so nothing proportional to the map is cleared) and compact 24-byte node
+* an int32 slot map (cell -> node record, -1 untouched, negative again once closed, so a
+  closed neighbour costs no record read; reset per query by walking the records made, so
+  nothing proportional to the map is cleared) and compact 24-byte node
   records (g, cell, heap position, coordinates: the heuristic needs no division);
 * a 4-ary heap with decrease-key for nodes above the current f, and a side heap (larger g
   first) for the current f plateau: on a grid with an octile heuristic most generated nodes
@@ -69,7 +70,8 @@ SOURCE = r"""
 #include <ctime>
 
 // Each trick can be switched off (benchmarks/cpp_anchor.py --variants measures each one):
-// ARITY 2 (a binary heap), SIDE_HEAP 0 (no plateau heap), BIT_GRID 0 (a byte grid).
+// ARITY 2 (a binary heap), SIDE_HEAP 0 (no plateau heap), BIT_GRID 0 (a byte grid),
+// SLOT_CLOSED 0 (a closed node is known by its record, not by its slot map entry).
 #ifndef ARITY
 #define ARITY 4
 #endif
@@ -78,6 +80,9 @@ SOURCE = r"""
 #endif
 #ifndef BIT_GRID
 #define BIT_GRID 1
+#endif
+#ifndef SLOT_CLOSED
+#define SLOT_CLOSED 1
 #endif
 #if BIT_GRID
 #define FREE(v) ((F->bits[(v) >> 3] >> ((v) & 7)) & 1)
@@ -93,7 +98,7 @@ static const int32_t CLOSED = -1, SIDE = -2;
 struct Floor {
     int64_t A, B, C;            // padded dims; cell v = (a * B + b) * C + c
     uint8_t* bits;              // bit (byte) v set = free (8 bytes of slack at the end)
-    int32_t* slot;              // cell -> node index, -1 untouched
+    int32_t* slot;              // cell -> node index, -1 untouched, -2 - index when closed
     Node* nodes; int64_t nn, ncap;
     Entry* heap; int64_t hn, hcap;   // main heap: f above the plateau (4-ary)
     Entry* side; int64_t sn, scap;   // plateau heap: f == the current f (binary, larger g)
@@ -270,6 +275,7 @@ int64_t floor_search(Floor* F, int64_t sa, int64_t sb, int64_t sc,
         } else break;
         Node cur = F->nodes[n];
         F->nodes[n].pos = CLOSED; ++exp;
+        if (SLOT_CLOSED) slot[cur.v] = -2 - n;   // a closed neighbour costs no record read
         if (cur.v == t) { *cost = cur.g; break; }
         uint32_t nb = 0;
         for (int r = 0; r < 9; ++r) {
@@ -287,6 +293,7 @@ int64_t floor_search(Floor* F, int64_t sa, int64_t sb, int64_t sc,
             const int32_t w = cur.v + (int32_t)F->mv[m];
             const double ng = cur.g + F->mc[m];
             const int32_t k = slot[w];
+            if (SLOT_CLOSED && k < -1) continue;
             if (k < 0) {
                 if (F->nn == F->ncap) F->nodes = grow(F->nodes, F->ncap, F);
                 const int16_t x = cur.x + F->mda[m], y = cur.y + F->mdb[m], z = cur.z + F->mdc[m];
@@ -346,8 +353,8 @@ def available() -> bool:
 
 # The floor with one trick switched off each (the macros at the top of SOURCE).
 VARIANTS = {"strongest": (), "binary heap": ("ARITY=2",), "no side heap": ("SIDE_HEAP=0",),
-            "byte grid": ("BIT_GRID=0",),
-            "none of the three": ("ARITY=2", "SIDE_HEAP=0", "BIT_GRID=0")}
+            "byte grid": ("BIT_GRID=0",), "closed in records": ("SLOT_CLOSED=0",),
+            "none of the four": ("ARITY=2", "SIDE_HEAP=0", "BIT_GRID=0", "SLOT_CLOSED=0")}
 
 
 @functools.cache
@@ -646,7 +653,7 @@ def variants(m: Map, repeat: int) -> None:
           f"{repeat}")
     for k, t in best.items():
         same = int(np.sum(np.isclose(costs[k], costs["strongest"], rtol=1e-9, atol=1e-9)))
-        print(f"  {k:14s} {1e3 * t.sum():9.2f} ms  costs equal to the strongest's: {same}/{n}")
+        print(f"  {k:17s} {1e3 * t.sum():9.2f} ms  costs equal to the strongest's: {same}/{n}")
     for k, t in best.items():
         if k != "strongest":
             print(harness.ratio_line(f"floor time {k} / strongest, {m.name}", t,
