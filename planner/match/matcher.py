@@ -15,7 +15,10 @@ level: a sixteenth), and the search continues at the next finer level.
 At each level the source is summarised by the means of its points per cell of that level's
 lattice scaled by one half, each weighted by its point count, so the weighted score
 approximates the point count at a fraction of the cost; the final score is counted on
-every source point at the finest level. Rotations are :class:`scipy.spatial.transform.
+every source point at the finest level. The discrete pose is then refined continuously
+(:mod:`planner.match.refine`: point-to-plane least squares on the matched cells' planes),
+and the refined pose is kept unless it holds fewer than 95% of the discrete pose's points
+in occupied cells. Rotations are :class:`scipy.spatial.transform.
 Rotation`; transforms are 4x4 homogeneous matrices (metres) taking source coordinates into
 the reference frame.
 """
@@ -32,6 +35,7 @@ from planner.errors import MapError, PlannerError
 from planner.lattice import Lattice
 from planner.match import _kernels
 from planner.match.multires import MultiResVoxelList, resolve_lattice
+from planner.match.refine import refine as refine_pose
 from planner.occupancy.keys import pack
 
 __all__ = ["MatchResult", "match", "pose_matrix", "pose_error", "check_transform"]
@@ -54,9 +58,12 @@ class MatchResult:
     levels : int
         Resolutions searched.
     iterations : list of int
-        Accepted moves per level, coarsest first.
+        Accepted moves per level searched, coarsest first (with the refinement, the search
+        ends at the refinement's plane level, :attr:`MultiResVoxelList.plane_level`).
     evaluations : int
         Candidate poses scored.
+    refinement : int
+        Gauss-Newton steps of the final refinement kept (0: none, or not kept).
     seconds : float
         Wall time of the match (building the reference excluded when it was given built).
     """
@@ -68,6 +75,7 @@ class MatchResult:
     iterations: list[int] = field(default_factory=list)
     evaluations: int = 0
     seconds: float = 0.0
+    refinement: int = 0
 
     def as_dict(self) -> dict:
         """JSON-ready: ``transform`` row-major 4x4, quaternion ``x, y, z, w``."""
@@ -76,7 +84,7 @@ class MatchResult:
                 .tolist(), "quaternion_xyzw": q.tolist(), "score": self.score,
                 "fraction": self.fraction, "levels": self.levels,
                 "iterations": self.iterations, "evaluations": self.evaluations,
-                "seconds": self.seconds}
+                "refinement": self.refinement, "seconds": self.seconds}
 
 
 def pose_matrix(xyz_rpy) -> np.ndarray:
@@ -179,7 +187,8 @@ def _search(score: _Scorer, r, t, c_src, dt, dr, dt_stop) -> tuple:
 
 
 def match(source, reference, *, lattice: str | Lattice = "fcc", cell_volume: float = 0.001,
-          levels: int = 4, init=None, scale: float = 2.0, summary: float = 2.0) -> MatchResult:
+          levels: int = 4, init=None, scale: float = 2.0, summary: float = 2.0,
+          refine: bool = True) -> MatchResult:
     """Estimate the rigid transform taking ``source`` into ``reference``'s frame.
 
     Parameters
@@ -204,6 +213,8 @@ def match(source, reference, *, lattice: str | Lattice = "fcc", cell_volume: flo
     summary : float
         The source is summarised per cell of each level's generator divided by this
         (per-cell means weighted by counts; 2: cells of half the side).
+    refine : bool
+        Refine the discrete pose continuously (see the module).
 
     Returns
     -------
@@ -226,7 +237,8 @@ def match(source, reference, *, lattice: str | Lattice = "fcc", cell_volume: flo
     c_src = src.mean(axis=0)
     radius = max(float(np.sqrt(((src - c_src) ** 2).sum(axis=1).mean())), 1e-9)
     iterations, evaluations = [], 0
-    for k in range(ref.levels - 1, -1, -1):
+    last = ref.plane_level if refine else 0
+    for k in range(ref.levels - 1, last - 1, -1):
         lv = ref.level(k)
         pts, wts = _summary(src, Lattice(lv.lattice.generator / summary))
         score = _Scorer(pts, wts, lv)
@@ -235,10 +247,21 @@ def match(source, reference, *, lattice: str | Lattice = "fcc", cell_volume: flo
         r, t, moves = _search(score, r, t, c_src, dt, dt / radius, stop)
         iterations.append(moves)
         evaluations += score.evaluations
-    final = np.eye(4)
-    final[:3, :3], final[:3, 3] = r, t
     fine = _Scorer(src, np.ones(len(src)), ref.level(0))
     n_hit = int(round(fine(r[None], t[None])[0]))
+    steps = 0
+    if refine:
+        lat0 = ref.level(0).lattice
+        pts, wts = _summary(src, Lattice(lat0.generator / summary))
+        r2, t2, steps = refine_pose(pts, wts, ref.planes(), ref.level(ref.plane_level).lattice,
+                                    r, t, 20)
+        n2 = int(round(fine(r2[None], t2[None])[0]))
+        if steps and n2 >= 0.95 * n_hit:
+            r, t, n_hit = r2, t2, n2
+        else:
+            steps = 0
+    final = np.eye(4)
+    final[:3, :3], final[:3, 3] = r, t
     seconds = time.perf_counter() - t0
     return MatchResult(final, n_hit, n_hit / len(src), ref.levels, iterations,
-                       evaluations + 1, seconds)
+                       evaluations + 1 + (1 if refine else 0), seconds, steps)

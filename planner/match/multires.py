@@ -24,6 +24,7 @@ import numpy as np
 from planner.errors import LatticeError, MapError
 from planner.lattice import Lattice
 from planner.match import _kernels
+from planner.match.refine import CellPlanes, cell_planes
 from planner.occupancy.keys import build_key_set, pack
 from planner.voxels import OccupiedVoxelList
 
@@ -96,6 +97,8 @@ class MultiResVoxelList:
         lattices = level_lattices(resolve_lattice(lattice, 1.0), levels, scale)
         self.scale = float(scale)
         self._levels = [_Level(OccupiedVoxelList.from_points(pts, lat)) for lat in lattices]
+        self._points = pts
+        self._planes: CellPlanes | None = None
 
     @property
     def levels(self) -> int:
@@ -120,6 +123,19 @@ class MultiResVoxelList:
     def level(self, k: int) -> _Level:
         """Level ``k`` (0 = finest) with its hash set and quantizer tables."""
         return self._levels[k]
+
+    @property
+    def plane_level(self) -> int:
+        """The level whose cells carry the refinement's planes: 1 (the finest when there is
+        one level; :mod:`planner.match.refine` says why)."""
+        return min(1, self.levels - 1)
+
+    def planes(self) -> CellPlanes:
+        """The cell planes (:func:`planner.match.refine.cell_planes`) of
+        :attr:`plane_level`, computed on first use and kept."""
+        if self._planes is None:
+            self._planes = cell_planes(self._points, self._levels[self.plane_level].lattice)
+        return self._planes
 
     def contains(self, points: np.ndarray, level: int = 0) -> np.ndarray:
         """(N,) bool: whether each point ((N, 3), metres) falls in an occupied cell of
