@@ -8,9 +8,8 @@ import pytest
 
 from planner.cli import main
 from planner.errors import PlannerError
-from planner.match import pose_matrix
+from planner.match import anchor, pose_matrix
 from planner.match.experiment import ROWS, read_rows, run_experiment
-from planner.match import anchor
 from planner.match.experiment_pairs import Pair, draw_trial, load_sources
 from planner.match.experiment_regimes import REGIMES, regime_scans
 from planner.match.experiment_report import format_report, write_outputs
