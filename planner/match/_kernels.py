@@ -1,12 +1,14 @@
 """Compiled kernels of scan matching: membership in the occupancy layer's key sets, the fused
 transform-quantize-lookup score of many poses, and ray casting through a voxel grid.
 
-The quantizer is the project's exact generic one (the tables of
-:meth:`planner.Lattice.quantizer` and the inline kernel
-:func:`planner.lattice.quantize.closest_point3` that ``quantize_generic3`` runs per point),
-fused with the rigid transform and the lookup so that no (N, 3) temporary is made per
-pose, and the same code path serves every lattice (their match times compare on equal
-terms).
+The score rounds each transformed point with the lattice's coset quantizer
+(:mod:`planner.lattice.cosets`: the nearest of one or two roundings on a box sublattice,
+the box's frame folded into the pose so that it costs nothing per point), fused with the
+rigid transform and the lookup so that no (N, 3) temporary is made per pose; one code
+path serves every named lattice, so their match times compare on equal terms. A lattice
+without a box sublattice of small index uses the project's exact generic quantizer (the
+tables of :meth:`planner.Lattice.quantizer` and
+:func:`planner.lattice.quantize.closest_point3`) in :func:`score_poses`.
 """
 
 from __future__ import annotations
@@ -14,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from planner._numba import njit_cached
+from planner.lattice.cosets import closest_coset3
 from planner.lattice.quantize import candidate_norms3, closest_point3
 from planner.occupancy.keys import in_key_set, pack3
 
@@ -50,6 +53,31 @@ def score_poses(pts, wts, rots, trans, b, binv, cand, cand_z, counts, t, table, 
             x1 = r[1, 0] * a0 + r[1, 1] * a1 + r[1, 2] * a2 + ty
             x2 = r[2, 0] * a0 + r[2, 1] * a1 + r[2, 2] * a2 + tz
             w0, w1, w2 = closest_point3(x0, x1, x2, b, binv, cand, cand_z, counts, t, cn)
+            if (w0 < -_LIM or w0 >= _LIM or w1 < -_LIM or w1 >= _LIM
+                    or w2 < -_LIM or w2 >= _LIM):
+                continue  # beyond the packable range: no stored cell is there
+            if in_key_set(table, mask, pack3(w0, w1, w2)):
+                s += wts[i]
+        out[p] = s
+
+
+@njit_cached(nogil=True)
+def score_poses_cosets(pts, wts, rots, trans, inv_sides, sides, shifts, mb, mo, table, bits,
+                       out):  # pragma: no cover - compiled
+    """:func:`score_poses` with the coset quantizer: ``rots`` (M, 3, 3) and ``trans`` (M, 3)
+    take the points into the box frame (the pose premultiplied by the frame), the other
+    tables are :class:`planner.lattice.cosets.CosetQuantizer`'s."""
+    mask = (1 << bits) - 1
+    for p in range(rots.shape[0]):
+        r = rots[p]
+        tx, ty, tz = trans[p, 0], trans[p, 1], trans[p, 2]
+        s = 0.0
+        for i in range(pts.shape[0]):
+            a0, a1, a2 = pts[i, 0], pts[i, 1], pts[i, 2]
+            y0 = r[0, 0] * a0 + r[0, 1] * a1 + r[0, 2] * a2 + tx
+            y1 = r[1, 0] * a0 + r[1, 1] * a1 + r[1, 2] * a2 + ty
+            y2 = r[2, 0] * a0 + r[2, 1] * a1 + r[2, 2] * a2 + tz
+            w0, w1, w2 = closest_coset3(y0, y1, y2, inv_sides, sides, shifts, mb, mo)
             if (w0 < -_LIM or w0 >= _LIM or w1 < -_LIM or w1 >= _LIM
                     or w2 < -_LIM or w2 >= _LIM):
                 continue  # beyond the packable range: no stored cell is there

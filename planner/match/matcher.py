@@ -32,7 +32,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from planner.errors import MapError, PlannerError
-from planner.lattice import Lattice
+from planner.lattice import Lattice, cosets
 from planner.match import _kernels
 from planner.match.multires import MultiResVoxelList, resolve_lattice
 from planner.match.refine import refine as refine_pose
@@ -134,7 +134,7 @@ def _as_cloud(points, what: str) -> np.ndarray:
 
 def _summary(points: np.ndarray, lattice: Lattice) -> tuple[np.ndarray, np.ndarray]:
     """Per-cell means of ``points`` and their counts, cells of ``lattice``."""
-    _, inv, counts = np.unique(pack(lattice.quantize(points)), return_inverse=True,
+    _, inv, counts = np.unique(pack(cosets.quantize(lattice, points)), return_inverse=True,
                                return_counts=True)
     means = np.stack([np.bincount(inv, points[:, j], len(counts)) for j in range(3)], axis=1)
     return np.ascontiguousarray(means / counts[:, None]), counts.astype(float)
@@ -149,9 +149,17 @@ class _Scorer:
 
     def __call__(self, rots: np.ndarray, trans: np.ndarray) -> np.ndarray:
         out = np.empty(len(rots))
-        _kernels.score_poses(self.pts, self.wts, np.ascontiguousarray(rots),
-                             np.ascontiguousarray(trans), *self.lv.tables, self.lv.table,
-                             self.lv.bits, out)
+        cq = self.lv.cosets
+        if cq is None:
+            _kernels.score_poses(self.pts, self.wts, np.ascontiguousarray(rots),
+                                 np.ascontiguousarray(trans), *self.lv.tables, self.lv.table,
+                                 self.lv.bits, out)
+        else:  # the box frame folded into the poses: y = F (R p + t)
+            _kernels.score_poses_cosets(self.pts, self.wts,
+                                        np.ascontiguousarray(cq.frame @ rots),
+                                        np.ascontiguousarray(trans @ cq.frame.T),
+                                        cq.inv_sides, cq.sides, cq.shifts, cq.index_basis,
+                                        cq.index_offsets, self.lv.table, self.lv.bits, out)
         self.evaluations += len(rots)
         return out
 
@@ -251,10 +259,11 @@ def match(source, reference, *, lattice: str | Lattice = "fcc", cell_volume: flo
     n_hit = int(round(fine(r[None], t[None])[0]))
     steps = 0
     if refine:
-        lat0 = ref.level(0).lattice
-        pts, wts = _summary(src, Lattice(lat0.generator / summary))
-        r2, t2, steps = refine_pose(pts, wts, ref.planes(), ref.level(ref.plane_level).lattice,
-                                    r, t, 20)
+        # The source summarised as for the plane level's search: points of the same
+        # half-cell fall on the same plane anyway.
+        plane_lat = ref.level(ref.plane_level).lattice
+        pts, wts = _summary(src, Lattice(plane_lat.generator / summary))
+        r2, t2, steps = refine_pose(pts, wts, ref.planes(), plane_lat, r, t, 20)
         n2 = int(round(fine(r2[None], t2[None])[0]))
         if steps and n2 >= 0.95 * n_hit:
             r, t, n_hit = r2, t2, n2

@@ -24,7 +24,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from planner.lattice import Lattice
+from planner.lattice import Lattice, cosets
 from planner.occupancy.keys import pack
 
 __all__ = ["CellPlanes", "MIN_POINTS", "cell_planes", "refine"]
@@ -53,7 +53,7 @@ class CellPlanes(NamedTuple):
 
 
 def _moments(points: np.ndarray, lattice: Lattice):
-    keys, inv, counts = np.unique(pack(lattice.quantize(points)), return_inverse=True,
+    keys, inv, counts = np.unique(pack(cosets.quantize(lattice, points)), return_inverse=True,
                                   return_counts=True)
     inv = inv.ravel()
     k = len(keys)
@@ -89,7 +89,7 @@ def refine(points: np.ndarray, weights: np.ndarray, planes: CellPlanes, lattice:
     steps = 0
     for _ in range(iterations):
         q = points @ r.T + t
-        keys = pack(lattice.quantize(q))
+        keys = pack(cosets.quantize(lattice, q))
         pos = np.minimum(np.searchsorted(planes.keys, keys), len(planes.keys) - 1)
         hit = planes.keys[pos] == keys if len(planes.keys) else np.zeros(len(q), bool)
         if hit.sum() < 6:
