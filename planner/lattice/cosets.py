@@ -157,21 +157,23 @@ def closest_coset3(y0, y1, y2, inv_sides, sides, shifts, mb, mo):  # pragma: no 
     """Indices (three int64, in the user's generator) of the lattice point closest to the
     point whose box-frame coordinates are ``(y0, y1, y2)`` (m, i.e. ``frame @ x``): the
     nearest of one rounding per coset. The tables are :class:`CosetQuantizer`'s."""
-    best_d = np.inf
-    b0 = b1 = b2 = 0.0
+    u0, u1, u2 = y0 * inv_sides[0], y1 * inv_sides[1], y2 * inv_sides[2]
+    n0, n1, n2 = np.rint(u0), np.rint(u1), np.rint(u2)
     bc = 0
-    for c in range(shifts.shape[0]):
-        u0 = (y0 - shifts[c, 0]) * inv_sides[0]
-        u1 = (y1 - shifts[c, 1]) * inv_sides[1]
-        u2 = (y2 - shifts[c, 2]) * inv_sides[2]
-        n0, n1, n2 = np.rint(u0), np.rint(u1), np.rint(u2)
-        e0 = (u0 - n0) * sides[0]
-        e1 = (u1 - n1) * sides[1]
-        e2 = (u2 - n2) * sides[2]
-        d = e0 * e0 + e1 * e1 + e2 * e2
-        if d < best_d:
-            best_d, b0, b1, b2, bc = d, n0, n1, n2, c
-    i0, i1, i2 = np.int64(b0), np.int64(b1), np.int64(b2)
+    if shifts.shape[0] > 1:
+        # Distances in metres: the box may have unequal sides.
+        e0, e1, e2 = (u0 - n0) * sides[0], (u1 - n1) * sides[1], (u2 - n2) * sides[2]
+        best_d = e0 * e0 + e1 * e1 + e2 * e2
+        for c in range(1, shifts.shape[0]):
+            v0 = u0 - shifts[c, 0] * inv_sides[0]
+            v1 = u1 - shifts[c, 1] * inv_sides[1]
+            v2 = u2 - shifts[c, 2] * inv_sides[2]
+            m0, m1, m2 = np.rint(v0), np.rint(v1), np.rint(v2)
+            e0, e1, e2 = (v0 - m0) * sides[0], (v1 - m1) * sides[1], (v2 - m2) * sides[2]
+            d = e0 * e0 + e1 * e1 + e2 * e2
+            if d < best_d:
+                best_d, n0, n1, n2, bc = d, m0, m1, m2, c
+    i0, i1, i2 = np.int64(n0), np.int64(n1), np.int64(n2)
     return (mb[0, 0] * i0 + mb[0, 1] * i1 + mb[0, 2] * i2 + mo[bc, 0],
             mb[1, 0] * i0 + mb[1, 1] * i1 + mb[1, 2] * i2 + mo[bc, 1],
             mb[2, 0] * i0 + mb[2, 1] * i1 + mb[2, 2] * i2 + mo[bc, 2])
