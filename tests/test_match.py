@@ -101,3 +101,21 @@ def test_pose_index_agrees_with_brute_force(lattice):
     assert np.array_equal(idx.near(queries), d <= 1.0)
     q = np.concatenate([stored[:5], Rotation.random(5, random_state=1).as_quat()], axis=1)
     assert idx.near(q).all()  # (N, 7) pose rows: a stored position is near itself
+
+
+@pytest.mark.parametrize("lattice", ["bcc", "hex"])
+def test_pose_index_grown_in_many_adds_agrees_with_brute_force_where_poses_pile_up(lattice):
+    rng = np.random.default_rng(12)
+    spread = rng.uniform(-20, 20, (1500, 3))
+    pile = rng.normal(scale=0.3, size=(3000, 3)) + [2.0, -1.0, 0.5]  # hundreds per cell
+    stored = np.concatenate([spread, pile])[rng.permutation(4500)]
+    idx = PoseIndex(0.5, lattice=lattice)
+    for part in np.array_split(stored, 60):  # the arrays and the hash map grow many times
+        idx.add(part)
+    assert len(idx) == 4500
+    queries = np.concatenate([rng.uniform(-20, 20, (3000, 3)),
+                              rng.normal(scale=1.0, size=(3000, 3)) + [2.0, -1.0, 0.5]])
+    d = np.sqrt(((queries[:, None] - stored[None]) ** 2).sum(axis=2)).min(axis=1)
+    got = idx.near(queries)
+    assert np.array_equal(got, d <= 0.5) and 0.2 < got.mean() < 0.8
+    assert not PoseIndex(0.5).near(queries[:3]).any()  # an empty index is near nothing

@@ -30,7 +30,7 @@ import numpy as np
 from planner._numba import njit_cached
 
 __all__ = ["CosetQuantizer", "MAX_COSETS", "closest_coset3", "coset_quantizer", "quantize",
-           "quantize_cosets3"]
+           "quantize_cosets3", "quantize_with"]
 
 MAX_COSETS = 4
 _RANGE = 3  # coefficients searched per reduced basis vector
@@ -200,6 +200,11 @@ def quantize(lattice, points: np.ndarray) -> np.ndarray:
     cq = coset_quantizer(lattice)
     if cq is None:
         return lattice.quantize(points)
+    return quantize_with(cq, points)
+
+
+def quantize_with(cq: CosetQuantizer, points: np.ndarray) -> np.ndarray:
+    """:func:`quantize` with the lattice's :class:`CosetQuantizer` already in hand."""
     x = np.ascontiguousarray(points, dtype=np.float64)
     out = np.empty((len(x), 3), dtype=np.int64)
     quantize_cosets3(x, cq.frame, cq.inv_sides, cq.sides, cq.shifts, cq.index_basis,
