@@ -10,8 +10,9 @@ same cube. Per size: the CPU time per query of ``PoseIndex.near`` (one batch cal
 ``cKDTree.query(k=1, distance_upper_bound=r)`` on the same poses (tree built untimed), the
 ratio to the 1e3 row; the CPU time per pose of building the index in 1,000 ``add`` calls
 (every doubling of its arrays included: the amortised cost); and the mean and the largest
-of 1,000 single-pose ``add`` calls (500 at 1e3) into the index holding that many poses (Python's call
-overhead included; the largest is the call that doubled the arrays, if one did). cKDTree
+of 1,000 single-pose ``add`` calls (500 at 1e3) into the index holding that many poses
+(Python's call overhead included; the largest is the call that doubled the arrays, if one
+did). cKDTree
 has no add: its build time over the poses is shown instead. Answers are checked equal to
 the tree's on every query.
 """
