@@ -18,7 +18,7 @@ random rotation (``scipy.spatial.transform.Rotation.random``), so that walls on 
 favour no lattice, and starts from one random initial error (uniform direction, offset
 uniform in [0, ``max_offset``] m, angle uniform in [0, ``max_angle``] degrees about a
 uniform axis); both come from ``numpy.random.default_rng([seed, pair, k])``, so every
-lattice and the ICP anchor see the same draws, and trial ``k`` does not depend on how many
+lattice and every anchor see the same draws, and trial ``k`` does not depend on how many
 trials are run (``--trials`` can grow a resumed run).
 """
 

@@ -10,11 +10,14 @@ transformed source's centroid), moving to the best strict improvement and halvin
 steps when none improves. The translation step starts at half the level's cell side and the
 rotation step is that step over the source's RMS radius, so both move points by about half
 a cell; a level ends when the step falls below an eighth of its cell side (the finest
-level: a sixteenth), and the search continues at the next finer level.
+level: a sixteenth), and the search continues at the next finer level. With the
+refinement (the default) the search ends at the refinement's plane level (level 1, cells
+of twice the finest side): the refinement places the pose more finely than the finest
+level's discrete steps could, and the finest level's search was half of a match's time.
 
 At each level the source is summarised by the means of its points per cell of that level's
 lattice scaled by one half, each weighted by its point count, so the weighted score
-approximates the point count at a fraction of the cost; the final score is counted on
+approximates the point count at a fraction of the cost; the reported score is counted on
 every source point at the finest level. The discrete pose is then refined continuously
 (:mod:`planner.match.refine`: point-to-plane least squares on the matched cells' planes),
 and the refined pose is kept unless it holds fewer than 95% of the discrete pose's points
