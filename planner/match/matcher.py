@@ -13,7 +13,7 @@ a cell; a level ends when the step falls below an eighth of its cell side (the f
 level: a sixteenth), and the search continues at the next finer level. With the
 refinement (the default) the search ends at the refinement's plane level (level 1, cells
 of twice the finest side): the refinement places the pose more finely than the finest
-level's discrete steps could, and the finest level's search was half of a match's time.
+level's discrete steps could, and the finest level's search was a match's costliest part.
 
 At each level the source is summarised by the means of its points per cell of that level's
 lattice scaled by one half, each weighted by its point count, so the weighted score

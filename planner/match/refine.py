@@ -8,9 +8,9 @@ of its reference points and the normal of their local plane (the eigenvector of 
 smallest eigenvalue of their covariance; a cell whose points are not planar, smallest
 eigenvalue above a third of the middle one, is left out). The matcher uses the cells of
 the second finest level (twice the finest side): on the finest cells (0.1 m by default)
-few points and 2 cm of range noise give normals too noisy to fix the rotation, which left
-errors of 0.5-1 degree on geb079's simulated pairs, against 0.15-0.3 degree on the
-coarser cells (the experiment's ``default`` regime measures the result). Gauss-Newton
+few points and 2 cm of range noise give normals too noisy to fix the rotation (several
+times the rotation error on geb079's simulated pairs); the experiment's ``default`` regime
+measures the result. Gauss-Newton
 then minimises
 ``sum w_i (n_i . (R p_i + t - mu_i))^2`` over the source points ``p_i`` whose cell is
 occupied, looking the cells up again after every step (the matched cells move with the
