@@ -1,19 +1,18 @@
 """The matcher's final continuous refinement: point-to-plane least squares on matched cells.
 
-The discrete search ends on a pose quantized to a sixteenth of the finest cell, and its
-objective (points in occupied cells) is flat inside a cell, so it cannot place a surface
-more finely than a cell allows. The refinement works on the cells the source points land
-in: each occupied reference cell with at least :data:`MIN_POINTS` points carries the mean
-of its reference points and the normal of their local plane (the eigenvector of the
-smallest eigenvalue of their covariance; a cell whose points are not planar, smallest
-eigenvalue above a third of the middle one, is left out). The matcher uses the cells of
-the second finest level (twice the finest side): on the finest cells (0.1 m by default)
-few points and 2 cm of range noise give normals too noisy to fix the rotation (several
-times the rotation error on geb079's simulated pairs); the experiment's ``default`` regime
-measures the result. Gauss-Newton
-then minimises
-``sum w_i (n_i . (R p_i + t - mu_i))^2`` over the source points ``p_i`` whose cell is
-occupied, looking the cells up again after every step (the matched cells move with the
+The discrete search ends on a pose quantized to a fraction of a cell, and its objective
+(points in occupied cells) is flat inside a cell, so it cannot place a surface more finely
+than a cell allows. The refinement works on the cells the source points land in: each
+occupied reference cell with at least :data:`MIN_POINTS` points carries the mean of its
+reference points and the normal of their local plane (the eigenvector of the smallest
+eigenvalue of their covariance; a cell whose points are not planar, smallest eigenvalue
+above a third of the middle one, is left out). The matcher uses the cells of the second
+finest level (twice the finest side): on the finest cells (0.1 m by default) few points
+and 2 cm of range noise give normals too noisy to fix the rotation (several times the
+rotation error on geb079's simulated pairs); the experiment's ``default`` regime measures
+the result. Gauss-Newton then minimises ``sum w_i (n_i . (R p_i + t - mu_i))^2`` over the
+source points ``p_i`` (the source summarised per half cell, weighted by counts) whose cell
+is occupied, looking the cells up again after every step (the matched cells move with the
 pose), with a small Levenberg damping so that a direction no plane constrains (a corridor)
 stays where the search left it.
 """
