@@ -116,7 +116,8 @@ def test_cli_runs_user_pairs_end_to_end(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("extra", [["--sources", "moon"], ["--data", "/nonexistent"],
-                                   ["--lattices", "cubic,square"],
+                                   ["--lattices", "cubic,square"], ["--anchors", "icp"],
+                                   ["--regimes", "default,near"],
                                    ["--sources", "", "--pair", "a.npy", "b.npy", "t.txt"],
                                    ["--plot", "fig.gif"]])
 def test_cli_bad_input_is_one_line_exit_2(tmp_path, capsys, extra):
