@@ -2,9 +2,11 @@
 
 Three kinds of pair:
 
-* **truth** pairs, whose relative pose is known: the Velodyne sweeps with their
-  ``relative.txt``, scans simulated in geb079 at known poses (:mod:`planner.match.simulate`),
-  or any user pair ``SOURCE REFERENCE TRANSFORM.txt``;
+* **truth** pairs, whose relative pose is known: scans simulated in geb079 at known poses
+  (:mod:`planner.match.simulate`; each scan cast independently with its own range noise,
+  so no point is shared: exact truth, the headline), the Velodyne sweeps with their
+  ``relative.txt`` (itself a measurement: the report prints how far from it every method
+  converges), or any user pair ``SOURCE REFERENCE TRANSFORM.txt``;
 * the **consistency** pair, PCL's two room scans, which have no ground truth, only the
   odometry guess published with them (PCL's NDT tutorial: 0.6931 rad about z, then
   (1.79387, 0.720047, 0) m, room_scan2 into room_scan1's frame); each method matches A->B
