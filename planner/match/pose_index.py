@@ -69,7 +69,7 @@ class PoseIndex:
         self._cells = 0
         self._tkeys = np.full(64, -1, dtype=np.int64)
         self._theads = np.full(64, -1, dtype=np.int64)
-        self._bitmap = np.zeros(4, dtype=np.uint64)  # 4 bits per slot
+        self._bitmap = np.zeros(16, dtype=np.uint64)  # 16 bits per slot
         self._cq = cosets.coset_quantizer(self.lattice)
 
     def __len__(self) -> int:
@@ -113,7 +113,7 @@ class PoseIndex:
         if slots != len(self._tkeys):
             keys = np.full(slots, -1, dtype=np.int64)
             heads = np.full(slots, -1, dtype=np.int64)
-            bitmap = np.zeros(slots // 16, dtype=np.uint64)
+            bitmap = np.zeros(slots // 4, dtype=np.uint64)
             _pose_kernels.rehash(self._tkeys, self._theads, keys, heads, bitmap)
             self._tkeys, self._theads, self._bitmap = keys, heads, bitmap
 
