@@ -6,9 +6,8 @@ cell (-1: the end), so an add writes two entries and never moves stored rows. A 
 16 bits per slot answers most probes of empty cells without reading the table: one 64-bit
 word per block of 4 x 4 x 4 cells (blocks hashed onto words), one bit per cell, so the
 some 50 neighbouring cells a query that finds nothing probes read a few words instead of
-50 scattered slots (at 1e6 cells the table is 32 MB, the bitmap 4 MB; 4 bits per slot
-made the 1e6-pose uniform queries of ``benchmarks/pose_index_speed.py`` some 15% slower
-through false positives).
+50 scattered slots (at 1e6 cells the table is 32 MB, the bitmap 4 MB: fewer bits per slot
+let more empty cells through to the table as false positives).
 """
 
 from __future__ import annotations
