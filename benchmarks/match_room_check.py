@@ -1,6 +1,7 @@
 """Why a room-pair trial of ``planner match-experiment`` fails: search or objective?
 
-Run: ``python benchmarks/match_room_check.py [--trial K] [--lattice hex] [--seed 0]``.
+Run: ``python benchmarks/match_room_check.py [--trial K] [--lattice hex] [--seed 0]
+[--data ../shared/data]``.
 Replays trial K of the room pair (pair index 4 in the default source order velodyne,
 3 x geb079, room) exactly as the experiment draws it, matches B->A (room_scan1 onto
 room_scan2) on ``--lattice`` and on cubic, and scores both end poses on every lattice: the
@@ -27,8 +28,9 @@ def main() -> None:
     ap.add_argument("--lattice", default="hex", choices=NAMED_LATTICES)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--pair-index", type=int, default=4)
+    ap.add_argument("--data", type=Path, default=DATA)
     a = ap.parse_args()
-    pair = room_pair(DATA)
+    pair = room_pair(a.data)
     t = draw_trial(a.seed, a.pair_index, a.trial, 0.5, 10.0)
     r = t.rotation[:3, :3]
     src, ref = pair.source @ r.T, pair.reference @ r.T

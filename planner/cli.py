@@ -224,7 +224,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print the result as JSON")
 
     p = sub.add_parser("match-experiment", help="the paper's Fig. 6: scan-matching errors "
-                       "per lattice and the ICP anchor from random initial errors")
+                       "per lattice and registration anchor (GICP) from random initial "
+                       "errors, per regime")
     p.add_argument("--data", default="../shared/data", help="data folder of the sources")
     p.add_argument("--sources", default="velodyne,geb079,room",
                    help="comma-separated: velodyne, geb079 (simulated), room (consistency)")
@@ -232,6 +233,13 @@ def build_parser() -> argparse.ArgumentParser:
                    help="an extra pair: two point files and the 4x4 source -> reference "
                         "transform (text); repeatable")
     p.add_argument("--lattices", default=",".join(NAMED_LATTICES), help="comma-separated")
+    p.add_argument("--anchors", default=None,
+                   help="comma-separated registration anchors: gicp, gicp-c2f, plane-icp "
+                        "(default: all when the 'match' extra is installed)")
+    p.add_argument("--regimes", default="default",
+                   help="comma-separated: default (0.5 m, 10 deg, or --max-offset/--max-angle), "
+                        "far (2 m, 45 deg), overlap (about 40%%), sparse (2,000 points), or "
+                        "all")
     p.add_argument("--trials", type=T.int_range(1), default=6,
                    help="random initial errors (and rotations) per pair")
     p.add_argument("--simulated-pairs", type=T.int_range(1), default=1,
@@ -244,7 +252,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", default="results/fig6", help="output folder")
     p.add_argument("--plot", default=None, help="box plot (.png, .pdf, .svg; default "
                                                 "OUT/fig6.png)")
-    p.add_argument("--no-icp", action="store_true", help="leave out the ICP anchor")
+    p.add_argument("--no-icp", action="store_true", help="leave out the registration anchors")
     p.add_argument("--resume", action="store_true", help="keep finished rows, run the rest")
     p.add_argument("--force", action="store_true", help="delete finished rows, start again")
     p.add_argument("--no-progress", action="store_true", help="no progress on stderr")

@@ -37,7 +37,22 @@ def test_recovers_a_known_transform_on_every_lattice(lattice):
     res = match(src, ref, lattice=lattice, cell_volume=0.001, levels=4)
     pos, rot = pose_error(res.transform, truth)
     assert pos < 0.05 and rot < 1.0
-    assert res.levels == 4 and len(res.iterations) == 4
+    # The discrete search ends at the refinement's plane level (level 1), then refines.
+    assert res.levels == 4 and len(res.iterations) == 3 and res.refinement > 0
+
+
+def test_the_continuous_refinement_beats_the_discrete_pose():
+    rng = np.random.default_rng(5)
+    ref = _room(rng)
+    truth = pose_matrix([0.3, -0.2, 0.1, 2.0, -1.0, 6.0])
+    src = (_room(rng) - truth[:3, 3]) @ truth[:3, :3]
+    for lattice in ("cubic", "fcc"):
+        fine = match(src, ref, lattice=lattice, levels=4)
+        coarse = match(src, ref, lattice=lattice, levels=4, refine=False)
+        assert len(coarse.iterations) == 4 and coarse.refinement == 0
+        e_fine, e_coarse = pose_error(fine.transform, truth), pose_error(coarse.transform, truth)
+        assert e_fine[0] < 0.005 and e_fine[1] < 0.05, e_fine  # discrete: 6-26 mm
+        assert e_fine[0] < e_coarse[0] / 2 and e_fine[1] < e_coarse[1] / 2, (e_fine, e_coarse)
 
 
 @pytest.mark.skipif(not VELODYNE.is_dir(), reason="Velodyne pair not present")
@@ -86,3 +101,21 @@ def test_pose_index_agrees_with_brute_force(lattice):
     assert np.array_equal(idx.near(queries), d <= 1.0)
     q = np.concatenate([stored[:5], Rotation.random(5, random_state=1).as_quat()], axis=1)
     assert idx.near(q).all()  # (N, 7) pose rows: a stored position is near itself
+
+
+@pytest.mark.parametrize("lattice", ["bcc", "hex"])
+def test_pose_index_grown_in_many_adds_agrees_with_brute_force_where_poses_pile_up(lattice):
+    rng = np.random.default_rng(12)
+    spread = rng.uniform(-20, 20, (1500, 3))
+    pile = rng.normal(scale=0.3, size=(3000, 3)) + [2.0, -1.0, 0.5]  # hundreds per cell
+    stored = np.concatenate([spread, pile])[rng.permutation(4500)]
+    idx = PoseIndex(0.5, lattice=lattice)
+    for part in np.array_split(stored, 60):  # the arrays and the hash map grow many times
+        idx.add(part)
+    assert len(idx) == 4500
+    queries = np.concatenate([rng.uniform(-20, 20, (3000, 3)),
+                              rng.normal(scale=1.0, size=(3000, 3)) + [2.0, -1.0, 0.5]])
+    d = np.sqrt(((queries[:, None] - stored[None]) ** 2).sum(axis=2)).min(axis=1)
+    got = idx.near(queries)
+    assert np.array_equal(got, d <= 0.5) and 0.2 < got.mean() < 0.8
+    assert not PoseIndex(0.5).near(queries[:3]).any()  # an empty index is near nothing

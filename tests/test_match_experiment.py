@@ -8,9 +8,10 @@ import pytest
 
 from planner.cli import main
 from planner.errors import PlannerError
-from planner.match import pose_matrix
+from planner.match import anchor, pose_matrix
 from planner.match.experiment import ROWS, read_rows, run_experiment
 from planner.match.experiment_pairs import Pair, draw_trial, load_sources
+from planner.match.experiment_regimes import REGIMES, regime_scans
 from planner.match.experiment_report import format_report, write_outputs
 
 DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
@@ -42,7 +43,7 @@ def _pair(name, seed, kind="truth"):
 
 
 def _run(out, pairs, trials, **kw):
-    kw.setdefault("icp", False)
+    kw.setdefault("anchors", [])
     return run_experiment(pairs, out, lattices=LATTICES, trials=trials, max_offset=0.3,
                           max_angle=5.0, progress=False, **kw)
 
@@ -56,13 +57,14 @@ def test_every_method_sees_the_same_draws_and_the_report_has_its_tables(tmp_path
                      if r["method"] == m] for m in LATTICES}
     assert by_method["cubic"] == by_method["fcc"]
     summary = write_outputs(rows, LATTICES, tmp_path)
-    assert list(summary["methods"]) == LATTICES
-    for s in summary["methods"].values():
+    default = summary["regimes"]["default"]
+    assert list(default["methods"]) == LATTICES
+    for s in default["methods"].values():
         assert s["n"] == 3 and s["success"]["rate"] == 1.0 and s["outliers"]["rate"] == 0.0
         lo, hi = s["position_error"]["ci"]
         assert lo <= s["position_error"]["median"] <= hi
-    assert set(summary["consistency"]) == set(LATTICES)
-    assert summary["consistency"]["fcc"]["position_residual"]["median"] < 0.05
+    assert set(default["consistency"]) == set(LATTICES)
+    assert default["consistency"]["fcc"]["position_residual"]["median"] < 0.05
     assert summary["paired"]["fcc"]["n"] == 3
     assert summary["verdict"].startswith("Verdict on the paper's claim")
     text = (tmp_path / "table.md").read_text()
@@ -82,7 +84,7 @@ def test_resume_runs_only_the_missing_trials_and_survives_a_cut_line(tmp_path):
     rows = _run(tmp_path, pairs, trials=2, resume=True)
     assert rows[:len(first)] == first  # the finished rows were kept, not rerun
     assert sorted((r["trial"], r["method"]) for r in rows) == sorted(
-        (f"0/{k}", m) for k in range(2) for m in LATTICES)
+        (f"default/0/{k}", m) for k in range(2) for m in LATTICES)
     assert len(read_rows(tmp_path / ROWS)) == len(rows)
     with pytest.raises(PlannerError, match="other settings"):
         _run(tmp_path, pairs, trials=2, resume=True, seed=5)
@@ -114,7 +116,8 @@ def test_cli_runs_user_pairs_end_to_end(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("extra", [["--sources", "moon"], ["--data", "/nonexistent"],
-                                   ["--lattices", "cubic,square"],
+                                   ["--lattices", "cubic,square"], ["--anchors", "icp"],
+                                   ["--regimes", "default,near"],
                                    ["--sources", "", "--pair", "a.npy", "b.npy", "t.txt"],
                                    ["--plot", "fig.gif"]])
 def test_cli_bad_input_is_one_line_exit_2(tmp_path, capsys, extra):
@@ -127,7 +130,7 @@ def test_cli_bad_input_is_one_line_exit_2(tmp_path, capsys, extra):
 @pytest.mark.skipif(not (DATA / "velodyne").is_dir(), reason="Velodyne pair not present")
 def test_velodyne_trial_succeeds_on_fcc(tmp_path):
     pairs = load_sources(["velodyne"], DATA)
-    rows = run_experiment(pairs, tmp_path, lattices=["fcc"], icp=False, trials=1,
+    rows = run_experiment(pairs, tmp_path, lattices=["fcc"], anchors=[], trials=1,
                           progress=False)
     assert rows[0]["position_error"] < 0.05 and rows[0]["rotation_error"] < 1.0
 
@@ -139,3 +142,38 @@ def test_simulated_geb079_pairs_have_their_separations():
     seps = sorted(round(float(np.linalg.norm(p.transform[:3, 3])), 6) for p in pairs)
     assert seps == [0.25, 0.5, 1.0]
     assert all(len(p.source) > 10000 and len(p.reference) > 10000 for p in pairs)
+
+
+def test_regimes_cut_and_thin_the_scans_the_same_way_for_every_method():
+    pair = _pair("a", 1)
+    full = regime_scans(REGIMES["default"], pair.source, pair.reference, pair.transform,
+                        0, 0, 0)
+    assert full[0] is pair.source and full[1] is pair.reference
+    src, ref = regime_scans(REGIMES["sparse"], pair.source, pair.reference, pair.transform,
+                            0, 0, 0)
+    assert len(src) == len(ref) == 2000
+    src, ref = regime_scans(REGIMES["overlap"], pair.source, pair.reference, pair.transform,
+                            0, 0, 0)
+    assert 0.5 < len(src) / len(pair.source) < 0.85 and 0.5 < len(ref) / len(pair.reference)
+    again = regime_scans(REGIMES["overlap"], pair.source, pair.reference, pair.transform,
+                         0, 0, 0)
+    assert np.array_equal(src, again[0]) and np.array_equal(ref, again[1])
+
+
+@pytest.mark.skipif(not anchor.available(), reason="the 'match' extra is not installed")
+def test_regimes_and_anchors_are_reported_with_where_the_lattice_matcher_loses(tmp_path):
+    rows = _run(tmp_path, [_pair("a", 1)], trials=1, anchors=["gicp"],
+                regimes=["default", "far", "sparse"])
+    assert sorted({(r["regime"], r["method"]) for r in rows}) == sorted(
+        (g, m) for g in ("default", "far", "sparse") for m in [*LATTICES, "gicp"])
+    assert {r["source_points"] for r in rows if r["regime"] == "sparse"} == {2000}
+    far = [r for r in rows if r["regime"] == "far"]
+    assert max(r["initial_position_error"] for r in far) > 0.3  # far's own draw, not 0.3 m
+    summary = write_outputs(rows, [*LATTICES, "gicp"], tmp_path)
+    text = format_report(summary)
+    assert "Regime far, truth pairs:" in text and "| gicp | 1 |" in text
+    niche = summary["niche"]
+    assert set(niche["regimes"]) == {"default", "far", "sparse"}
+    assert niche["text"].startswith("The lattice matcher wins")
+    for g, v in niche["regimes"].items():  # the sentence names each regime's outcome
+        assert f"{g}: the lattice matcher {'wins' if v['lattice_wins'] else 'loses'}" in text

@@ -12,6 +12,7 @@ from planner.io import load_points
 from planner.match import anchor
 from planner.match.experiment import run_experiment, trial_methods
 from planner.match.experiment_pairs import load_sources, user_pair
+from planner.match.experiment_regimes import REGIMES, parse_regimes
 from planner.match.experiment_report import format_report, write_outputs
 from planner.match.matcher import match, pose_matrix
 
@@ -37,26 +38,39 @@ def run_match(source: str, reference: str, *, lattice: str = "fcc", cell_volume:
     return 0
 
 
+def _anchors(a) -> list[str]:
+    """The anchors a run asks for (checked), or all of them when the extra is installed."""
+    if a.no_icp:
+        return []
+    if a.anchors is not None:
+        return [s for s in a.anchors.split(",") if s]
+    if not anchor.available():
+        print(f"planner: note: anchors left out, {anchor.EXTRA_MESSAGE}", file=sys.stderr)
+        return []
+    return list(anchor.ANCHORS)
+
+
 def run_match_experiment(a) -> int:
     """``planner match-experiment``: the pairs from ``a.sources`` (in ``a.data``) and
-    ``a.pair`` triples, the trials (:func:`planner.match.experiment.run_experiment`), then
-    the table and verdict on stdout and the outputs in ``a.out``. Returns 0."""
+    ``a.pair`` triples, the trials of every regime
+    (:func:`planner.match.experiment.run_experiment`), then the tables and verdicts on
+    stdout and the outputs in ``a.out``. Returns 0."""
     names = [s for s in (a.sources or "").split(",") if s]
-    trial_methods(a.lattices.split(","), False)  # bad names refused before loading data
+    anchors = _anchors(a)
+    regimes = list(REGIMES) if a.regimes == "all" else a.regimes.split(",")
+    parse_regimes(regimes)  # bad names refused before loading data
+    methods = trial_methods(a.lattices.split(","), anchors)
     pairs = load_sources(names, a.data, seed=a.seed,
                          simulated_per_separation=a.simulated_pairs,
                          cell_volume=a.cell_volume, levels=a.levels)
     pairs += [user_pair(*p) for p in a.pair or []]
     if not pairs:
         raise PlannerError("no pairs: name --sources or give --pair SOURCE REFERENCE T.txt")
-    if not a.no_icp and not anchor.available():
-        print(f"planner: note: ICP left out, {anchor.EXTRA_MESSAGE}", file=sys.stderr)
-    rows = run_experiment(pairs, a.out, lattices=a.lattices.split(","),
-                          icp=False if a.no_icp else None, trials=a.trials,
-                          cell_volume=a.cell_volume, levels=a.levels, seed=a.seed,
-                          max_offset=a.max_offset, max_angle=a.max_angle, resume=a.resume,
-                          force=a.force, progress=not a.no_progress)
-    methods = trial_methods(a.lattices.split(","), any(r["method"] == "icp" for r in rows))
+    rows = run_experiment(pairs, a.out, lattices=a.lattices.split(","), anchors=anchors,
+                          regimes=regimes, trials=a.trials, cell_volume=a.cell_volume,
+                          levels=a.levels, seed=a.seed, max_offset=a.max_offset,
+                          max_angle=a.max_angle, resume=a.resume, force=a.force,
+                          progress=not a.no_progress)
     summary = write_outputs(rows, methods, a.out, a.plot)
     print(format_report(summary), end="")
     print(f"{len(rows)} rows in {a.out}/trials.jsonl; table.md, summary.json, trials.csv "

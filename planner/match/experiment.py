@@ -1,18 +1,20 @@
 """The paper's Fig. 6: scan-matching errors per lattice, from one command.
 
 ``planner match-experiment`` (or :func:`run_experiment`) matches every pair of
-:mod:`planner.match.experiment_pairs` from many random initial errors (up to 0.5 m and 10
-degrees) on every lattice at the same finest cell volume, and with the ICP anchor
+:mod:`planner.match.experiment_pairs` in every regime of
+:mod:`planner.match.experiment_regimes` (by default: initial errors up to 0.5 m and 10
+degrees) on every lattice at the same finest cell volume, and with the registration anchors
 (:mod:`planner.match.anchor`, when the ``match`` extra is installed), all with the same
-draws. Each finished (trial, method) row is appended to ``OUT/trials.jsonl`` at once, so a
-killed run loses no finished trial and ``--resume`` runs only the rest; the report
+draws and the same scans. Each finished (regime, trial, method) row is appended to
+``OUT/trials.jsonl`` at once, so a killed run loses no finished trial and ``--resume``
+runs only the rest; the report
 (:mod:`planner.match.experiment_report`) is then written: ``OUT/table.md``,
 ``OUT/summary.json``, ``OUT/trials.csv`` and the box plot (``OUT/fig6.png`` or ``--plot``).
 
-Time per match is wall time on one thread: for the lattices, building the reference's
-multi-resolution voxel list plus the match; for ICP, its downsampling, normals and k-d tree
-plus the registration. Each method is run once on a small cloud before any trial, so that
-compilation is never timed.
+Time per match is the process's CPU time, one thread: for the lattices, building the
+reference's multi-resolution voxel list plus the match; for the anchors, their downsampling,
+covariances and k-d trees plus the registration. Each method is run once on a small
+cloud before any trial, so that compilation is never timed.
 """
 
 from __future__ import annotations
@@ -29,6 +31,7 @@ from planner.fsutil import write_text_atomic
 from planner.lattice import NAMED_LATTICES, Lattice
 from planner.match import anchor
 from planner.match.experiment_pairs import Pair, Trial, draw_trial
+from planner.match.experiment_regimes import Regime, parse_regimes, regime_scans
 from planner.match.matcher import match, pose_error
 from planner.match.multires import MultiResVoxelList
 
@@ -38,14 +41,19 @@ ROWS = "trials.jsonl"
 _CONFIG = "config.json"
 
 
-def trial_methods(lattices: list[str], icp: bool) -> list[str]:
-    """The methods of a run: the lattices (cubic first when present), then ``icp``."""
+def trial_methods(lattices: list[str], anchors: list[str] = ()) -> list[str]:
+    """The methods of a run: the lattices (cubic first when present), then the anchors in
+    :data:`planner.match.anchor.ANCHORS` order."""
     bad = [n for n in lattices if n not in NAMED_LATTICES]
     if bad or not lattices:
         raise PlannerError(f"unknown lattice {bad[0] if bad else '(none)'!r}: choose from "
                            f"{', '.join(NAMED_LATTICES)}")
+    bad = [n for n in anchors if n not in anchor.ANCHORS]
+    if bad:
+        raise PlannerError(f"unknown anchor {bad[0]!r}: choose from "
+                           f"{', '.join(anchor.ANCHORS)}")
     ordered = [n for n in NAMED_LATTICES if n in lattices]
-    return ordered + (["icp"] if icp else [])
+    return ordered + [n for n in anchor.ANCHORS if n in anchors]
 
 
 def read_rows(path: str | Path) -> list[dict]:
@@ -96,21 +104,25 @@ def _conj(rot: np.ndarray, m: np.ndarray) -> np.ndarray:
 
 
 def _lattice_match(src, ref, lattice: Lattice, levels: int, init) -> tuple[np.ndarray, float]:
-    t0 = time.perf_counter()
+    t0 = time.process_time()
     res = match(src, MultiResVoxelList(ref, lattice, levels), init=init)
-    return res.transform, time.perf_counter() - t0
+    return res.transform, time.process_time() - t0
 
 
 def _run_one(method: str, src, ref, init, lattice: Lattice | None, levels: int):
-    if method == "icp":
-        return anchor.icp(src, ref, init)
+    if lattice is None:
+        return anchor.register(method, src, ref, init)
     return _lattice_match(src, ref, lattice, levels, init)
 
 
-def _trial_row(pair: Pair, trial: Trial, method: str, lattice, levels: int) -> dict:
+def _trial_row(pair: Pair, trial: Trial, method: str, lattice, levels: int,
+               regime: Regime, seed: int) -> dict:
     r = trial.rotation[:3, :3]
-    src = np.ascontiguousarray(pair.source @ r.T)
-    ref = np.ascontiguousarray(pair.reference @ r.T)
+    source, reference = regime_scans(regime, pair.source, pair.reference, pair.transform,
+                                     seed, trial.pair, trial.index)
+    src = np.ascontiguousarray(source @ r.T)
+    ref = np.ascontiguousarray(reference @ r.T)
+    levels += regime.extra_levels
     known = _conj(trial.rotation, pair.transform)
     init = trial.error @ known
     e0 = pose_error(init, known)
@@ -121,10 +133,13 @@ def _trial_row(pair: Pair, trial: Trial, method: str, lattice, levels: int) -> d
         back, sec_b = _run_one(method, ref, src, np.linalg.inv(init), lattice, levels)
         pos, rot = pose_error(back @ fwd, np.eye(4))
         sec = (sec + sec_b) / 2
-    return {"trial": trial.key, "pair": pair.name, "group": pair.group, "kind": pair.kind,
-            "index": trial.index, "method": method, "position_error": pos,
-            "rotation_error": rot, "seconds": sec, "initial_position_error": e0[0],
-            "initial_rotation_error": e0[1]}
+    estimate = _conj(trial.rotation.T, fwd)  # back in the pair's own frames
+    return {"trial": f"{regime.name}/{trial.key}", "regime": regime.name, "pair": pair.name,
+            "group": pair.group, "kind": pair.kind, "index": trial.index, "method": method,
+            "position_error": pos, "rotation_error": rot, "seconds": sec,
+            "initial_position_error": e0[0], "initial_rotation_error": e0[1],
+            "estimate": estimate.tolist(), "source_points": len(src),
+            "reference_points": len(ref)}
 
 
 def _warm_up(methods: list[str], lattices: dict, pair: Pair, levels: int) -> None:
@@ -160,11 +175,11 @@ def _prepare_out(out: Path, config: dict, resume: bool, force: bool) -> list[dic
 
 
 def run_experiment(pairs: list[Pair], out: str | Path, *, lattices=NAMED_LATTICES,
-                   icp: bool | None = None, trials: int = 6, cell_volume: float = 0.001,
-                   levels: int = 4, seed: int = 0, max_offset: float = 0.5,
-                   max_angle: float = 10.0, resume: bool = False, force: bool = False,
-                   progress: bool = True) -> list[dict]:
-    """Run the Fig. 6 trials into ``out`` and return every finished row.
+                   anchors: list[str] | None = None, regimes=("default",), trials: int = 6,
+                   cell_volume: float = 0.001, levels: int = 4, seed: int = 0,
+                   max_offset: float = 0.5, max_angle: float = 10.0, resume: bool = False,
+                   force: bool = False, progress: bool = True) -> list[dict]:
+    """Run the Fig. 6 trials of every regime into ``out`` and return every finished row.
 
     Parameters
     ----------
@@ -175,8 +190,11 @@ def run_experiment(pairs: list[Pair], out: str | Path, *, lattices=NAMED_LATTICE
         Output folder; ``trials.jsonl`` there grows one JSON row per (trial, method).
     lattices : sequence of str
         Named lattices, each scaled to ``cell_volume`` (m^3) at the finest level.
-    icp : bool or None
-        Run the ICP anchor too; None: when the ``match`` extra is installed.
+    anchors : list of str or None
+        Registration anchors (:data:`planner.match.anchor.ANCHORS`) run too; None: all of
+        them when the ``match`` extra is installed, none otherwise.
+    regimes : sequence of str
+        Regimes (:data:`planner.match.experiment_regimes.REGIMES`).
     trials : int
         Trials (rotation and initial error) per pair.
     levels : int
@@ -184,7 +202,8 @@ def run_experiment(pairs: list[Pair], out: str | Path, *, lattices=NAMED_LATTICE
     seed : int
         Seed of the shared draws.
     max_offset, max_angle : float
-        Largest initial position (m) and rotation (degrees) error.
+        Largest initial position (m) and rotation (degrees) error of the ``default``
+        regime (the others have their own).
     resume, force : bool
         Continue the rows already in ``out``, or delete them and start again.
     progress : bool
@@ -193,20 +212,21 @@ def run_experiment(pairs: list[Pair], out: str | Path, *, lattices=NAMED_LATTICE
     Returns
     -------
     list of dict
-        The rows: ``trial``, ``pair``, ``group``, ``kind``, ``method``,
-        ``position_error`` (m), ``rotation_error`` (degrees), ``seconds`` (per match), the
-        initial errors.
+        The rows: ``trial``, ``regime``, ``pair``, ``group``, ``kind``, ``method``,
+        ``position_error`` (m), ``rotation_error`` (degrees), ``seconds`` (CPU per match),
+        the initial errors, ``estimate`` (4x4 source -> reference in the pair's frames) and
+        the points of each scan.
 
     Raises
     ------
     PlannerError
-        Bad settings, an ICP run without the extra, or an ``out`` holding another run.
+        Bad settings, anchors without the extra, or an ``out`` holding another run.
     """
-    if icp is None:
-        icp = anchor.available()
-    elif icp and not anchor.available():
+    if anchors is None:
+        anchors = list(anchor.ANCHORS) if anchor.available() else []
+    methods = trial_methods(list(lattices), list(anchors))
+    if anchors and not anchor.available():
         raise PlannerError(anchor.EXTRA_MESSAGE)
-    methods = trial_methods(list(lattices), icp)
     if int(trials) != trials or trials < 1:
         raise PlannerError(f"trials must be a positive integer, got {trials!r}")
     if not (0 <= max_offset and 0 <= max_angle <= 180):
@@ -214,30 +234,35 @@ def run_experiment(pairs: list[Pair], out: str | Path, *, lattices=NAMED_LATTICE
     names = [p.name for p in pairs]
     if not pairs or len(set(names)) != len(names):
         raise PlannerError("the experiment needs at least one pair, with distinct names")
+    regs = parse_regimes(list(regimes), max_offset, max_angle)
     config = {"pairs": names, "methods": methods, "cell_volume": cell_volume,
               "levels": levels, "seed": seed, "max_offset": max_offset,
-              "max_angle": max_angle}
+              "max_angle": max_angle, "regimes": [r.name for r in regs]}
     out = Path(out)
     rows = _prepare_out(out, config, resume, force)
     done = {(r["trial"], r["method"]) for r in rows}
-    lat = {m: Lattice.named(m, cell_volume) for m in methods if m != "icp"}
-    todo = [(p, draw_trial(seed, i, k, max_offset, max_angle), m)
-            for i, p in enumerate(pairs) for k in range(trials) for m in methods]
-    todo = [t for t in todo if (t[1].key, t[2]) not in done]
+    lat = {m: Lattice.named(m, cell_volume) for m in methods if m in NAMED_LATTICES}
+    todo = [(g, p, draw_trial(seed, i, k, g.max_offset, g.max_angle), m)
+            for g in regs for i, p in enumerate(pairs) for k in range(trials)
+            for m in methods]
+    todo = [t for t in todo if (f"{t[0].name}/{t[2].key}", t[3]) not in done]
     if todo:
-        _warm_up(methods, lat, todo[0][0], levels)
-    bar = _Progress(sum(2 if p.kind == "consistency" else 1 for p, _, _ in todo), progress)
+        _warm_up(methods, lat, todo[0][1], levels)
+    bar = _Progress(sum(2 if p.kind == "consistency" else 1 for _, p, _, _ in todo),
+                    progress)
     try:
         with open(out / ROWS, "a") as f:
-            for pair, trial, m in todo:
-                row = _trial_row(pair, trial, m, lat.get(m), levels)
+            for regime, pair, trial, m in todo:
+                row = _trial_row(pair, trial, m, lat.get(m), levels, regime, seed)
                 f.write(json.dumps(row) + "\n")
                 f.flush()
                 rows.append(row)
-                bar.step(f"{pair.name} #{trial.index} {m}")
+                what = f"{regime.name} {pair.name} #{trial.index} {m}"
+                bar.step(what)
                 if pair.kind == "consistency":
-                    bar.step(f"{pair.name} #{trial.index} {m} back")
+                    bar.step(f"{what} back")
     finally:
         bar.close()
-    keep = {(p.name, k) for p in pairs for k in range(trials)}
-    return [r for r in rows if (r["pair"], r["index"]) in keep and r["method"] in methods]
+    keep = {(g.name, p.name, k) for g in regs for p in pairs for k in range(trials)}
+    return [r for r in rows if (r.get("regime", "default"), r["pair"], r["index"]) in keep
+            and r["method"] in methods]

@@ -2,9 +2,11 @@
 
 Three kinds of pair:
 
-* **truth** pairs, whose relative pose is known: the Velodyne sweeps with their
-  ``relative.txt``, scans simulated in geb079 at known poses (:mod:`planner.match.simulate`),
-  or any user pair ``SOURCE REFERENCE TRANSFORM.txt``;
+* **truth** pairs, whose relative pose is known: scans simulated in geb079 at known poses
+  (:mod:`planner.match.simulate`; each scan cast independently with its own range noise,
+  so no point is shared: exact truth, the headline), the Velodyne sweeps with their
+  ``relative.txt`` (itself a measurement: the report prints how far from it every method
+  converges), or any user pair ``SOURCE REFERENCE TRANSFORM.txt``;
 * the **consistency** pair, PCL's two room scans, which have no ground truth, only the
   odometry guess published with them (PCL's NDT tutorial: 0.6931 rad about z, then
   (1.79387, 0.720047, 0) m, room_scan2 into room_scan1's frame); each method matches A->B
@@ -18,7 +20,7 @@ random rotation (``scipy.spatial.transform.Rotation.random``), so that walls on 
 favour no lattice, and starts from one random initial error (uniform direction, offset
 uniform in [0, ``max_offset``] m, angle uniform in [0, ``max_angle``] degrees about a
 uniform axis); both come from ``numpy.random.default_rng([seed, pair, k])``, so every
-lattice and the ICP anchor see the same draws, and trial ``k`` does not depend on how many
+lattice and every anchor see the same draws, and trial ``k`` does not depend on how many
 trials are run (``--trials`` can grow a resumed run).
 """
 

@@ -10,12 +10,18 @@ transformed source's centroid), moving to the best strict improvement and halvin
 steps when none improves. The translation step starts at half the level's cell side and the
 rotation step is that step over the source's RMS radius, so both move points by about half
 a cell; a level ends when the step falls below an eighth of its cell side (the finest
-level: a sixteenth), and the search continues at the next finer level.
+level: a sixteenth), and the search continues at the next finer level. With the
+refinement (the default) the search ends at the refinement's plane level (level 1, cells
+of twice the finest side): the refinement places the pose more finely than the finest
+level's discrete steps could, and the finest level's search was a match's costliest part.
 
 At each level the source is summarised by the means of its points per cell of that level's
 lattice scaled by one half, each weighted by its point count, so the weighted score
-approximates the point count at a fraction of the cost; the final score is counted on
-every source point at the finest level. Rotations are :class:`scipy.spatial.transform.
+approximates the point count at a fraction of the cost; the reported score is counted on
+every source point at the finest level. The discrete pose is then refined continuously
+(:mod:`planner.match.refine`: point-to-plane least squares on the matched cells' planes),
+and the refined pose is kept unless it holds fewer than 95% of the discrete pose's points
+in occupied cells. Rotations are :class:`scipy.spatial.transform.
 Rotation`; transforms are 4x4 homogeneous matrices (metres) taking source coordinates into
 the reference frame.
 """
@@ -29,9 +35,10 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from planner.errors import MapError, PlannerError
-from planner.lattice import Lattice
+from planner.lattice import Lattice, cosets
 from planner.match import _kernels
 from planner.match.multires import MultiResVoxelList, resolve_lattice
+from planner.match.refine import refine as refine_pose
 from planner.occupancy.keys import pack
 
 __all__ = ["MatchResult", "match", "pose_matrix", "pose_error", "check_transform"]
@@ -54,9 +61,12 @@ class MatchResult:
     levels : int
         Resolutions searched.
     iterations : list of int
-        Accepted moves per level, coarsest first.
+        Accepted moves per level searched, coarsest first (with the refinement, the search
+        ends at the refinement's plane level, :attr:`MultiResVoxelList.plane_level`).
     evaluations : int
         Candidate poses scored.
+    refinement : int
+        Gauss-Newton steps of the final refinement kept (0: none, or not kept).
     seconds : float
         Wall time of the match (building the reference excluded when it was given built).
     """
@@ -68,6 +78,7 @@ class MatchResult:
     iterations: list[int] = field(default_factory=list)
     evaluations: int = 0
     seconds: float = 0.0
+    refinement: int = 0
 
     def as_dict(self) -> dict:
         """JSON-ready: ``transform`` row-major 4x4, quaternion ``x, y, z, w``."""
@@ -76,7 +87,7 @@ class MatchResult:
                 .tolist(), "quaternion_xyzw": q.tolist(), "score": self.score,
                 "fraction": self.fraction, "levels": self.levels,
                 "iterations": self.iterations, "evaluations": self.evaluations,
-                "seconds": self.seconds}
+                "refinement": self.refinement, "seconds": self.seconds}
 
 
 def pose_matrix(xyz_rpy) -> np.ndarray:
@@ -126,7 +137,7 @@ def _as_cloud(points, what: str) -> np.ndarray:
 
 def _summary(points: np.ndarray, lattice: Lattice) -> tuple[np.ndarray, np.ndarray]:
     """Per-cell means of ``points`` and their counts, cells of ``lattice``."""
-    _, inv, counts = np.unique(pack(lattice.quantize(points)), return_inverse=True,
+    _, inv, counts = np.unique(pack(cosets.quantize(lattice, points)), return_inverse=True,
                                return_counts=True)
     means = np.stack([np.bincount(inv, points[:, j], len(counts)) for j in range(3)], axis=1)
     return np.ascontiguousarray(means / counts[:, None]), counts.astype(float)
@@ -141,9 +152,17 @@ class _Scorer:
 
     def __call__(self, rots: np.ndarray, trans: np.ndarray) -> np.ndarray:
         out = np.empty(len(rots))
-        _kernels.score_poses(self.pts, self.wts, np.ascontiguousarray(rots),
-                             np.ascontiguousarray(trans), *self.lv.tables, self.lv.table,
-                             self.lv.bits, out)
+        cq = self.lv.cosets
+        if cq is None:
+            _kernels.score_poses(self.pts, self.wts, np.ascontiguousarray(rots),
+                                 np.ascontiguousarray(trans), *self.lv.tables, self.lv.table,
+                                 self.lv.bits, out)
+        else:  # the box frame folded into the poses: y = F (R p + t)
+            _kernels.score_poses_cosets(self.pts, self.wts,
+                                        np.ascontiguousarray(cq.frame @ rots),
+                                        np.ascontiguousarray(trans @ cq.frame.T),
+                                        cq.inv_sides, cq.sides, cq.shifts, cq.index_basis,
+                                        cq.index_offsets, self.lv.table, self.lv.bits, out)
         self.evaluations += len(rots)
         return out
 
@@ -179,7 +198,8 @@ def _search(score: _Scorer, r, t, c_src, dt, dr, dt_stop) -> tuple:
 
 
 def match(source, reference, *, lattice: str | Lattice = "fcc", cell_volume: float = 0.001,
-          levels: int = 4, init=None, scale: float = 2.0, summary: float = 2.0) -> MatchResult:
+          levels: int = 4, init=None, scale: float = 2.0, summary: float = 2.0,
+          refine: bool = True) -> MatchResult:
     """Estimate the rigid transform taking ``source`` into ``reference``'s frame.
 
     Parameters
@@ -204,6 +224,8 @@ def match(source, reference, *, lattice: str | Lattice = "fcc", cell_volume: flo
     summary : float
         The source is summarised per cell of each level's generator divided by this
         (per-cell means weighted by counts; 2: cells of half the side).
+    refine : bool
+        Refine the discrete pose continuously (see the module).
 
     Returns
     -------
@@ -226,7 +248,8 @@ def match(source, reference, *, lattice: str | Lattice = "fcc", cell_volume: flo
     c_src = src.mean(axis=0)
     radius = max(float(np.sqrt(((src - c_src) ** 2).sum(axis=1).mean())), 1e-9)
     iterations, evaluations = [], 0
-    for k in range(ref.levels - 1, -1, -1):
+    last = ref.plane_level if refine else 0
+    for k in range(ref.levels - 1, last - 1, -1):
         lv = ref.level(k)
         pts, wts = _summary(src, Lattice(lv.lattice.generator / summary))
         score = _Scorer(pts, wts, lv)
@@ -235,10 +258,22 @@ def match(source, reference, *, lattice: str | Lattice = "fcc", cell_volume: flo
         r, t, moves = _search(score, r, t, c_src, dt, dt / radius, stop)
         iterations.append(moves)
         evaluations += score.evaluations
-    final = np.eye(4)
-    final[:3, :3], final[:3, 3] = r, t
     fine = _Scorer(src, np.ones(len(src)), ref.level(0))
     n_hit = int(round(fine(r[None], t[None])[0]))
+    steps = 0
+    if refine:
+        # The source summarised as for the plane level's search: points of the same
+        # half-cell fall on the same plane anyway.
+        plane_lat = ref.level(ref.plane_level).lattice
+        pts, wts = _summary(src, Lattice(plane_lat.generator / summary))
+        r2, t2, steps = refine_pose(pts, wts, ref.planes(), plane_lat, r, t, 20)
+        n2 = int(round(fine(r2[None], t2[None])[0]))
+        if steps and n2 >= 0.95 * n_hit:
+            r, t, n_hit = r2, t2, n2
+        else:
+            steps = 0
+    final = np.eye(4)
+    final[:3, :3], final[:3, 3] = r, t
     seconds = time.perf_counter() - t0
     return MatchResult(final, n_hit, n_hit / len(src), ref.levels, iterations,
-                       evaluations + 1, seconds)
+                       evaluations + 1 + (1 if refine else 0), seconds, steps)

@@ -22,8 +22,10 @@ import math
 import numpy as np
 
 from planner.errors import LatticeError, MapError
-from planner.lattice import Lattice
+from planner.lattice import Lattice, cosets
+from planner.lattice.cosets import coset_quantizer
 from planner.match import _kernels
+from planner.match.refine import CellPlanes, cell_planes
 from planner.occupancy.keys import build_key_set, pack
 from planner.voxels import OccupiedVoxelList
 
@@ -60,6 +62,7 @@ class _Level:
         self.table = build_key_set(voxels.keys, 1 << self.bits)
         q = self.lattice.quantizer()
         self.tables = (q.basis, q.basis_inv, q.cand, q.cand_z, q.counts, q.reduction)
+        self.cosets = coset_quantizer(self.lattice)  # None: the generic tables score
         self.side = self.lattice.cell_volume ** (1 / 3)
 
 
@@ -95,7 +98,10 @@ class MultiResVoxelList:
             raise MapError("point cloud is empty: nothing to match against")
         lattices = level_lattices(resolve_lattice(lattice, 1.0), levels, scale)
         self.scale = float(scale)
-        self._levels = [_Level(OccupiedVoxelList.from_points(pts, lat)) for lat in lattices]
+        self._levels = [_Level(OccupiedVoxelList.from_indices(cosets.quantize(lat, pts), lat))
+                        for lat in lattices]
+        self._points = pts
+        self._planes: CellPlanes | None = None
 
     @property
     def levels(self) -> int:
@@ -121,11 +127,24 @@ class MultiResVoxelList:
         """Level ``k`` (0 = finest) with its hash set and quantizer tables."""
         return self._levels[k]
 
+    @property
+    def plane_level(self) -> int:
+        """The level whose cells carry the refinement's planes: 1 (the finest when there is
+        one level; :mod:`planner.match.refine` says why)."""
+        return min(1, self.levels - 1)
+
+    def planes(self) -> CellPlanes:
+        """The cell planes (:func:`planner.match.refine.cell_planes`) of
+        :attr:`plane_level`, computed on first use and kept."""
+        if self._planes is None:
+            self._planes = cell_planes(self._points, self._levels[self.plane_level].lattice)
+        return self._planes
+
     def contains(self, points: np.ndarray, level: int = 0) -> np.ndarray:
         """(N,) bool: whether each point ((N, 3), metres) falls in an occupied cell of
         ``level``."""
         lv = self._levels[level]
-        keys = pack(lv.lattice.quantize(points))
+        keys = pack(cosets.quantize(lv.lattice, np.asarray(points, dtype=float)))
         return _kernels.contains_keys(lv.table, lv.bits, keys)
 
     def __repr__(self) -> str:
