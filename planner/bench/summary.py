@@ -301,8 +301,8 @@ def _answer_sections(rows: list[dict], record: dict) -> dict:
         "maps": "\n".join(maps),
         "decision": "\n".join([
             "Per map and goal, the configuration with the lowest median on the queries "
-            "every configuration of the map solved, among those with the map's best "
-            "success rate; each cell cites its row of the per-map tables.", "",
+            "every configuration of the map solved (its success rate beside it when below "
+            "the map's best); each cell cites its row of the per-map tables.", "",
             decision, "", *plain]),
     }
 
@@ -423,7 +423,7 @@ def readme_section(suite, rows: list[dict], command: str, *, partial: str | None
     ``benchmarks/results.md`` too)."""
     parts = parts or _answer_sections(rows, {})
     prov = prov or provenance(suite, rows, command)
-    lines = [f"Generated from a run of the bundled `{suite.name}` suite"
+    lines = [f"Generated from a run of the suite `{suite.name}`"
              + (" (PARTIAL)" if partial else "") + f" (suite file sha256 "
              f"`{prov['suite_sha256'][:12]}`, lattice-planner {prov['version']}, commit "
              f"`{prov['commit']}`, {prov['date']}) by `python -m "
