@@ -78,7 +78,8 @@ def test_one_command_writes_the_page_the_readme_block_and_the_figures(tmp_path):
     repo = tmp_path / "repo"
     (repo / "benchmarks").mkdir(parents=True)
     readme = repo / "README.md"
-    readme.write_text(f"# x\n\n## Which lattice?\n\n{README_START}\nold 0.66\n{README_END}\n\nrest\n")
+    readme.write_text(f"# x\n\n## Which lattice?\n\n{README_START}\nold 0.66\n{README_END}"
+                      "\n\nrest\n")
     written = regenerate(run, page=repo / "benchmarks" / "results.md", readme=readme)
     figs = repo / "benchmarks" / "figures" / "quick"
     assert (figs / "pareto.png").read_bytes() == b"png" and (figs / "report.md").is_file()

@@ -36,7 +36,7 @@ def _commit() -> str:
 
 def package_version() -> str:
     """This package's version (``planner.__version__``, the one source of it)."""
-    from planner import __version__
+    from planner import __version__  # at call time: never read from a half-imported package
 
     return str(__version__)
 

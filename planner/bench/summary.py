@@ -11,11 +11,14 @@ from pathlib import Path
 
 import numpy as np
 
-from planner.analysis.metadata import metadata_markdown, run_metadata
+from planner.analysis.metadata import metadata_markdown, run_metadata, suite_sha256
+from planner.analysis.stats import STATISTICS_NOTE
 from planner.analysis.style import LATTICE_COLORS, OTHER_COLOR
 from planner.analysis.tables import format_table
 from planner.bench import paired
+from planner.bench.answer import decision_table, delivered_table, fair_queries_table, per_map_table
 from planner.bench.figures import plot_tradeoffs
+from planner.bench.orientation import rotation_spread
 from planner.bench.paired import wilson_interval
 from planner.bench.rows import unique_rows
 from planner.fsutil import atomic_path, write_text_atomic
@@ -223,9 +226,6 @@ DROP_PREFIXES = ("candidates ", "kept but blocked in ")
 def provenance(suite, rows: list[dict], command: str, *, jobs: int = 1) -> dict:
     """What a results page records about the run that made it: package version, commit
     (the report's and the rows'), the suite file and its SHA-256, date, statistics."""
-    from planner.analysis.metadata import suite_sha256
-    from planner.analysis.stats import STATISTICS_NOTE
-
     meta = run_metadata(jobs)
     src = getattr(suite, "source", "")
     return {"suite": suite.name, "suite_file": Path(src).name if src else "",
@@ -250,15 +250,6 @@ def provenance_lines(prov: dict) -> list[str]:
 
 def _answer_sections(rows: list[dict], record: dict) -> dict:
     """The generated Markdown pieces every page shares."""
-    from planner.analysis.stats import STATISTICS_NOTE
-    from planner.bench.answer import (
-        decision_table,
-        delivered_table,
-        fair_queries_table,
-        per_map_table,
-    )
-    from planner.bench.orientation import rotation_spread
-
     add_ratios(rows)
     table, prose = paired.paired_table(rows)
     rot_table, rot_prose = rotation_spread(rows)
