@@ -28,15 +28,13 @@ README = ROOT / "README.md"
 
 
 def _claims(readme_block: str) -> list[str]:
-    """The README block's numbers: its table rows, bullet sentences and plain sentences."""
+    """The README block's numbers: its table rows and its bullet sentences."""
     out = []
     for ln in readme_block.splitlines()[1:]:  # the first line is the provenance
         if ln.startswith("| ") and not ln.startswith("| ---"):
             out.append(ln)
         elif ln.startswith("- "):
             out.append(ln[2:])
-        elif ln.startswith("On "):
-            out.append(ln)
     return out
 
 

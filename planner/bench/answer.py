@@ -57,13 +57,15 @@ def _ratio(s) -> str:
     return txt + (" (too few)" if s.too_few else "")
 
 
-def delivered_table(rows: list[dict], markdown: bool = True) -> str:
+def delivered_table(rows: list[dict], markdown: bool = True,
+                    comparisons: dict | None = None) -> str:
     """What the delivered path costs, per lattice, neighbour set and method.
 
     Medians over the queries every lattice solved with that neighbour set and method (the
     same queries for every row of a neighbour set and method); ratios are the paired
     Hodges-Lehmann ratios to cubic with their 95% interval
-    (:func:`planner.bench.paired.compare_to_cubic`).
+    (:func:`planner.bench.paired.compare_to_cubic`; ``comparisons`` holds them when already
+    computed, keyed by (lattice, neighbours, method)).
     """
     head = ["lattice", "nbrs", "method", "solved", "delivered path", "CPU ms to path",
             "= search + smoothing ms", "checks to path", "= search + smoothing checks",
@@ -73,7 +75,9 @@ def delivered_table(rows: list[dict], markdown: bool = True) -> str:
         rs = [r for r in rows if (r["lattice"], r["neighbors"], r["method"]) == (lat, nb, meth)]
         common = common_queries(rows, nb, meth)
         ok = [r for r in rs if query_key(r) in common]
-        c = compare_to_cubic(rows, lat, nb, meth) if lat != "cubic" else None
+        c = None
+        if lat != "cubic":
+            c = (comparisons or {}).get((lat, nb, meth)) or compare_to_cubic(rows, lat, nb, meth)
         lines.append(dict(zip(head, [
             lat, nb, meth, f"{np.mean([bool(r.get('found')) for r in rs]):.0%}",
             _delivered(meth), _ms(_med(ok, "cpu_seconds")),

@@ -132,13 +132,16 @@ def _ci(s) -> str:
     return numbers(s).split(", n =")[0] + ("" if not s.too_few else " (too few)")
 
 
-def paired_table(rows: list[dict], markdown: bool = True) -> tuple[str, list[str]]:
+def paired_table(rows: list[dict], markdown: bool = True,
+                 comparisons: dict | None = None) -> tuple[str, list[str]]:
     """Table of every non-cubic configuration against cubic, and the report's sentences.
 
     Columns: success on every query both ran (solved by it / by cubic, with the discordant
     counts), the queries every lattice solved, then per metric the Hodges-Lehmann ratio
     with its 95% interval and p-value. The sentence of a configuration whose checks and
-    time verdicts point opposite ways starts with that disagreement.
+    time verdicts point opposite ways starts with that disagreement. ``comparisons``, when
+    given, receives each configuration's :func:`compare_to_cubic` (keyed by (lattice,
+    neighbours, method)) for the other tables to reuse.
     """
     head = ["lattice", "nbrs", "method", "solved (cubic)", "only it / only cubic",
             "all solved (groups)", "CPU time / cubic", "checks / cubic",
@@ -148,6 +151,8 @@ def paired_table(rows: list[dict], markdown: bool = True) -> tuple[str, list[str
         if lat == "cubic":
             continue
         c = compare_to_cubic(rows, lat, nb, meth)
+        if comparisons is not None:
+            comparisons[(lat, nb, meth)] = c
         s = c["success"]
         lines.append(dict(zip(head, [
             lat, nb, meth, f"{s['x_rate']:.0%} ({s['cubic_rate']:.0%})",

@@ -251,7 +251,8 @@ def provenance_lines(prov: dict) -> list[str]:
 def _answer_sections(rows: list[dict], record: dict) -> dict:
     """The generated Markdown pieces every page shares."""
     add_ratios(rows)
-    table, prose = paired.paired_table(rows)
+    comparisons: dict = {}
+    table, prose = paired.paired_table(rows, comparisons=comparisons)
     rot_table, rot_prose = rotation_spread(rows)
     recs, maps = [], []
     for m in sorted({r["map"] for r in rows}):
@@ -273,7 +274,7 @@ def _answer_sections(rows: list[dict], record: dict) -> dict:
             "CPU time and cell checks of the search plus the smoothing, medians over the "
             "queries every lattice solved with that neighbour set and method; ratios to "
             "cubic are paired Hodges-Lehmann ratios with a 95% interval.", "",
-            delivered_table(rows)]),
+            delivered_table(rows, comparisons=comparisons)]),
         "disagree": disagree,
         "paired": "\n".join([STATISTICS_NOTE, "", table, "", *prose]),
         "fair": "\n".join([
@@ -294,7 +295,7 @@ def _answer_sections(rows: list[dict], record: dict) -> dict:
             "Per map and goal, the configuration with the lowest median on the queries "
             "every configuration of the map solved (its success rate beside it when below "
             "the map's best); each cell cites its row of the per-map tables.", "",
-            decision, "", *plain]),
+            decision, "", *[f"- {p}" for p in plain]]),
     }
 
 
