@@ -166,8 +166,8 @@ def paired_table(rows: list[dict], markdown: bool = True,
                   f"{s['cubic_rate']:.0%} ({s['x_only']} only by {lat}, {s['cubic_only']} only "
                   f"by cubic, {format_p(s['p'])})")
         warn = disagreement(c["cell_checks"], c["cpu_seconds"], who, time_name="CPU time")
-        prose.append(f"- **{who}** vs cubic {nb} {meth}" + (f": **{warn}**" if warn else "")
-                     + f" {solved}; on the {c['common']} queries every lattice solved "
+        prose.append(f"- **{who}** vs cubic {nb} {meth}: " + (f"**{warn}** It " if warn else "")
+                     + f"{solved}; on the {c['common']} queries every lattice solved "
                      f"(delivered path: {delivered}): " + "; ".join(parts) + ".")
     return format_table(lines, head, markdown=markdown), prose
 
