@@ -58,7 +58,8 @@ EXACT_MAX = 400
 STATISTICS_NOTE = (
     "Ratios are Hodges-Lehmann estimates of the per-query ratio against cubic with the "
     "same neighbours and method (median of the Walsh averages of the log ratios), on the "
-    "queries both ran and solved. Within one map x rotation the 95% interval and p-value "
+    "queries every lattice solved with that neighbour set and method. Within one map x "
+    "rotation the 95% interval and p-value "
     "come from the Wilcoxon signed-rank test (interval by inverting the test); pooled over "
     "several map x rotation groups, from a cluster bootstrap that resamples whole groups "
     f"(percentile interval, p by inverting it). The interval excludes 1 exactly when "
