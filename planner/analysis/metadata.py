@@ -17,11 +17,13 @@ _PACKAGES = ("lattice-planner", "numpy", "scipy", "numba", "matplotlib", "ompl",
 
 @functools.cache
 def _commit() -> str:
-    """The source checkout's commit (``+dirty`` with local changes), or ``unknown``; read
-    once per process, so a row records the code that ran it."""
+    """The source checkout's commit (``+dirty`` with local changes), or, for an installed
+    package (no checkout to ask), its version: ``"version 0.4.0 (installed package)"``;
+    read once per process, so a row records the code that ran it."""
     root = Path(__file__).resolve().parents[2]
     if not (root / "pyproject.toml").is_file() or not (root / "planner").is_dir():
-        return "unknown (installed package)"  # site-packages may sit inside another repo
+        # site-packages may sit inside another repo: its commit is not this package's
+        return f"version {package_version()} (installed package)"
     try:
         sha = subprocess.run(["git", "-C", str(root), "rev-parse", "--short=12", "HEAD"],
                              capture_output=True, text=True, timeout=5, check=True).stdout.strip()
@@ -30,6 +32,20 @@ def _commit() -> str:
     except (OSError, subprocess.SubprocessError):
         return "unknown (not a git checkout)"
     return sha + ("+dirty" if dirty else "") if sha else "unknown"
+
+
+def package_version() -> str:
+    """This package's version (``planner.__version__``, the one source of it)."""
+    from planner import __version__  # at call time: never read from a half-imported package
+
+    return str(__version__)
+
+
+def suite_sha256(path: str | Path) -> str:
+    """SHA-256 (hex) of a suite file's bytes, the identity a results page records."""
+    import hashlib
+
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
 def _cpu() -> str:
@@ -46,7 +62,7 @@ def run_metadata(jobs: int = 1) -> dict:
     """Commit, package versions, CPU, worker count and UTC date of this run.
 
     >>> sorted(run_metadata(jobs=2))
-    ['commit', 'cpu', 'cpu_count', 'date', 'jobs', 'packages', 'python']
+    ['commit', 'cpu', 'cpu_count', 'date', 'jobs', 'packages', 'python', 'version']
     """
     versions = {}
     for name in _PACKAGES:
@@ -55,6 +71,7 @@ def run_metadata(jobs: int = 1) -> dict:
         except metadata.PackageNotFoundError:
             continue
     return {
+        "version": package_version(),
         "commit": _commit(),
         "packages": versions,
         "python": platform.python_version(),
@@ -79,7 +96,8 @@ def metadata_markdown(meta: dict, rows: list[dict] | None = None) -> str:
     by = "; rows run by " + ", ".join(f"`{c}` ({n})" for c, n in ran.most_common()) \
         if ran else ""
     return "\n".join([
-        f"- commit: `{meta['commit']}` (this report){by}; date: {meta['date']}",
+        f"- lattice-planner {meta.get('version', '?')}, commit: `{meta['commit']}` (this "
+        f"report){by}; date: {meta['date']}",
         f"- CPU: {meta['cpu']} ({meta['cpu_count']} cores), jobs: {meta['jobs']}",
         f"- Python {meta['python']}; {pk}",
     ])

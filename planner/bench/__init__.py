@@ -7,6 +7,8 @@ paper's fairness rule), ``worlds`` (the World of a rotated map, cached for the w
 queries), ``task`` (one batch run in a worker), ``rows`` (the append-only results file),
 ``runner`` (local processes or Dask, resume), ``stopping`` (SIGINT / SIGTERM), ``host``
 (the machine a row ran on), ``paired`` (lattice vs cubic per query: intervals, tests, generated
-sentences), ``summary`` (tables, box plots, report), ``figures`` (trade-off curves),
+sentences), ``orientation`` (the permutation test of rotation labels), ``answer`` (the time
+to the delivered path, the queries each lattice cannot run, the decision table),
+``summary`` (tables, box plots, report), ``figures`` (trade-off curves),
 ``session`` (one ``planner bench`` run).
 """

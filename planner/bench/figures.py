@@ -1,11 +1,13 @@
 """Trade-off figures of a benchmark: one point per lattice x neighbours x method x cell volume.
 
-- ``pareto.png``: median cell checks per query against the median path length ratio (raw and
-  smoothed panels), per map; the Pareto front (fewer checks *and* shorter) is outlined.
+- ``pareto.png``: median cell checks per query (search + smoothing) against the median
+  path length ratio (raw and smoothed panels), per map; the Pareto front (fewer checks
+  *and* shorter) is outlined.
 - ``success_vs_resolution.png``: success rate against cell volume, and against the
   lattice's covering radius (the comparison at equal covering radius: a lattice with a
   smaller covering radius at the same volume sits further left).
-- ``time_vs_length.png``: median search time against median smoothed length ratio.
+- ``time_vs_length.png``: median CPU time to the delivered path (search + smoothing)
+  against median delivered length ratio.
 
 Colours are the project's one colour per lattice; markers tell the method; filled markers
 are the full neighbour set, hollow ones the face neighbours (and in
@@ -37,10 +39,11 @@ def operating_points(rows: list[dict]) -> list[dict]:
     """One record per map x lattice x neighbours x method x cell volume (lattice methods).
 
     Needs rows with ``length_ratio`` / ``raw_length_ratio`` (:func:`summary.add_ratios`).
-    Fields: success rate over all queries; medians of cell checks, time, raw and smoothed
-    length ratio over the queries that *every* configuration of that map and cell volume
-    solved (medians over each one's own solved queries would favour a configuration that
-    fails the hard ones); the lattice's covering radius at that cell volume (m).
+    Fields: success rate over all queries; medians of cell checks and CPU time
+    (``seconds``) to the delivered path, raw and smoothed length ratio over the queries
+    that *every* configuration of that map and cell volume solved (medians over each one's
+    own solved queries would favour a configuration that fails the hard ones); the
+    lattice's covering radius at that cell volume (m).
     """
     groups: dict = defaultdict(list)
     for r in rows:
@@ -63,7 +66,7 @@ def operating_points(rows: list[dict]) -> list[dict]:
                     "cell_volume": cv, "success": sum(bool(r.get("found")) for r in rs) / len(rs),
                     "common_queries": len(ok),
                     "covering_radius": Lattice.named(lat, cell_volume=cv).covering_radius,
-                    "cell_checks": med("cell_checks"), "seconds": med("seconds"),
+                    "cell_checks": med("cell_checks"), "seconds": med("cpu_seconds"),
                     "raw_length_ratio": med("raw_length_ratio"),
                     "length_ratio": med("length_ratio")})
     return out
@@ -154,7 +157,7 @@ def plot_tradeoffs(rows: list[dict], out_dir: Path) -> list[Path]:
                     alpha=0.6, zorder=2)
             _log_y(ax, y)
             ax.set_xlabel(f"median {name} path length / best on the query")
-            ax.set_ylabel("median cell checks per query")
+            ax.set_ylabel("median cell checks to the delivered path")
             ax.set_title(f"{Path(m).name}: checks vs {name} length", fontsize=9)
             ax.grid(alpha=0.3)
             if i == 0 and j == 0:
@@ -178,7 +181,7 @@ def plot_tradeoffs(rows: list[dict], out_dir: Path) -> list[Path]:
                        marker=_MARKERS.get(p["method"], "x"), s=36)
         _log_y(ax, [p["seconds"] for p in mp])
         ax.set_xlabel("median smoothed length / best on the query")
-        ax.set_ylabel("median search time (s)")
+        ax.set_ylabel("median CPU time to the delivered path (s)")
         ax.set_title(f"{Path(m).name}: time vs length", fontsize=9)
         ax.grid(alpha=0.3)
         if i == 0:

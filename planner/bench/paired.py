@@ -1,29 +1,35 @@
 """Paired comparisons "lattice X vs cubic" over benchmark rows, with intervals and tests.
 
-Every ratio here is a median of per-query ratios (:func:`planner.analysis.stats.paired_ratio`:
-bootstrap 95% interval, Wilcoxon signed-rank p) between a lattice and cubic with the same
+Every ratio here is a Hodges-Lehmann ratio of per-query values
+(:func:`planner.analysis.stats.paired_ratio`) between a lattice and cubic with the same
 neighbour set and method on the same query (same map, cell volume, radius and rotation), so
-maps of very different sizes never mix in one ratio.  The report's sentences come from
-:func:`planner.analysis.stats.describe`, never from hand-written text.
+maps of very different sizes never mix in one ratio, on the queries that every lattice of
+the run solved with that neighbour set and method (a lattice that blocks or cannot connect
+a query shows in the success columns, not as a missing pair). Pooled over several map x
+rotation groups, the interval resamples whole groups. The report's sentences come from
+:func:`planner.analysis.stats.describe` and :func:`planner.analysis.stats.disagreement`,
+never from hand-written text.
 """
 
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 
-from planner.analysis.stats import describe, format_p, paired_ratio
+from planner.analysis.stats import describe, disagreement, format_p, numbers, paired_ratio
 from planner.analysis.tables import format_table
 from planner.lattice import NAMED_LATTICES
 
-__all__ = ["query_key", "paired_table", "rotation_spread", "headline", "wilson_interval"]
+__all__ = ["query_key", "configs", "common_queries", "compare_to_cubic", "paired_table",
+           "wilson_interval", "METRICS", "cost_value"]
 
-METRICS = (("cell_checks", "checks", "fewer", "more"),
-           ("length", "raw length", "shorter", "longer"),
-           ("length_smoothed", "smoothed length", "shorter", "longer"),
-           ("seconds", "search time", "less", "more"))
+METRICS = (("cpu_seconds", "CPU time to the delivered path", "less", "more"),
+           ("cell_checks", "cell checks (search + smoothing)", "fewer", "more"),
+           ("search_checks", "search checks alone", "fewer", "more"),
+           ("length_smoothed", "delivered path length", "shorter", "longer"),
+           ("length", "raw (as searched) path length", "shorter", "longer"))
+"""(row key, words, less, more) of the paired metrics, what the user pays first."""
 
 
 def query_key(r: dict) -> tuple:
@@ -31,7 +37,7 @@ def query_key(r: dict) -> tuple:
     return (r["map"], r["cell_volume"], r["radius"], r.get("rotation", 0), r["query"])
 
 
-def _configs(rows: list[dict]) -> list[tuple[str, str, str]]:
+def configs(rows: list[dict]) -> list[tuple[str, str, str]]:
     """(lattice, neighbours, method) of the lattice methods, cubic first, in lattice order."""
     cfg = {(r["lattice"], r["neighbors"], r["method"]) for r in rows
            if not str(r["method"]).startswith("ompl:")}
@@ -43,14 +49,39 @@ def _configs(rows: list[dict]) -> list[tuple[str, str, str]]:
     return sorted(cfg, key=order)
 
 
+_configs = configs
+
+
 def _index(rows: list[dict]) -> dict:
     return {(r["lattice"], r["neighbors"], r["method"], query_key(r)): r for r in rows}
 
 
-def _value(r: dict | None, key: str) -> float:
-    if r is None or not r.get("found") or r.get(key) is None:
+def cost_value(r: dict | None, key: str) -> float:
+    """A found row's value of ``key`` (NaN when not found or not recorded). Rows written
+    before search and smoothing were recorded apart have ``search_checks`` = their
+    ``cell_checks`` only when they were not smoothed."""
+    if r is None or not r.get("found"):
         return math.nan
-    return float(r[key])
+    if key == "search_checks" and "search_checks" not in r and r.get("method") not in (
+            "astar", "dijkstra"):
+        key = "cell_checks"
+    v = r.get(key)
+    return math.nan if v is None else float(v)
+
+
+_value = cost_value
+
+
+def common_queries(rows: list[dict], neighbors: str, method: str) -> set:
+    """Queries that every lattice of ``rows`` ran and solved with these neighbours and
+    method (the paired ratios' sample)."""
+    lats = {r["lattice"] for r in rows if (r["neighbors"], r["method"]) == (neighbors, method)}
+    keys = None
+    for lat in lats:
+        k = {query_key(r) for r in rows if (r["lattice"], r["neighbors"], r["method"])
+             == (lat, neighbors, method) and r.get("found")}
+        keys = k if keys is None else keys & k
+    return keys or set()
 
 
 def compare_to_cubic(rows: list[dict], lattice: str, neighbors: str, method: str,
@@ -60,10 +91,11 @@ def compare_to_cubic(rows: list[dict], lattice: str, neighbors: str, method: str
     Returns
     -------
     dict
-        ``{metric: PairedRatio}`` for cell checks, raw and smoothed length and time (queries
-        both solved), plus ``success`` counts: ``n`` queries tried by both, ``x_only`` /
-        ``cubic_only`` solved by one of them, and ``p`` (exact binomial test on those
-        discordant queries, NaN when there are none).
+        ``{metric: PairedRatio}`` for :data:`METRICS` on the queries every lattice solved
+        (``common``: their number; ``groups``: their map x rotation groups), plus
+        ``success`` counts on every query both ran: ``n``, ``x_only`` / ``cubic_only``
+        solved by one of them, and ``p`` (exact binomial test on those discordant queries,
+        NaN when there are none), ``x_rate`` / ``cubic_rate``.
     """
     from scipy.stats import binomtest
 
@@ -73,13 +105,19 @@ def compare_to_cubic(rows: list[dict], lattice: str, neighbors: str, method: str
     keys = [k for k in keys if ("cubic", neighbors, method, k) in idx]
     mine = [idx[(lattice, neighbors, method, k)] for k in keys]
     cub = [idx[("cubic", neighbors, method, k)] for k in keys]
-    out = {}
+    common = common_queries(rows, neighbors, method)
+    both = [k for k in keys if k in common]
+    groups = [f"{k[0]}|{k[3]}" for k in both]  # map x rotation
+    out: dict = {"common": len(both), "groups": len(set(groups))}
     for key, *_ in METRICS:
-        out[key] = paired_ratio([_value(r, key) for r in mine], [_value(r, key) for r in cub],
-                                seed=seed)
+        out[key] = paired_ratio(
+            [cost_value(idx[(lattice, neighbors, method, k)], key) for k in both],
+            [cost_value(idx[("cubic", neighbors, method, k)], key) for k in both],
+            clusters=groups, seed=seed)
     a = sum(bool(x.get("found")) and not c.get("found") for x, c in zip(mine, cub, strict=True))
     b = sum(bool(c.get("found")) and not x.get("found") for x, c in zip(mine, cub, strict=True))
     p = binomtest(a, a + b).pvalue if a + b else math.nan
+
     def rate(rs: list[dict]) -> float:
         return float(np.mean([bool(r.get("found")) for r in rs])) if rs else math.nan
 
@@ -91,86 +129,47 @@ def compare_to_cubic(rows: list[dict], lattice: str, neighbors: str, method: str
 def _ci(s) -> str:
     if s.n == 0:
         return "-"
-    return f"{s.median:.3f} [{s.low:.3f}, {s.high:.3f}] {format_p(s.p)}"
+    return numbers(s).split(", n =")[0] + ("" if not s.too_few else " (too few)")
 
 
-def paired_table(rows: list[dict], markdown: bool = True) -> tuple[str, list[str]]:
+def paired_table(rows: list[dict], markdown: bool = True,
+                 comparisons: dict | None = None) -> tuple[str, list[str]]:
     """Table of every non-cubic configuration against cubic, and the report's sentences.
 
-    Columns: success (solved by it / by cubic on the same queries, with the discordant
-    counts), then per metric the median paired ratio with its 95% interval and p-value.
+    Columns: success on every query both ran (solved by it / by cubic, with the discordant
+    counts), the queries every lattice solved, then per metric the Hodges-Lehmann ratio
+    with its 95% interval and p-value. The sentence of a configuration whose checks and
+    time verdicts point opposite ways starts with that disagreement. ``comparisons``, when
+    given, receives each configuration's :func:`compare_to_cubic` (keyed by (lattice,
+    neighbours, method)) for the other tables to reuse.
     """
     head = ["lattice", "nbrs", "method", "solved (cubic)", "only it / only cubic",
-            "checks / cubic", "raw length / cubic", "smoothed length / cubic", "time / cubic"]
+            "all solved (groups)", "CPU time / cubic", "checks / cubic",
+            "search checks / cubic", "delivered length / cubic", "raw length / cubic"]
     lines, prose = [], []
-    for lat, nb, meth in _configs(rows):
+    for lat, nb, meth in configs(rows):
         if lat == "cubic":
             continue
         c = compare_to_cubic(rows, lat, nb, meth)
+        if comparisons is not None:
+            comparisons[(lat, nb, meth)] = c
         s = c["success"]
         lines.append(dict(zip(head, [
             lat, nb, meth, f"{s['x_rate']:.0%} ({s['cubic_rate']:.0%})",
             f"{s['x_only']} / {s['cubic_only']} ({format_p(s['p'])})",
-            _ci(c["cell_checks"]), _ci(c["length"]), _ci(c["length_smoothed"]),
-            _ci(c["seconds"])], strict=True)))
+            f"{c['common']} ({c['groups']})",
+            *[_ci(c[k]) for k, *_ in METRICS]], strict=True)))
+        who = f"{lat} {nb} {meth}"
+        delivered = "smoothed" if meth in ("astar", "dijkstra") else "as searched"
         parts = [describe(c[k], what, less=less, more=more) for k, what, less, more in METRICS]
         solved = (f"solved {s['x_rate']:.0%} of {s['n']} queries vs cubic's "
                   f"{s['cubic_rate']:.0%} ({s['x_only']} only by {lat}, {s['cubic_only']} only "
                   f"by cubic, {format_p(s['p'])})")
-        prose.append(f"- **{lat} {nb} {meth}** vs cubic {nb} {meth}: {solved}; "
-                     + "; ".join(parts) + ".")
+        warn = disagreement(c["cell_checks"], c["cpu_seconds"], who, time_name="CPU time")
+        prose.append(f"- **{who}** vs cubic {nb} {meth}: " + (f"**{warn}** It " if warn else "")
+                     + f"{solved}; on the {c['common']} queries every lattice solved "
+                     f"(delivered path: {delivered}): " + "; ".join(parts) + ".")
     return format_table(lines, head, markdown=markdown), prose
-
-
-def rotation_spread(rows: list[dict], markdown: bool = True) -> str:
-    """Per map: how much the answer moves with the rotation of the map.
-
-    One line per map x configuration: success rate per rotation (min-max and each one), and
-    the per-rotation median of the paired checks ratio against cubic (min-max).
-    """
-    head = ["map", "lattice", "nbrs", "method", "rotations", "success min-max",
-            "success per rotation", "checks/cubic per-rotation medians min-max"]
-    idx = _index(rows)
-    lines = []
-    for m in sorted({r["map"] for r in rows}):
-        mrows = [r for r in rows if r["map"] == m]
-        rots = sorted({r.get("rotation", 0) for r in mrows})
-        for lat, nb, meth in _configs(mrows):
-            succ, ratio = [], []
-            for k in rots:
-                rs = [r for r in mrows if r.get("rotation", 0) == k and
-                      (r["lattice"], r["neighbors"], r["method"]) == (lat, nb, meth)]
-                if not rs:
-                    continue
-                succ.append(np.mean([bool(r.get("found")) for r in rs]))
-                rr = [_value(r, "cell_checks") / _value(idx.get(("cubic", nb, meth,
-                                                                 query_key(r))), "cell_checks")
-                      for r in rs]
-                rr = [v for v in rr if math.isfinite(v)]
-                if rr:
-                    ratio.append(float(np.median(rr)))
-            if not succ:
-                continue
-            lines.append(dict(zip(head, [
-                Path(m).name, lat, nb, meth, str(len(succ)),
-                f"{min(succ):.0%}-{max(succ):.0%}", " ".join(f"{v:.0%}" for v in succ),
-                f"{min(ratio):.2f}-{max(ratio):.2f}" if ratio and lat != "cubic" else "-",
-            ], strict=True)))
-    return format_table(lines, head, markdown=markdown)
-
-
-def headline(rows: list[dict]) -> str:
-    """The README's results block: the paired table and its sentences (Markdown)."""
-    table, prose = paired_table(rows)
-    n_q = len({query_key(r) for r in rows})
-    maps = ", ".join(sorted({Path(r["map"]).name for r in rows}))
-    rots = sorted({r.get("rotation", 0) for r in rows})
-    return "\n".join([
-        f"{n_q} queries over {maps} ({len(rots)} rotation(s) per map). Ratios are medians "
-        "of per-query ratios against cubic with the same neighbours and method, on the queries "
-        "both solved, with a BCa bootstrap 95% interval and a Wilcoxon signed-rank p-value; "
-        "success compares the queries only one of the two solved (exact binomial test).", "",
-        table, "", *prose])
 
 
 def wilson_interval(k: int, n: int, z: float = 1.96) -> tuple[float, float]:

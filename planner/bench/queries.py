@@ -18,7 +18,8 @@ def sample_queries(
     free=None,
     neighbors: str | None = "full",
 ) -> tuple[np.ndarray, np.ndarray, dict]:
-    """Sample ``n`` start/goal pairs in continuous space, kept only if valid everywhere.
+    """Sample ``n`` start/goal pairs in continuous space, kept when some lattice can run
+    them (both ends free in it, connected in one of them).
 
     Candidates are drawn uniformly in the map's box ``bounds`` (a rotated world is in the
     map's own frame too, :mod:`planner.bench.worlds`), so every rotation of a map sees the
@@ -27,8 +28,10 @@ def sample_queries(
     Parameters
     ----------
     worlds : dict of str -> World
-        Every lattice world of the group; a pair is kept only if both points are free
-        in all of them.
+        Every lattice world of the group; a pair is kept when both points are free in at
+        least one of them (a lattice that blocks an end fails that query: at equal cell
+        volume the lattices block different shares of the free space, and that loss is
+        part of the answer).
     bounds : ndarray, shape (2, 3)
         The map's own world box (m) to sample in (before rotation).
     n : int
@@ -54,13 +57,20 @@ def sample_queries(
     starts, goals : ndarray, shape (n', 3)
         ``n' <= n`` when the free space is too small to find more.
     dropped : dict
-        Counts of rejected candidates by reason, e.g. ``{"start blocked in fcc": 12}``.
+        Counts of rejected candidates by reason (``"start or goal blocked in every
+        lattice"``, ...), and per lattice: ``"candidates free in some lattice"`` (the
+        candidates at least one lattice could run), ``"candidates blocked in fcc"`` (of
+        those, the ones whose start or goal FCC blocks) and ``"kept but blocked in fcc"``
+        (kept pairs FCC cannot run).
     """
     rng = np.random.default_rng(seed)
     lo, hi = np.asarray(bounds, dtype=float)
     diag = float(np.linalg.norm(hi - lo))
     dropped: Counter = Counter()
     starts, goals = [], []
+    blocked_in: Counter = Counter()  # candidates whose start or goal each lattice blocks
+    kept_blocked: Counter = Counter()
+    candidates = 0
     batch = max(64, 4 * n)
     for _ in range(max_tries):
         if len(starts) >= n:
@@ -76,35 +86,46 @@ def sample_queries(
         short = np.linalg.norm(g - s, axis=1) < min_distance * diag
         dropped["start and goal too close"] += int(np.sum(short & ok))
         ok &= ~short
-        for what, pts in (("start", s), ("goal", g)):
-            # Per lattice, so that a point inside a wall (blocked everywhere) is not charged
-            # to whichever lattice happens to be checked first.
-            valid = {name: w.points_free(pts) for name, w in worlds.items()}
-            every = np.logical_and.reduce([~v for v in valid.values()])
-            dropped[f"{what} blocked in every lattice"] += int(np.sum(ok & every))
-            for name, v in valid.items():
-                key = f"{what} blocked in {name}, free in another lattice"
-                dropped[key] += int(np.sum(ok & ~v & ~every))
-            ok &= np.logical_and.reduce(list(valid.values()))
+        # A pair is kept when some lattice has both ends free (a lattice that blocks an
+        # end of it fails the query, and that loss is part of its answer); the drops are
+        # counted per lattice for the report.
+        free_s = {name: w.points_free(s) for name, w in worlds.items()}
+        free_g = {name: w.points_free(g) for name, w in worlds.items()}
+        both = {name: free_s[name] & free_g[name] for name in worlds}
+        some = np.logical_or.reduce(list(both.values()))
+        dropped["start or goal blocked in every lattice"] += int(np.sum(ok & ~some))
+        ok &= some
+        for name in worlds:
+            blocked_in[name] += int(np.sum(ok & ~both[name]))
         cand = np.flatnonzero(ok)
         while len(cand) and len(starts) < n:
             # only as many as still wanted: a check is a search per pair
             take, cand = cand[:n - len(starts)], cand[n - len(starts):]
             if neighbors is not None:
-                linked = _connected(worlds, s[take], g[take], neighbors)
+                linked = _connected(worlds, s[take], g[take], neighbors,
+                                    {k: v[take] for k, v in both.items()})
                 dropped["start and goal connected in no lattice"] += int(np.sum(~linked))
                 take = take[linked]
             for i in take:
                 starts.append(s[i])
                 goals.append(g[i])
-    return (np.array(starts).reshape(-1, 3), np.array(goals).reshape(-1, 3),
-            {k: v for k, v in dropped.items() if v})
+                for name in worlds:
+                    kept_blocked[name] += int(not both[name][i])
+        candidates += int(np.sum(ok))
+    dropped = {k: v for k, v in dropped.items() if v}
+    dropped["candidates free in some lattice"] = candidates
+    for name in worlds:
+        dropped[f"candidates blocked in {name}"] = blocked_in[name]
+        dropped[f"kept but blocked in {name}"] = kept_blocked[name]
+    return (np.array(starts).reshape(-1, 3), np.array(goals).reshape(-1, 3), dropped)
 
 
-def _connected(worlds: dict, starts: np.ndarray, goals: np.ndarray, neighbors: str) -> np.ndarray:
-    """(Q,) bool: lattice A* (``neighbors`` moves) connects start i and goal i (points, m,
-    free in every world) in at least one of ``worlds``. A search that stops at its budget
-    counts as connected (not proved otherwise)."""
+def _connected(worlds: dict, starts: np.ndarray, goals: np.ndarray, neighbors: str,
+               free: dict | None = None) -> np.ndarray:
+    """(Q,) bool: lattice A* (``neighbors`` moves) connects start i and goal i (points, m)
+    in at least one of ``worlds`` where both are free (``free``: name -> (Q,) bool; None:
+    free in every world). A search that stops at its budget counts as connected (not
+    proved otherwise)."""
     from planner.search import search_many  # lazy: numba
 
     linked = np.zeros(len(starts), dtype=bool)
@@ -112,6 +133,11 @@ def _connected(worlds: dict, starts: np.ndarray, goals: np.ndarray, neighbors: s
         todo = np.flatnonzero(~linked)
         if not len(todo):
             break
+        if free is not None:
+            name = next(k for k, v in worlds.items() if v is w)
+            todo = todo[free[name][todo]]
+            if not len(todo):
+                continue
         q = w.lattice.quantize
         found = search_many(w, q(starts[todo]), q(goals[todo]), neighbors=neighbors)
         linked[todo] = [r.status != "unreachable" for r in found]

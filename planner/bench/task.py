@@ -4,7 +4,9 @@ that ran it."""
 
 from __future__ import annotations
 
+import contextlib
 import time
+from typing import NamedTuple
 
 import numpy as np
 
@@ -23,6 +25,7 @@ __all__ = ["run_task", "LATTICE_METHODS"]
 
 _WORLDS: dict = {}
 _CLEARANCE: dict = {}
+_WARMED: set = set()
 LATTICE_METHODS = ("astar", "dijkstra", "theta", "lazy-theta", "weighted-theta")
 
 
@@ -52,16 +55,79 @@ def _clearance(map_path: str):
     return _CLEARANCE[map_path]
 
 
+def _warm(world, task: dict) -> None:
+    """Load every kernel a query of this configuration calls (search, shortcut, path
+    metrics) once per process, on a two-cell query of the same lattice, so that no row
+    times the JIT or numba's cache load."""
+    key = (world.lattice.name, task["neighbors"], task["method"])
+    if key in _WARMED or task["method"].startswith("ompl:"):
+        return
+    _WARMED.add(key)
+    from planner.world import World  # lazy: numba
+
+    lat = world.lattice
+    a, b = lat.to_world(np.array([[0, 0, 0], [3, 0, 0]]))
+    pad = 3.0 * lat.covering_radius
+    tiny = World(lat, np.zeros((0, 3), np.int64),
+                 np.array([np.minimum(a, b) - pad, np.maximum(a, b) + pad]))
+    with contextlib.suppress(PlannerError):
+        res = api.plan(tiny, a, b, method=task["method"], neighbors=_neighbors(task))
+        if res.found and len(res.cells) > 2:
+            search.shortcut(tiny, res.cells)
+
+
+def _neighbors(task: dict) -> str:
+    return task["neighbors"] if task["neighbors"] != "-" else "full"
+
+
+class Cost(NamedTuple):
+    """What one step of a query cost: occupancy lookups, wall and CPU seconds."""
+
+    checks: int
+    seconds: float
+    cpu_seconds: float
+
+
+def _cost_fields(search_cost: Cost, smooth_cost: Cost) -> dict:
+    """The row's cost columns: search, post-processing (smoothing) and their sums, which
+    are what the user pays for the delivered path (``cell_checks``, ``seconds``,
+    ``cpu_seconds``)."""
+    return {"search_checks": search_cost.checks, "search_seconds": search_cost.seconds,
+            "search_cpu_seconds": search_cost.cpu_seconds,
+            "smooth_checks": smooth_cost.checks, "smooth_seconds": smooth_cost.seconds,
+            "smooth_cpu_seconds": smooth_cost.cpu_seconds,
+            "cell_checks": search_cost.checks + smooth_cost.checks,
+            "seconds": search_cost.seconds + smooth_cost.seconds,
+            "cpu_seconds": search_cost.cpu_seconds + smooth_cost.cpu_seconds}
+
+
+NO_COST = Cost(0, 0.0, 0.0)
+
+
 def run_task(task: dict) -> list[dict]:
     """Run one task (a world configuration, a method and a batch of queries).
 
     A plain function of plain data so that it pickles to processes and Dask workers.
+
+    Every row carries what the user pays for the path it delivers: the search
+    (``search_checks``, ``search_seconds`` wall, ``search_cpu_seconds`` CPU of the whole
+    :func:`planner.plan` call) and the post-processing (``smooth_*``: line-of-sight
+    shortcutting of an A*/Dijkstra path, :func:`planner.search.shortcut`, and rebuilding
+    its points; 0 for any-angle methods, whose path is delivered as searched, and for OMPL,
+    whose simplification is inside its own time), and their sums ``cell_checks``,
+    ``seconds`` and ``cpu_seconds``. ``delivered`` names the path whose length the
+    report compares (``"smoothed"`` or ``"raw"``; ``length_smoothed`` is always that
+    path's length). ``blocked`` is True when the lattice blocks the start or goal (the
+    query was sampled free on another lattice).
     """
     if task["method"] == "explore":  # a robot sensing its way, not one planned path
         return explore_rows(task)
     world = _world(task)
     clear = _clearance(task["map"])
     step = 0.25 * world.lattice.packing_radius
+    _warm(world, task)
+    meth = task["method"]
+    smoothed = meth in ("astar", "dijkstra")
     rows = []
     for q in task["queries"]:
         base = {k: task[k] for k in ("suite", "map", "cell_volume", "radius", "lattice",
@@ -69,31 +135,39 @@ def run_task(task: dict) -> list[dict]:
         base.update(commit=row_commit(), **worker_host(), rotation=task.get("rotation", 0),
                     quaternion_xyzw=list(task.get("quaternion_xyzw", IDENTITY_XYZW)))
         base.update(query=q["id"], start=q["start"], goal=q["goal"],
-                    optimal_cost=q.get("optimal_cost"))
-        t0 = time.perf_counter()
+                    optimal_cost=q.get("optimal_cost"),
+                    delivered="smoothed" if smoothed or meth.startswith("ompl:") else "raw")
+        t0, c0 = time.perf_counter(), time.process_time()
         try:
-            res = api.plan(world, q["start"], q["goal"], method=task["method"],
-                           neighbors=task["neighbors"] if task["neighbors"] != "-" else "full",
+            res = api.plan(world, q["start"], q["goal"], method=meth,
+                           neighbors=_neighbors(task),
                            time_limit=task.get("ompl_time", 1.0), seed=task["seed"])
         except PlannerError as exc:
-            rows.append({**base, "found": False, "reason": str(exc), "length": None,
-                         "length_smoothed": None, "cell_checks": 0, "expansions": 0,
-                         "seconds": time.perf_counter() - t0, "peak_bytes": 0,
-                         "clearance": None, "collision_free": None})
+            spent = Cost(0, time.perf_counter() - t0, time.process_time() - c0)
+            rows.append({**base, "found": False, "reason": str(exc),
+                         "blocked": _blocked(world, q), "length": None,
+                         "length_smoothed": None, **_cost_fields(spent, NO_COST),
+                         "expansions": 0, "peak_bytes": 0, "clearance": None,
+                         "collision_free": None})
             continue
-        row = {**base, "found": res.found, "reason": res.reason, "cell_checks": res.cell_checks,
-               "expansions": res.expansions, "seconds": res.seconds,
-               "peak_bytes": res.peak_bytes, "length": None, "length_smoothed": None,
-               "clearance": None, "collision_free": None}
+        searched = Cost(res.cell_checks, time.perf_counter() - t0, time.process_time() - c0)
+        smooth_cost = NO_COST
+        row = {**base, "found": res.found, "reason": res.reason, "blocked": False,
+               "expansions": res.expansions, "peak_bytes": res.peak_bytes, "length": None,
+               "length_smoothed": None, "clearance": None, "collision_free": None}
         if res.found:
             raw = res.path
-            if task["method"].startswith("ompl:"):
+            if meth.startswith("ompl:"):
                 raw_path = np.asarray(res.extra.get("path_raw", raw), dtype=float).reshape(-1, 3)
                 smooth = raw
                 raw = raw_path if len(raw_path) > 1 else raw
-            elif task["method"] in ("astar", "dijkstra"):
+            elif smoothed:
+                t1, c1 = time.perf_counter(), time.process_time()
+                before = world.cell_checks
                 cells = search.shortcut(world, res.cells)
                 smooth = np.concatenate([raw[:1], world.lattice.to_world(cells), raw[-1:]])
+                smooth_cost = Cost(world.cell_checks - before, time.perf_counter() - t1,
+                                   time.process_time() - c1)
             else:
                 smooth = raw
             c_raw = clear.of_path(raw, step)
@@ -103,5 +177,14 @@ def run_task(task: dict) -> list[dict]:
                        clearance=min(c_raw, c_smooth),
                        collision_free=bool(min(c_raw, c_smooth) >= task["radius"] - tol),
                        waypoints=len(raw))
-        rows.append(row)
+        rows.append({**row, **_cost_fields(searched, smooth_cost)})
     return rows
+
+
+def _blocked(world, q: dict) -> bool:
+    """The lattice blocks the query's start or goal (or they lie outside its bounds)."""
+    try:
+        pts = np.array([q["start"], q["goal"]], dtype=float)
+        return not bool(np.all(world.points_free(pts)))
+    except (PlannerError, ValueError):
+        return True
