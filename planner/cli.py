@@ -177,7 +177,13 @@ def build_parser() -> argparse.ArgumentParser:
     _add_world_args(p)
     p.add_argument("--out", required=True,
                    help="output .npz (the world), .ply (blocked and unknown cell centres) "
-                        "or .bt (OctoMap tree of the blocked cells; cubic lattice only)")
+                        "or .bt (an OctoMap of the map's obstacles: occupied, observed free, "
+                        "unknown left out, on OctoMap's own voxels of the cell edge)")
+    p.add_argument("--bt-cspace", action="store_true",
+                   help="with --out X.bt: write the planner's blocked cells (the C-space "
+                        "mask: obstacles inflated by the radius, plus blocked unknown space) "
+                        "instead of the obstacles; cubic lattice only, half a cell shifted "
+                        "(the header says so)")
 
     p = sub.add_parser("view", help="write an interactive 3D view (one self-contained .html) "
                                     "of a map or saved world and paths")
