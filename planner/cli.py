@@ -89,7 +89,9 @@ def _add_world_args(p: argparse.ArgumentParser, *, lattice: bool = True,
     p.add_argument("--format", default=None,
                    help="file format instead of the extension: bag, las (LAS/LAZ), e57, "
                         "rosmap (map_server YAML), 3dmap, pcd, ply, bt, npy, xyz (text), or "
-                        "poses (a pose list of scans, merged)")
+                        "poses (a pose list of scans, merged: one line per scan, "
+                        "'SCAN x y z qx qy qz qw' or 'SCAN' and 16 numbers of the 4x4 "
+                        "sensor-to-world matrix; # comments; paths relative to the list)")
     p.add_argument("--check-source", action="store_true",
                    help="with a saved world: refuse it unless its source map (beside the "
                         "world file or in the current folder) still has the SHA-256 "
@@ -97,6 +99,11 @@ def _add_world_args(p: argparse.ArgumentParser, *, lattice: bool = True,
     _add_bag_args(p)
     if not unknown:  # explore: the robot itself decides what unknown space is
         return
+    p.add_argument("--origin", type=T.vec3, default=None,
+                   help="x,y,z (m): the sensor position of a single scan (a point cloud), "
+                        "in its frame: free space is ray-cast from it and space it never saw "
+                        "is unknown (blocked). A PCD's own non-default VIEWPOINT and an E57 "
+                        "station pose are used without it; several scans: --format poses")
     p.add_argument("--unknown", choices=("blocked", "free"), default=None,
                    help="unknown space: blocked (kept the robot radius away, as obstacles) or "
                         "free (default: blocked when the map says what was observed free, else "

@@ -3,7 +3,8 @@ with the JSON beside it as its sidecar).
 
 Both carry the map (file name and sha256 when known), frame, lattice, cell volume (area for
 a 2D map), radius, unknown policy, start, goal, raw and smoothed length, the number of path
-cells meeting unknown space, and per distinct waypoint x, y, z and heading (yaw in the x-y plane,
+cells meeting unknown space, ``warnings`` (:func:`planner.world.caveats.world_warnings`: e.g. a
+cloud without a sensor origin), and per distinct waypoint x, y, z and heading (yaw in the x-y plane,
 radians, of the segment leaving the waypoint; the last repeats the one before). Numbers are
 rounded to 1 um / 1 urad so files carry no float noise.
 """
@@ -44,6 +45,7 @@ def _r(x):
 
 def path_record(res, world, start, goal) -> dict:
     """The metadata and waypoints of a :class:`planner.PlanResult` as a JSON-ready dict."""
+    from planner.world.caveats import world_warnings  # lazy: planner.world loads numba
     src = world.source or ""
     raw = res.extra.get("raw_length", res.length)
     smooth = res.extra.get("smoothed_length")
@@ -73,6 +75,7 @@ def path_record(res, world, start, goal) -> dict:
         "found": res.found, "status": res.status, "reason": res.reason,
         "raw_length": _r(raw), "smoothed_length": _r(smooth),
         "unknown_cells": int(res.unknown_cells), "guarantee": res.guarantee,
+        "warnings": world_warnings(world),
         "path": [[_r(v) for v in p] for p in path],
         "waypoints": [[_r(v) for v in p] + [_r(h)] for p, h in zip(pts, yaw, strict=True)],
         "waypoint_columns": (["x", "y"] if world.dim == 2 else ["x", "y", "z"]) + ["yaw"],

@@ -17,14 +17,27 @@ def bag_options(a: argparse.Namespace) -> dict:
 
 
 def map_source(a: argparse.Namespace):
-    """The map argument, or the obstacles read from it when bag options are given (they
-    belong to the bag reader, not to the world)."""
+    """The map argument, or the obstacles read from it when bag options or a sensor
+    ``--origin`` are given (they belong to the reader, not to the world)."""
     bag = bag_options(a)
-    if not bag:
+    origin = getattr(a, "origin", None)
+    if not bag and origin is None:
         return a.map
-    from planner.io import load_obstacles  # lazy: scipy
+    from planner.io import load_obstacles, with_origin  # lazy: scipy
+    from planner.maps import resolve
+    from planner.world.file import is_world_file  # lazy: numba, scipy
 
-    return load_obstacles(a.map, a.format, **bag)
+    path = resolve(a.map)
+    if origin is not None and is_world_file(path):
+        raise PlannerError(f"argument --origin: {a.map} is a saved world; give the scan "
+                           f"itself")
+    obst = load_obstacles(path, a.format, **bag)
+    return obst if origin is None else with_origin(obst, origin)
+
+
+def reads_source(a: argparse.Namespace) -> bool:
+    """True when :func:`map_source` reads the map itself (bag options or ``--origin``)."""
+    return bool(bag_options(a)) or getattr(a, "origin", None) is not None
 
 
 def build(a: argparse.Namespace):
