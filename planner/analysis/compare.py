@@ -14,12 +14,13 @@ from planner.analysis.tables import format_table
 from planner.errors import MapError, PlanError
 from planner.io import load_scenarios
 from planner.maps import resolve
-from planner.path import path_length
+from planner.path import path_length, read_record
 from planner.planning import plan
 from planner.progress import Progress
 from planner.search import warm_up
 from planner.view import write_view
 from planner.world.build import build_world, sidecar
+from planner.world.caveats import world_warnings
 
 __all__ = ["compare", "format_rows", "plot_paths"]
 
@@ -132,6 +133,8 @@ def _row(world, name: str, per: list, build: float, compile_s: float, method: st
         "compile_seconds": compile_s,
         "blocked_cells": int(world.n_blocked),
         "unknown_cells": int(sum(r.unknown_cells or 0 for r in found)),
+        "read": read_record(world),
+        "warnings": world_warnings(world),
     }
 
 
@@ -190,6 +193,7 @@ def format_rows(rows: list[dict], markdown: bool = False) -> str:
         text += (f"\n(sums over {r0['queries']} queries; {r0['method']}, "
                  f"{r0['neighbors']} neighbours; lengths in metres; compile s: the search "
                  f"kernels' first-use compilation or cache load, never in search s)")
+        text += "".join(f"\nWARNING: {w}" for w in r0.get("warnings", []))
     return text
 
 
