@@ -175,7 +175,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--goal", type=T.vec3, default=None, help="x,y,z (m); default: map's queries")
     p.add_argument("--method", default="astar", help=METHODS)
     p.add_argument("--neighbors", default="full", help="full, face, face+k or full+k")
-    p.add_argument("--plot", help="write a figure of the paths")
+    p.add_argument("--plot", help="write a figure of the paths: one row of panels per query "
+                                  "(the first 4; the title says which)")
+    p.add_argument("--plot-query", type=T.int_range(1), default=None,
+                   help="draw only query N (1-based) in --plot and --view (default: --plot "
+                        "the first 4, --view query 1)")
     p.add_argument("--view", help="write an interactive 3D view of the paths (.html)")
     p.add_argument("--json", action="store_true", help="print the rows as JSON")
 

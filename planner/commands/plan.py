@@ -60,7 +60,8 @@ def compare(a: argparse.Namespace) -> int:
     rows = comparison.compare(
         a.map, lattices=lattices, cell_volume=a.cell_volume, radius=radius, bounds=a.bounds,
         start=a.start, goal=a.goal, method=a.method, neighbors=a.neighbors, plot=a.plot,
-        progress=not a.json, format=a.format, max_expansions=a.max_expansions,
+        plot_query=a.plot_query, progress=not a.json, format=a.format,
+        max_expansions=a.max_expansions,
         unknown=a.unknown, view=a.view, source=map_source(a) if reads_source(a) else None,
     )
     print(json.dumps(rows) if a.json else comparison.format_rows(rows))
