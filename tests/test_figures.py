@@ -75,3 +75,41 @@ def test_compare_plots_every_query_or_the_one_asked_for(tmp_path, capsys):
                  "9"]) == 2
     assert "there are 3 queries" in capsys.readouterr().err
     assert not (tmp_path / "q9.png").exists()
+
+
+def test_zero_check_replans_are_drawn_at_a_floor_and_counted(tmp_path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from planner.explore.figures import _log_dots, floor_of
+
+    dstar = np.array([120.0, 0, 0, 3, 0, 1])
+    astar = np.array([900.0, 40, 30, 20, 10, 5])
+    fig, ax = plt.subplots()
+    _log_dots(ax, [(astar, "0.5", "A*"), (dstar, "tab:red", "D* Lite")], "cell checks")
+    drawn = sum(len(line.get_xdata()) for line in ax.get_lines())
+    assert drawn == len(dstar) + len(astar)  # every replan is on the axis
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "D* Lite: 3 with 0 cell checks (drawn at the floor)" in labels
+    zeros = [line for line in ax.get_lines() if line.get_marker() == "v"]
+    assert np.all(zeros[0].get_ydata() == floor_of([astar, dstar])) and floor_of(
+        [astar, dstar]) < 1
+    plt.close(fig)
+
+
+def test_a_plan_leaving_the_slice_is_drawn_apart_with_its_heights():
+    from planner.explore.figures import split_at_slice
+
+    # flat at z = 1, over a wall at z = 2.4, down again
+    plan = np.array([[0, 0, 1.0], [1, 0, 1.0], [2, 0, 2.4], [3, 0, 2.4], [4, 0, 1.0],
+                     [5, 0, 1.0]])
+    inside, outside, z = split_at_slice(plan, 1.0)
+    assert np.isnan(inside[2:4]).all() and not np.isnan(inside[[0, 1, 4, 5]]).any()
+    # the dotted part runs from the last waypoint in the slice to the first one back
+    np.testing.assert_array_equal(outside[1:5], plan[1:5])
+    assert np.isnan(outside[[0, 5]]).all()
+    assert z == (1.0, 2.4)
+    flat_in, flat_out, _ = split_at_slice(plan[:2], 1.0)
+    assert not len(flat_out) and not np.isnan(flat_in).any()
