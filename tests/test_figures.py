@@ -113,3 +113,31 @@ def test_a_plan_leaving_the_slice_is_drawn_apart_with_its_heights():
     assert z == (1.0, 2.4)
     flat_in, flat_out, _ = split_at_slice(plan[:2], 1.0)
     assert not len(flat_out) and not np.isnan(flat_in).any()
+
+
+@pytest.mark.parametrize("k", [1, 3])
+def test_fig5_draws_markers_for_one_rotation_and_cdfs_for_several(tmp_path, monkeypatch, k):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from planner.analysis import paper
+
+    figs, close = [], plt.close
+    monkeypatch.setattr(paper, "save_fig", lambda fig, path: figs.append(fig))
+    monkeypatch.setattr(plt, "close", lambda fig=None: None)  # kept open to be inspected
+    rows = [{"dataset": "scan", "cell_volume": 0.125, "lattice": name, "rotation": r,
+             "distortion": 0.2 + 0.01 * i + 0.001 * r, "voxel_count": 100 + i + r}
+            for i, name in enumerate(paper.NAMED) for r in range(k)]
+    paper.fig5(tmp_path, plt, rows, {"scan": np.zeros((10, 3))}, [0.125])
+    lines = figs[0].axes[0].get_lines()
+    assert len(lines) == len(paper.NAMED)
+    if k == 1:  # a dot per lattice, not a vertical step
+        assert all(line.get_marker() == "o" and line.get_drawstyle() == "default"
+                   for line in lines)
+        assert "one random rotation" in figs[0]._suptitle.get_text()
+    else:
+        assert all(line.get_drawstyle() == "steps-post" for line in lines)
+    for fig in figs:
+        close(fig)
