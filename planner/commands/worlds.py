@@ -8,6 +8,7 @@ import time
 
 from planner.errors import PlannerError
 from planner.lattice import Lattice
+from planner.maps import resolve
 
 BAG_OPTIONS = ("topic", "fixed_frame", "max_clouds")
 
@@ -26,7 +27,6 @@ def map_source(a: argparse.Namespace):
     if not reads_source(a):
         return a.map
     from planner.io import load_obstacles, with_origin  # lazy: scipy
-    from planner.maps import resolve
     from planner.world.file import is_world_file  # lazy: numba, scipy
 
     path = resolve(a.map)
@@ -58,7 +58,6 @@ def describe_read(obst) -> str:
 
 def _is_bag(a: argparse.Namespace) -> bool:
     from planner.io.load import map_format  # lazy: scipy
-    from planner.maps import resolve
 
     return map_format(resolve(a.map), a.format) == "bag"
 
@@ -90,14 +89,12 @@ def build(a: argparse.Namespace):
     world = build_world(source, lattice, cell_volume=a.cell_volume, radius=a.radius,
                         bounds=a.bounds, format=a.format, unknown=a.unknown)
     if source is not a.map:  # read here: the path files hash the map itself
-        from planner.maps import resolve
-
         world.source_file = str(resolve(a.map))
     if read and a.cell_volume is None and a.bounds is None and not source.resolution:
-        from planner.world import build as rules
+        from planner.world.build import DEFAULT_CELLS  # lazy: numba (loaded by the build)
 
         print(f"planner: note: cell volume {world.lattice.cell_volume:.4g} m^3 is the "
-              f"default for the box of what was read (~{rules.DEFAULT_CELLS:,} cells): it "
+              f"default for the box of what was read (~{DEFAULT_CELLS:,} cells): it "
               f"changes with --max-clouds, --topic and the bag; give --cell-volume to keep "
               f"it", file=sys.stderr)
     if getattr(a, "check_source", False) and is_world_file(a.map):

@@ -18,6 +18,7 @@ from scipy.spatial.transform import Rotation, Slerp
 from planner.errors import MapError
 from planner.io.obstacles import Obstacles
 from planner.io.validate import finite_points, no_return_mask
+from planner.progress import Progress
 
 CLOUD_TYPE = "sensor_msgs/msg/PointCloud2"
 TF_TYPE = "tf2_msgs/msg/TFMessage"
@@ -65,7 +66,6 @@ def read_bag(p: Path, topic: str | None = None, fixed_frame: str | None = None,
         ``point_origin`` (N,), ``dropped_nonfinite``, ``frame`` (the fixed frame), ``read``
         (the topic and frame chosen, whether given, the clouds read and in the topic).
     """
-    from planner.progress import Progress
 
     require("rosbags", ".bag", p.name)
     from rosbags.highlevel import AnyReader
