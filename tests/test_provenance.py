@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from planner import progress
+from planner.io import bag as bag_reader
 from planner.cli import main
 from planner.fsutil import source_sha256
 
@@ -125,7 +126,7 @@ def test_a_long_bag_read_shows_progress(bag, tmp_path, capsys, monkeypatch):
         def __init__(self, *args, **kw):
             super().__init__(*args, **{**kw, "quiet": 0.0})
 
-    monkeypatch.setattr(progress, "Progress", Eager)
+    monkeypatch.setattr(bag_reader, "Progress", Eager)
     assert main(["world", str(bag), "--radius", "0.1", "--cell-volume", "0.001", "--out",
                  str(tmp_path / "w.npz")]) == 0
     err = capsys.readouterr().err
