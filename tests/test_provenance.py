@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from planner import progress
-from planner.io import bag as bag_reader
 from planner.cli import main
 from planner.fsutil import source_sha256
+from planner.io import bag as bag_reader
 
 PLAN = ["--lattice", "cubic", "--radius", "0.1", "--unknown", "free", "--start", "1,1,1",
         "--goal", "3,3,1"]
