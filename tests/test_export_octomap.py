@@ -186,3 +186,21 @@ def test_a_saved_world_or_a_2d_map_is_refused_in_one_line(tmp_path, capsys):
             points=np.zeros((1, 2)), boxes=np.zeros((0, 2)), box_size=0.0, bounds=None,
             resolution=None, source="plan", dim=2), 0.1)
     assert not list(tmp_path.glob("*.bt"))
+
+
+@pytest.mark.real_data
+def test_geb079_written_again_is_the_same_bit_stream(real_data, tmp_path):
+    """OctoMap's own file and ours, after their headers: byte for byte (same pruning, same
+    depth-first order, same node count)."""
+    src = real_data / "octomap" / "geb079.bt"
+    write_octomap(tmp_path / "g.bt", load_obstacles(src))
+    a, b = (tmp_path / "g.bt").read_bytes(), src.read_bytes()
+
+    def split(data: bytes) -> tuple[dict, bytes]:
+        head, _, body = data.partition(b"\ndata\n")
+        fields = dict(line.split(" ", 1) for line in head.decode().splitlines()
+                      if line and not line.startswith("#"))
+        return fields, body
+    (ha, sa), (hb, sb) = split(a), split(b)
+    assert ha == hb  # id, size, res
+    assert sa == sb
