@@ -89,7 +89,9 @@ def _add_world_args(p: argparse.ArgumentParser, *, lattice: bool = True,
     p.add_argument("--format", default=None,
                    help="file format instead of the extension: bag, las (LAS/LAZ), e57, "
                         "rosmap (map_server YAML), 3dmap, pcd, ply, bt, npy, xyz (text), or "
-                        "poses (a pose list of scans, merged)")
+                        "poses (a pose list of scans, merged: one line per scan, "
+                        "'SCAN x y z qx qy qz qw' or 'SCAN' and 16 numbers of the 4x4 "
+                        "sensor-to-world matrix; # comments; paths relative to the list)")
     p.add_argument("--check-source", action="store_true",
                    help="with a saved world: refuse it unless its source map (beside the "
                         "world file or in the current folder) still has the SHA-256 "
@@ -97,6 +99,11 @@ def _add_world_args(p: argparse.ArgumentParser, *, lattice: bool = True,
     _add_bag_args(p)
     if not unknown:  # explore: the robot itself decides what unknown space is
         return
+    p.add_argument("--origin", type=T.vec3, default=None,
+                   help="x,y,z (m): the sensor position of a single scan (a point cloud), "
+                        "in its frame: free space is ray-cast from it and space it never saw "
+                        "is unknown (blocked). A PCD's own non-default VIEWPOINT and an E57 "
+                        "station pose are used without it; several scans: --format poses")
     p.add_argument("--unknown", choices=("blocked", "free"), default=None,
                    help="unknown space: blocked (kept the robot radius away, as obstacles) or "
                         "free (default: blocked when the map says what was observed free, else "
@@ -168,7 +175,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--goal", type=T.vec3, default=None, help="x,y,z (m); default: map's queries")
     p.add_argument("--method", default="astar", help=METHODS)
     p.add_argument("--neighbors", default="full", help="full, face, face+k or full+k")
-    p.add_argument("--plot", help="write a figure of the paths")
+    p.add_argument("--plot", help="write a figure of the paths: one row of panels per query "
+                                  "(the first 4; the title says which)")
+    p.add_argument("--plot-query", type=T.int_range(1), default=None,
+                   help="draw only query N (1-based) in --plot and --view (default: --plot "
+                        "the first 4, --view query 1)")
     p.add_argument("--view", help="write an interactive 3D view of the paths (.html)")
     p.add_argument("--json", action="store_true", help="print the rows as JSON")
 
@@ -177,7 +188,13 @@ def build_parser() -> argparse.ArgumentParser:
     _add_world_args(p)
     p.add_argument("--out", required=True,
                    help="output .npz (the world), .ply (blocked and unknown cell centres) "
-                        "or .bt (OctoMap tree of the blocked cells; cubic lattice only)")
+                        "or .bt (an OctoMap of the map's obstacles: occupied, observed free, "
+                        "unknown left out, on OctoMap's own voxels of the cell edge)")
+    p.add_argument("--bt-cspace", action="store_true",
+                   help="with --out X.bt: write the planner's blocked cells (the C-space "
+                        "mask: obstacles inflated by the radius, plus blocked unknown space) "
+                        "instead of the obstacles; cubic lattice only, half a cell shifted "
+                        "(the header says so)")
 
     p = sub.add_parser("view", help="write an interactive 3D view (one self-contained .html) "
                                     "of a map or saved world and paths")

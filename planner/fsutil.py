@@ -60,3 +60,16 @@ def sha256(path: str | os.PathLike) -> str:
         for block in iter(lambda: f.read(1 << 20), b""):
             h.update(block)
     return h.hexdigest()
+
+
+def source_sha256(path: str | os.PathLike) -> str:
+    """Hex SHA-256 of a map source: a file's bytes (:func:`sha256`), or for a folder (a
+    rosbag2) the SHA-256 of one ``relative/path NUL file-sha256`` line per file, in sorted
+    order, so renaming, adding or changing any file changes it."""
+    p = Path(path)
+    if not p.is_dir():
+        return sha256(p)
+    h = hashlib.sha256()
+    for f in sorted(q for q in p.rglob("*") if q.is_file()):
+        h.update(f"{f.relative_to(p).as_posix()}\0{sha256(f)}\n".encode())
+    return h.hexdigest()

@@ -1,9 +1,12 @@
 """Path files written by ``planner plan --out``: JSON (everything) or CSV (waypoints only,
 with the JSON beside it as its sidecar).
 
-Both carry the map (file name and sha256 when known), frame, lattice, cell volume (area for
+Both carry the map (file name and sha256: of the file, or of a rosbag2 folder's files), frame,
+what was read (``read``: a bag's topic, fixed frame, ``max_clouds`` and clouds read; the
+world's local-frame offset when it has one), lattice, cell volume (area for
 a 2D map), radius, unknown policy, start, goal, raw and smoothed length, the number of path
-cells meeting unknown space, and per distinct waypoint x, y, z and heading (yaw in the x-y plane,
+cells meeting unknown space, ``warnings`` (:func:`planner.world.caveats.world_warnings`: e.g. a
+cloud without a sensor origin), and per distinct waypoint x, y, z and heading (yaw in the x-y plane,
 radians, of the segment leaving the waypoint; the last repeats the one before). Numbers are
 rounded to 1 um / 1 urad so files carry no float noise.
 """
@@ -18,9 +21,10 @@ from pathlib import Path
 import numpy as np
 
 from planner.errors import PlanError
-from planner.fsutil import atomic_path
+from planner.fsutil import atomic_path, source_sha256
 
-__all__ = ["SHORT_PATH", "headings", "path_length", "path_record", "rows_length", "write_path"]
+__all__ = ["SHORT_PATH", "headings", "path_length", "path_record", "read_record", "rows_length",
+           "write_path"]
 
 _DIGITS = 6
 
@@ -42,18 +46,31 @@ def _r(x):
     return None if x is None or not math.isfinite(x) else round(float(x), _DIGITS)
 
 
+def read_record(world) -> dict:
+    """What was read to make ``world``: a bag's topic, fixed frame and clouds (``None``
+    where the map is a single file read whole), and the offset (m) of the world's local
+    frame from the input's when it has one (``None`` otherwise)."""
+    obst = getattr(world, "obstacles", None)
+    read = dict(getattr(obst, "read", None) or {})
+    offset = getattr(world, "offset", None)
+    return {"topic": read.get("topic"), "fixed_frame": read.get("fixed_frame"),
+            "max_clouds": read.get("max_clouds"), "clouds": read.get("clouds"),
+            "clouds_in_topic": read.get("clouds_in_topic"),
+            "local_frame_offset": None if offset is None else
+            [float(v) for v in np.asarray(offset, dtype=float).reshape(-1)]}
+
+
 def path_record(res, world, start, goal) -> dict:
     """The metadata and waypoints of a :class:`planner.PlanResult` as a JSON-ready dict."""
+    from planner.world.caveats import world_warnings  # lazy: planner.world loads numba
     src = world.source or ""
     raw = res.extra.get("raw_length", res.length)
     smooth = res.extra.get("smoothed_length")
     path = np.asarray(res.path, dtype=float)
     digest = getattr(world, "source_sha256", "") or ""
     src_file = getattr(world, "source_file", "")
-    if not digest and src_file and Path(src_file).is_file():
-        from planner.world.file import sha256  # lazy: numba, scipy
-
-        digest = sha256(src_file)
+    if not digest and src_file and Path(src_file).exists():
+        digest = source_sha256(src_file)  # a file, or a rosbag2 folder
     if len(path) > 1:  # a start at a cell centre would appear twice
         r = np.round(path, _DIGITS)
         path = path[np.concatenate([[True], np.any(r[1:] != r[:-1], axis=1)])]
@@ -63,6 +80,7 @@ def path_record(res, world, start, goal) -> dict:
         "map": Path(src).name if src else None,
         "map_sha256": digest or None,
         "frame": getattr(world.obstacles, "frame", None) or "map",
+        "read": read_record(world),
         "dim": world.dim,
         "lattice": res.lattice, "cell_volume": _r(res.cell_volume),
         "cell_volume_unit": "m^2" if world.dim == 2 else "m^3",
@@ -73,6 +91,7 @@ def path_record(res, world, start, goal) -> dict:
         "found": res.found, "status": res.status, "reason": res.reason,
         "raw_length": _r(raw), "smoothed_length": _r(smooth),
         "unknown_cells": int(res.unknown_cells), "guarantee": res.guarantee,
+        "warnings": world_warnings(world),
         "path": [[_r(v) for v in p] for p in path],
         "waypoints": [[_r(v) for v in p] + [_r(h)] for p, h in zip(pts, yaw, strict=True)],
         "waypoint_columns": (["x", "y"] if world.dim == 2 else ["x", "y", "z"]) + ["yaw"],

@@ -20,8 +20,10 @@ from planner.path import SHORT_PATH, path_length, rows_length
 from planner.search.run import search_points
 from planner.world import World, as_point
 from planner.world.build import build_world
+from planner.world.caveats import NO_ORIGIN, world_warnings
 
-__all__ = ["PlanResult", "build_world", "describe", "plan", "unknown_on_path"]
+__all__ = ["NO_ORIGIN", "PlanResult", "build_world", "describe", "plan", "unknown_on_path",
+           "world_warnings"]
 
 
 @dataclass
@@ -227,8 +229,8 @@ def _path_points(lat: Lattice, s: np.ndarray, cells: np.ndarray, g: np.ndarray) 
 
 def describe(res: PlanResult, world=None) -> str:
     """One human-readable line about a :class:`PlanResult` (what ``planner plan`` prints);
-    with its ``world``, it also says when unknown space was treated as free because the map
-    records no free space."""
+    with its ``world``, a ``WARNING:`` line follows for each of :func:`world_warnings` (a
+    cloud without a sensor origin, whose unseen space counted as free)."""
     ompl = res.method.startswith("ompl:")
     planar = world is not None and world.dim == 2
     size = (f"cell area {res.cell_volume:.6g} m^2, edge {res.cell_volume ** 0.5:.4g} m"
@@ -236,10 +238,7 @@ def describe(res: PlanResult, world=None) -> str:
             f"cell volume {res.cell_volume:.6g} m^3, edge {res.cell_volume ** (1 / 3):.4g} m")
     head = f"{res.lattice} ({size}), {res.method}" + (
         " (continuous, validated on this lattice's world)" if ompl else f", {res.neighbors}")
-    blind = (world is not None and world.unknown_policy == "free"
-             and world.obstacles is not None and not world.obstacles.has_free_space)
-    unseen = ("; unknown space treated as free: the map records no free space "
-              "(--unknown blocked needs a map that does)") if blind else ""
+    unseen = "".join(f"\nWARNING: {w}" for w in world_warnings(world))
     if not res.found:
         return f"{head}: no path ({res.reason}); {res.cell_checks} cell checks{unseen}"
     work = "" if ompl else f", {res.expansions} expansions"

@@ -81,7 +81,7 @@ def cubic_world(tmp_path_factory):
     d = tmp_path_factory.mktemp("world")
     assert main(["world", *OFFICE, "--lattice", "cubic", "--out", str(d / "w.npz")]) == 0
     assert main(["world", str(d / "w.npz"), "--out", str(d / "w.ply")]) == 0
-    assert main(["world", str(d / "w.npz"), "--out", str(d / "w.bt")]) == 0
+    assert main(["world", str(d / "w.npz"), "--out", str(d / "w.bt"), "--bt-cspace"]) == 0
     world = build_world(str(d / "w.npz"))
     return d, world, np.unique(world.blocked, axis=0)
 
@@ -111,7 +111,7 @@ def _leaf_cells(centres: np.ndarray, sizes: np.ndarray, h: float) -> np.ndarray:
     return np.unique(np.concatenate(out), axis=0)
 
 
-def test_octomap_reads_back_cell_for_cell(cubic_world):
+def test_cspace_octomap_reads_back_cell_for_cell(cubic_world):
     from planner.io import load_obstacles
 
     d, world, cells = cubic_world
@@ -125,7 +125,7 @@ def test_octomap_reads_back_cell_for_cell(cubic_world):
     np.testing.assert_array_equal(_leaf_cells(obst.boxes, obst.box_sizes, h), cells)
 
 
-def test_octomap_binding_sees_the_cells_half_a_cell_shifted(cubic_world):
+def test_cspace_octomap_binding_sees_the_cells_half_a_cell_shifted(cubic_world):
     octomap = pytest.importorskip("octomap", reason="octomap-python does not install here")
     d, world, cells = cubic_world
     h = world.cell_size
@@ -138,8 +138,9 @@ def test_octomap_binding_sees_the_cells_half_a_cell_shifted(cubic_world):
     np.testing.assert_array_equal(_leaf_cells(centres, sizes, h), cells)
 
 
-def test_octomap_refuses_a_non_cubic_lattice(tmp_path, capsys):
-    assert main(["world", *OFFICE, "--lattice", "bcc", "--out", str(tmp_path / "w.bt")]) == 2
+def test_cspace_octomap_refuses_a_non_cubic_lattice(tmp_path, capsys):
+    assert main(["world", *OFFICE, "--lattice", "bcc", "--out", str(tmp_path / "w.bt"),
+                 "--bt-cspace"]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "cubic" in err
     assert not (tmp_path / "w.bt").exists()

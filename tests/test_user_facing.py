@@ -52,10 +52,10 @@ def test_the_duplicate_voxels_command_is_gone(capsys):
 def test_plan_line_gives_the_cell_edge_and_says_when_unseen_space_counts_as_free(capsys):
     # office is a plain cloud: it records no observed free space.
     main(["plan", "office", "--start", "2,2,1", "--goal", "18,10,1", "--cell-volume", "0.01"])
-    line = capsys.readouterr().out.strip()
-    assert len(line.splitlines()) == 1
+    line, warning = capsys.readouterr().out.strip().splitlines()
     assert f"cell volume 0.01 m^3, edge {0.01 ** (1 / 3):.4g} m" in line
-    assert "unknown space treated as free: the map records no free space" in line
+    assert warning.startswith("WARNING: no sensor origin: space the sensor never saw counts "
+                              "as free") and "--origin" in warning
 
 
 def test_rerunning_a_suite_into_a_folder_with_results_needs_resume_or_force(tmp_path, capsys):

@@ -14,12 +14,13 @@ from planner.analysis.tables import format_table
 from planner.errors import MapError, PlanError
 from planner.io import load_scenarios
 from planner.maps import resolve
-from planner.path import path_length
+from planner.path import path_length, read_record
 from planner.planning import plan
 from planner.progress import Progress
 from planner.search import warm_up
 from planner.view import write_view
 from planner.world.build import build_world, sidecar
+from planner.world.caveats import world_warnings
 
 __all__ = ["compare", "format_rows", "plot_paths"]
 
@@ -36,6 +37,7 @@ def compare(
     method: str = "astar",
     neighbors: str = "full",
     plot: str | None = None,
+    plot_query: int | None = None,
     progress: bool = True,
     format: str | None = None,
     max_expansions: int | None = None,
@@ -95,19 +97,46 @@ def compare(
                                 max_expansions=max_expansions))
                 bar.step()
             rows.append(_row(world, name, per, build, compile_s, method, neighbors))
-            results[name] = per[0]
+            results[name] = per
     if plot:
-        s, g = queries[0]
-        plot_paths(plot, world, results,
-                   title=f"{Path(map_path).name}: query 1 of {len(queries)}, "
-                         f"{_xyz(s)} -> {_xyz(g)}" + (f" (cells of {name})"
-                                                      if len(results) > 1 else ""))
+        shown = _plotted(plot_query, len(queries))
+        cells = f"; cells of {name}" if len(results) > 1 else ""
+        plot_paths(plot, world, [{k: per[q] for k, per in results.items()} for q in shown],
+                   title=[f"query {q + 1} of {len(queries)}: {_xyz(queries[q][0])} -> "
+                          f"{_xyz(queries[q][1])}" for q in shown],
+                   suptitle=f"{Path(map_path).name}: "
+                            + _which(shown, len(queries)) + cells)
     if view:
-        s, g = queries[0]
-        write_view(view, world, {k: r.path for k, r in results.items() if r.found}, start=s,
-                   goal=g, title=f"{Path(map_path).name}: query 1 of {len(queries)}, cells of "
-                                 f"the {name} lattice")
+        q = (plot_query or 1) - 1
+        s, g = queries[q]
+        write_view(view, world, {k: per[q].path for k, per in results.items()
+                                 if per[q].found}, start=s, goal=g,
+                   title=f"{Path(map_path).name}: query {q + 1} of {len(queries)}, cells "
+                         f"of the {name} lattice")
     return rows
+
+
+#: most queries drawn in one ``compare --plot`` figure (one row of panels each)
+PLOT_QUERIES = 4
+
+
+def _plotted(plot_query: int | None, n: int) -> list[int]:
+    """0-based queries a figure shows: the one asked for, else the first
+    :data:`PLOT_QUERIES`."""
+    if plot_query is None:
+        return list(range(min(n, PLOT_QUERIES)))
+    if not 1 <= plot_query <= n:
+        raise PlanError(f"--plot-query {plot_query}: there are {n} queries (1..{n})")
+    return [plot_query - 1]
+
+
+def _which(shown: list[int], n: int) -> str:
+    """What a figure's queries are, in words (it says when some are left out)."""
+    if len(shown) == 1:
+        return f"query {shown[0] + 1} of {n}"
+    if len(shown) == n:
+        return f"all {n} queries"
+    return (f"queries 1-{len(shown)} of {n} (--plot-query N draws another)")
 
 
 def _row(world, name: str, per: list, build: float, compile_s: float, method: str,
@@ -132,6 +161,8 @@ def _row(world, name: str, per: list, build: float, compile_s: float, method: st
         "compile_seconds": compile_s,
         "blocked_cells": int(world.n_blocked),
         "unknown_cells": int(sum(r.unknown_cells or 0 for r in found)),
+        "read": read_record(world),
+        "warnings": world_warnings(world),
     }
 
 
@@ -190,13 +221,14 @@ def format_rows(rows: list[dict], markdown: bool = False) -> str:
         text += (f"\n(sums over {r0['queries']} queries; {r0['method']}, "
                  f"{r0['neighbors']} neighbours; lengths in metres; compile s: the search "
                  f"kernels' first-use compilation or cache load, never in search s)")
+        text += "".join(f"\nWARNING: {w}" for w in r0.get("warnings", []))
     return text
 
 
-def plot_paths(path: str, world, results: dict, max_cells: int = 4000,
-               title: str | None = None) -> None:
+def plot_paths(path: str, world, results, max_cells: int = 6000,
+               title: str | list[str] | None = None, suptitle: str | None = None) -> None:
     """Figure of paths over the cells: see :func:`planner.analysis.path_figure.plot_paths`."""
-    draw(path, world, results, title=title, max_cells=max_cells)
+    draw(path, world, results, title=title, max_cells=max_cells, suptitle=suptitle)
 
 
 def _xyz(p) -> str:

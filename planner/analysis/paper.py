@@ -286,24 +286,35 @@ def fig5(out: Path, plt, rows: list[dict], scans: dict[str, np.ndarray],
         ("voxel_count", "fig5_voxel_count_cdf.png", "voxel count (occupied cells)"),
     ):
         nr, nc = len(scans), len(volumes)
+        k = len({r["rotation"] for r in rows})
         fig, axes = plt.subplots(nr, nc, figsize=(5.2 * nc, 3.6 * nr), squeeze=False)
         for a, ds in enumerate(scans):
             for b, vol in enumerate(volumes):
                 ax = axes[a][b]
-                for name in NAMED:
+                for i, name in enumerate(NAMED):
                     v = np.sort([r[metric] for r in rows if r["dataset"] == ds
                                  and r["cell_volume"] == float(vol) and r["lattice"] == name])
-                    if len(v):
+                    if len(v) and k == 1:  # one rotation: a CDF would be one vertical line
+                        ax.plot(v, np.full(len(v), i), "o", ms=8, color=COLORS[name],
+                                label=name)
+                    elif len(v):
                         ax.step(np.r_[v[0], v], np.arange(len(v) + 1) / len(v),
                                 where="post", color=COLORS[name], label=name)
                 ax.set_title(f"{ds} ({len(scans[ds])} points), cell {vol:g} m$^3$", fontsize=9)
                 ax.set_xlabel(xlabel)
-                ax.set_ylabel("cumulative fraction of rotations")
+                ax.xaxis.set_major_locator(plt.MaxNLocator(5))  # no crowded labels
+                if k == 1:
+                    ax.set_yticks(range(len(NAMED)), list(NAMED))
+                    ax.set_ylim(-0.6, len(NAMED) - 0.4)
+                else:
+                    ax.set_ylabel("cumulative fraction of rotations")
+                    ax.legend(fontsize=7)
                 ax.grid(alpha=0.3)
-                ax.legend(fontsize=7)
-        k = len({r["rotation"] for r in rows})
+        what = metric.replace("_", " ")
         fig.suptitle(f"Fig. 5 (rotated protocol): CDF over {k} uniform random rotations of "
-                     f"{metric.replace('_', ' ')}, same rotations for every lattice")
+                     f"{what}, same rotations for every lattice" if k > 1 else
+                     f"Fig. 5 (rotated protocol), one random rotation: {what} per lattice "
+                     f"(--rotations K > 1 draws the CDF over K rotations)")
         fig.tight_layout()
         save_fig(fig, out / fname)
         plt.close(fig)

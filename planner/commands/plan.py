@@ -7,7 +7,7 @@ import json
 
 from planner import planning as api
 from planner.analysis import compare as comparison
-from planner.commands.worlds import bag_options, build, check_dim, check_neighbors, map_source
+from planner.commands.worlds import build, check_dim, check_neighbors, map_source, reads_source
 from planner.export import write_path_bag, write_tum
 from planner.path import write_path
 
@@ -36,7 +36,8 @@ def plan(a: argparse.Namespace) -> int:
 
         write_view(a.view, world, {label: res.path} if res.found else {}, start=a.start,
                    goal=a.goal)
-    print(json.dumps(res.to_dict()) if a.json else api.describe(res, world))
+    print(json.dumps({**res.to_dict(), "warnings": api.world_warnings(world)}) if a.json
+          else api.describe(res, world))
     return 0 if res.found else 1
 
 
@@ -59,8 +60,9 @@ def compare(a: argparse.Namespace) -> int:
     rows = comparison.compare(
         a.map, lattices=lattices, cell_volume=a.cell_volume, radius=radius, bounds=a.bounds,
         start=a.start, goal=a.goal, method=a.method, neighbors=a.neighbors, plot=a.plot,
-        progress=not a.json, format=a.format, max_expansions=a.max_expansions,
-        unknown=a.unknown, view=a.view, source=map_source(a) if bag_options(a) else None,
+        plot_query=a.plot_query, progress=not a.json, format=a.format,
+        max_expansions=a.max_expansions,
+        unknown=a.unknown, view=a.view, source=map_source(a) if reads_source(a) else None,
     )
     print(json.dumps(rows) if a.json else comparison.format_rows(rows))
     return 0 if all(r["found"] for r in rows) else 1

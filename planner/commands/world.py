@@ -6,22 +6,37 @@ import argparse
 from pathlib import Path
 
 from planner.commands.worlds import build
-from planner.export import write_world_cells
+from planner.errors import PlannerError
+from planner.export import write_octomap, write_world_cells
 from planner.export.octomap import check_cubic_name
 
 
 def world(a: argparse.Namespace) -> int:
     """Build the world once and write it (.npz), its cells (.ply) or an OctoMap tree (.bt)."""
-    from planner.world.file import save_world  # lazy: numba, scipy
+    from planner.world.file import is_world_file, save_world  # lazy: numba, scipy
 
     suffix = Path(a.out).suffix.lower()
-    if suffix == ".bt":  # refused before the (long) build when the lattice cannot be a tree
-        check_cubic_name(a.generator if a.generator is not None else a.lattice, a.map)
+    cspace = getattr(a, "bt_cspace", False)
+    if cspace and suffix != ".bt":
+        raise PlannerError(f"argument --bt-cspace: writes a .bt, not {a.out}")
+    if suffix == ".bt":  # refused before the (long) build when the file cannot be written
+        if cspace:
+            check_cubic_name(a.generator if a.generator is not None else a.lattice, a.map)
+        elif is_world_file(a.map):
+            raise PlannerError(f"{a.map}: a saved world keeps no obstacles; write the .bt "
+                               f"from the map itself, or give --bt-cspace for its blocked "
+                               f"cells")
     w, label = build(a)
     if suffix == ".npz":
         save_world(w, a.out)
+    elif suffix == ".bt" and not cspace:
+        got = write_octomap(a.out, w)
+        print(f"{a.out}: OctoMap of the obstacles of {label}, {got.occupied} occupied and "
+              f"{got.free} free voxels of {got.resolution:g} m (unknown left out; the "
+              f"radius is not applied: --bt-cspace writes the blocked cells)")
+        return 0
     else:
-        write_world_cells(a.out, w)
+        write_world_cells(a.out, w, cspace=cspace)
     print(f"{a.out}: {label} world, {w.n_blocked} blocked and {w.n_unknown} unknown "
           f"cells, radius {w.radius:g} m, unknown space {w.unknown_policy}, built in "
           f"{w.build_seconds:.2f} s")

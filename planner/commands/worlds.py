@@ -3,9 +3,12 @@
 from __future__ import annotations
 
 import argparse
+import sys
+import time
 
 from planner.errors import PlannerError
 from planner.lattice import Lattice
+from planner.maps import resolve
 
 BAG_OPTIONS = ("topic", "fixed_frame", "max_clouds")
 
@@ -17,14 +20,53 @@ def bag_options(a: argparse.Namespace) -> dict:
 
 
 def map_source(a: argparse.Namespace):
-    """The map argument, or the obstacles read from it when bag options are given (they
-    belong to the bag reader, not to the world)."""
-    bag = bag_options(a)
-    if not bag:
+    """The map argument, or the obstacles read from it when it is a bag (read here with
+    its options and a progress line, and what was read said on stderr) or a sensor
+    ``--origin`` is given (it belongs to the reader, not to the world)."""
+    origin = getattr(a, "origin", None)
+    if not reads_source(a):
         return a.map
-    from planner.io import load_obstacles  # lazy: scipy
+    from planner.io import load_obstacles, with_origin  # lazy: scipy
+    from planner.world.file import is_world_file  # lazy: numba, scipy
 
-    return load_obstacles(a.map, a.format, **bag)
+    path = resolve(a.map)
+    if origin is not None and is_world_file(path):
+        raise PlannerError(f"argument --origin: {a.map} is a saved world; give the scan "
+                           f"itself")
+    bag = _is_bag(a)
+    obst = load_obstacles(path, a.format, **bag_options(a), **({"progress": True} if bag
+                                                                 else {}))
+    if obst.read:
+        print(f"planner: {describe_read(obst)}", file=sys.stderr)
+    return obst if origin is None else with_origin(obst, origin)
+
+
+def describe_read(obst) -> str:
+    """One line on what a bag read chose: topic, fixed frame, clouds."""
+    r = obst.read
+    n = len(r["topics"])
+    topic = (f"topic {r['topic']}" + ("" if r["topic_given"] else
+             f" (the first of {n} PointCloud2 topic{'s' if n > 1 else ''}"
+             + (f": {', '.join(r['topics'])}; --topic picks another)" if n > 1 else ")")))
+    frame = f"fixed frame {r['fixed_frame']!r}" + (
+        "" if r["fixed_frame_given"] else " (the root of the tf tree; --fixed-frame picks "
+                                          "another)")
+    clouds = f"{r['clouds']} of {r['clouds_in_topic']} clouds" + (
+        f" (--max-clouds {r['max_clouds']})" if r["max_clouds"] is not None else "")
+    return f"read {obst.source}: {topic}, {frame}, {clouds}, {len(obst.points):,} points"
+
+
+def _is_bag(a: argparse.Namespace) -> bool:
+    from planner.io.load import map_format  # lazy: scipy
+
+    return map_format(resolve(a.map), a.format) == "bag"
+
+
+def reads_source(a: argparse.Namespace) -> bool:
+    """True when :func:`map_source` reads the map itself (a bag, bag options or
+    ``--origin``)."""
+    return (bool(bag_options(a)) or getattr(a, "origin", None) is not None
+            or _is_bag(a))
 
 
 def build(a: argparse.Namespace):
@@ -37,8 +79,24 @@ def build(a: argparse.Namespace):
     from planner.world.file import is_world_file  # lazy: numba, scipy
 
     lattice = a.generator if a.generator is not None else a.lattice
-    world = build_world(map_source(a), lattice, cell_volume=a.cell_volume, radius=a.radius,
+    t0 = time.perf_counter()
+    source = map_source(a)
+    read_s = time.perf_counter() - t0
+    read = getattr(source, "read", None)
+    if read and read_s > 5:  # what comes next can take as long again: say so
+        print(f"planner: building the world from {len(source.points):,} points (read in "
+              f"{read_s:.0f} s) ...", file=sys.stderr, flush=True)
+    world = build_world(source, lattice, cell_volume=a.cell_volume, radius=a.radius,
                         bounds=a.bounds, format=a.format, unknown=a.unknown)
+    if source is not a.map:  # read here: the path files hash the map itself
+        world.source_file = str(resolve(a.map))
+    if read and a.cell_volume is None and a.bounds is None and not source.resolution:
+        from planner.world.build import DEFAULT_CELLS  # lazy: numba (loaded by the build)
+
+        print(f"planner: note: cell volume {world.lattice.cell_volume:.4g} m^3 is the "
+              f"default for the box of what was read (~{DEFAULT_CELLS:,} cells): it "
+              f"changes with --max-clouds, --topic and the bag; give --cell-volume to keep "
+              f"it", file=sys.stderr)
     if getattr(a, "check_source", False) and is_world_file(a.map):
         from planner.world.check import check_source  # lazy: numba, scipy
 

@@ -5,7 +5,10 @@ Both show a top view sliced at the robot's height (obstacle points within 0.5 m 
 median trajectory height). The animation adds what the robot knew at each replan: the
 space its horizontal sensor rays had swept (the *observed* area, white; never observed:
 grey), the obstacles seen so far (black; the true ones not yet seen faint), the trajectory
-so far, the path it was about to follow, the goal and the robot's disc.
+so far, the path it was about to follow (dotted magenta where it leaves the slice, e.g.
+over a wall through unknown space, with its height range in the title), the goal and the
+robot's disc. On the summary's log axes a replan with zero cell checks is a hollow triangle
+at a floor below every other value, counted in the legend.
 """
 
 from __future__ import annotations
@@ -17,7 +20,7 @@ import numpy as np
 from planner.errors import PlanError
 from planner.fsutil import atomic_path
 
-__all__ = ["summary_png", "animate_gif", "frame_replans"]
+__all__ = ["animate_gif", "floor_of", "frame_replans", "split_at_slice", "summary_png"]
 
 _SLICE = 0.5  # m either side of the median robot height
 
@@ -56,20 +59,60 @@ def summary_png(res, path: str | Path) -> Path:
                  f"{res.mismatches} mismatches, {res.contacts} contacts", fontsize=9)
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(0.0, -0.08), ncol=3,
               frameon=False)
-    i = np.arange(res.replans)
     for a, (d, s, what) in ((ac, (res.dstar_checks, res.astar_checks, "cell checks")),
                             (at, (res.dstar_seconds, res.astar_seconds, "seconds"))):
-        a.semilogy(i, s, ".", c="0.5", label="A* from scratch")
-        a.semilogy(i, d, ".", c="tab:red", label="D* Lite (repair + search)")
-        a.set_xlabel("replan")
-        a.set_title(f"{what} per replan", fontsize=9)
-        a.legend(fontsize=7)
+        _log_dots(a, [(s, "0.5", "A* from scratch"),
+                      (d, "tab:red", "D* Lite (repair + search)")], what)
     fig.tight_layout()
     out = Path(path)
     with atomic_path(out) as tmp:
         fig.savefig(tmp, dpi=110, format="png")
     plt.close(fig)
     return out
+
+
+def floor_of(values: list[np.ndarray]) -> float:
+    """Where zeros go on a log axis: a third of the smallest positive value (1 if none)."""
+    pos = np.concatenate([np.asarray(v, dtype=float) for v in values])
+    pos = pos[pos > 0]
+    return float(pos.min()) / 3 if len(pos) else 1.0
+
+
+def _log_dots(a, series: list, what: str) -> None:
+    """Per-replan values on a log axis; zeros (a kept replan checks nothing) are drawn as
+    hollow triangles at a floor below every other value, counted in the legend, so no
+    replan silently drops off the axis."""
+    floor = floor_of([v for v, _, _ in series])
+    for v, colour, label in series:
+        v = np.asarray(v, dtype=float)
+        i = np.arange(len(v))
+        zero = v <= 0
+        a.semilogy(i[~zero], v[~zero], ".", c=colour, label=label)
+        if zero.any():
+            a.semilogy(i[zero], np.full(zero.sum(), floor), "v", mfc="none", mec=colour,
+                       ms=4, label=f"{label}: {zero.sum()} with 0 {what} (drawn at the floor)")
+    a.set_xlabel("replan")
+    a.set_title(f"{what} per replan", fontsize=9)
+    a.legend(fontsize=7)
+
+
+def split_at_slice(path: np.ndarray, zc: float) -> tuple[np.ndarray, np.ndarray, tuple]:
+    """A plan (K, 3) as two polylines for a top view sliced at ``zc`` +- the slice: the
+    parts inside the slice and the parts above or below it (each a (K, 3) array with NaN
+    rows breaking it; empty when there is none), and the plan's (min, max) height. The
+    parts join at the waypoints where the plan crosses the slice's edge."""
+    p = np.asarray(path, dtype=float).reshape(-1, 3)
+    if not len(p):
+        return p, p, (zc, zc)
+    out = np.abs(p[:, 2] - zc) > _SLICE
+    near_out = out.copy()  # a segment with an end outside is drawn as outside
+    near_out[:-1] |= out[1:]
+    near_out[1:] |= out[:-1]
+    inside, outside = p.copy(), p.copy()
+    inside[out] = np.nan
+    outside[~near_out] = np.nan
+    z = (float(p[:, 2].min()), float(p[:, 2].max()))
+    return inside, (outside if out.any() else p[:0]), z
 
 
 def frame_replans(replans: int, max_frames: int) -> np.ndarray:
@@ -167,6 +210,8 @@ def animate_gif(res, path: str | Path, max_frames: int = 150, fps: float = 6.0,
     seen_sc = ax.scatter([], [], s=0.6, c="k", zorder=2, label="seen obstacles")
     (traj,) = ax.plot([], [], "-", c="tab:red", lw=1.6, zorder=4, label="trajectory")
     (plan,) = ax.plot([], [], "--", c="tab:blue", lw=1.4, zorder=3, label="current plan")
+    (plan_out,) = ax.plot([], [], ":", c="magenta", lw=2.2, zorder=3,
+                          label="plan above or below the slice")
     ax.plot(*res.start[:2], "o", c="tab:green", ms=6, zorder=5, label="start")
     ax.plot(*res.goal[:2], "*", c="gold", mec="k", ms=14, zorder=5, label="goal")
     robot = plt.Circle((0, 0), max(res.radius, 0.05), color="tab:red", alpha=0.6, zorder=6)
@@ -186,7 +231,7 @@ def animate_gif(res, path: str | Path, max_frames: int = 150, fps: float = 6.0,
         Patch(facecolor="white", edgecolor="0.5", label="swept by the sensor"),
         Patch(facecolor="0.82", edgecolor="0.5", label="not observed")]
     ax.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(0.0, -0.12),
-              ncol=4, frameon=False)
+              ncol=3, frameon=False)
     title = ax.set_title("")
     fig.tight_layout()
 
@@ -196,12 +241,16 @@ def animate_gif(res, path: str | Path, max_frames: int = 150, fps: float = 6.0,
         seen_sc.set_offsets(pts[(seen_step >= 0) & (seen_step <= step), :2])
         tr = res.trajectory[:step + 1]
         traj.set_data(tr[:, 0], tr[:, 1])
-        plan.set_data(paths[k][:, 0], paths[k][:, 1])
+        inside, outside, z_range = split_at_slice(paths[k], zc)
+        plan.set_data(inside[:, 0], inside[:, 1])
+        plan_out.set_data(outside[:, 0], outside[:, 1])
         robot.center = (float(tr[-1, 0]), float(tr[-1, 1]))
         d = float(np.linalg.norm(np.diff(tr, axis=0), axis=1).sum())
-        title.set_text(f"{res.lattice}: {labels[k]}, {step} moves, {d:.1f} m travelled "
-                       f"(slice z = {zc:.1f} +- {_SLICE} m)")
-        return img, seen_sc, traj, plan, robot, title
+        leaves = (f"; plan leaves the slice: z {z_range[0]:.1f}-{z_range[1]:.1f} m"
+                  if len(outside) else "")
+        title.set_text(f"{res.lattice}: {labels[k]}, {step} moves, {d:.1f} m travelled\n"
+                       f"(slice z = {zc:.1f} +- {_SLICE} m{leaves})")
+        return img, seen_sc, traj, plan, plan_out, robot, title
 
     anim = FuncAnimation(fig, draw, frames=len(steps), blit=False)
     out = Path(path)

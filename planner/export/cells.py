@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from planner.errors import MapError
-from planner.export.octomap import write_octomap
+from planner.export.octomap import write_cspace_octomap, write_octomap
 from planner.fsutil import atomic_path
 
 __all__ = ["BLOCKED", "UNKNOWN", "write_ply_cells", "write_world_cells"]
@@ -54,12 +54,13 @@ def write_ply_cells(out: str | os.PathLike, world) -> tuple[int, int]:
     return len(blocked), len(unknown)
 
 
-def write_world_cells(out: str | os.PathLike, world) -> None:
-    """Write ``world``'s cells by the suffix of ``out``: ``.ply`` or ``.bt``."""
+def write_world_cells(out: str | os.PathLike, world, cspace: bool = False) -> None:
+    """Write ``world``'s cells by the suffix of ``out``: ``.ply``, or ``.bt`` (the map's
+    obstacles as an OctoMap; ``cspace``: the world's blocked cells, cubic worlds only)."""
     suffix = Path(out).suffix.lower()
     if suffix == ".ply":
         write_ply_cells(out, world)
     elif suffix == ".bt":
-        write_octomap(out, world)  # imported here: the octree writer is its own module
+        (write_cspace_octomap if cspace else write_octomap)(out, world)
     else:
         raise MapError(f"{out}: unknown cell file type {suffix!r}; use .ply or .bt")

@@ -18,7 +18,7 @@ from planner.io.load import (
 )
 from planner.io.movingai import load_scenarios
 from planner.io.obstacles import Obstacles, Scenarios
-from planner.io.scans import merge_scans
+from planner.io.scans import merge_scans, with_origin
 from planner.io.sidecar import load_sidecar
 from planner.io.validate import robust_extent
 
@@ -35,4 +35,5 @@ __all__ = [
     "obstacles_from_points",
     "robust_extent",
     "save_points",
+    "with_origin",
 ]

@@ -18,6 +18,7 @@ from scipy.spatial.transform import Rotation, Slerp
 from planner.errors import MapError
 from planner.io.obstacles import Obstacles
 from planner.io.validate import finite_points, no_return_mask
+from planner.progress import Progress
 
 CLOUD_TYPE = "sensor_msgs/msg/PointCloud2"
 TF_TYPE = "tf2_msgs/msg/TFMessage"
@@ -39,7 +40,7 @@ def require(module: str, what: str, name: str):
 
 
 def read_bag(p: Path, topic: str | None = None, fixed_frame: str | None = None,
-             max_clouds: int | None = None) -> Obstacles:
+             max_clouds: int | None = None, progress: bool = False) -> Obstacles:
     """Clouds of a ROS bag in one fixed frame, with each cloud's sensor origin.
 
     Parameters
@@ -54,13 +55,18 @@ def read_bag(p: Path, topic: str | None = None, fixed_frame: str | None = None,
         clouds' own frame.
     max_clouds : int, optional
         Read at most this many clouds.
+    progress : bool
+        Show the clouds read on stderr (:class:`planner.progress.Progress`: silent for the
+        first 5 s).
 
     Returns
     -------
     Obstacles
         ``points`` (N, 3) in the fixed frame, ``origins`` (S, 3) one per cloud,
-        ``point_origin`` (N,), ``dropped_nonfinite``, ``frame`` (the fixed frame).
+        ``point_origin`` (N,), ``dropped_nonfinite``, ``frame`` (the fixed frame), ``read``
+        (the topic and frame chosen, whether given, the clouds read and in the topic).
     """
+
     require("rosbags", ".bag", p.name)
     from rosbags.highlevel import AnyReader
     from rosbags.typesys import Stores, get_typestore
@@ -92,6 +98,11 @@ def read_bag(p: Path, topic: str | None = None, fixed_frame: str | None = None,
             for tf in msg.transforms:
                 tree.add(tf, static=conn.topic == "/tf_static")
         pts_all, owner, origins, dropped = [], [], [], 0
+        in_topic = sum(int(getattr(c, "msgcount", 0) or 0) for c in conns)
+        frame_given = fixed_frame is not None
+        total = min(in_topic, max_clouds) if max_clouds is not None else in_topic
+        bar = Progress(max(total, 1), "clouds", label=f"reading {p.name} {chosen}",
+                       enabled=progress)
         for conn, _, raw in reader.messages(connections=conns):
             msg = reader.deserialize(raw, conn.msgtype)
             frame = _frame(msg.header.frame_id)
@@ -109,8 +120,10 @@ def read_bag(p: Path, topic: str | None = None, fixed_frame: str | None = None,
             pts_all.append(pts @ pose[:3, :3].T + pose[:3, 3])
             owner.append(np.full(len(pts), len(origins), dtype=np.int64))
             origins.append(pose[:3, 3])
+            bar.step()
             if max_clouds is not None and len(origins) >= max_clouds:
                 break
+        bar.close()
     except MapError:
         raise
     except Exception as exc:  # deserialisation of corrupt messages
@@ -123,7 +136,11 @@ def read_bag(p: Path, topic: str | None = None, fixed_frame: str | None = None,
     return Obstacles(points=points, boxes=np.zeros((0, 3)), box_size=0.0, bounds=None,
                      resolution=None, source=p.name, origins=np.array(origins),
                      point_origin=np.concatenate(owner), dropped_nonfinite=dropped,
-                     frame=_frame(fixed_frame))
+                     frame=_frame(fixed_frame),
+                     read={"topic": chosen, "topic_given": topic is not None,
+                           "topics": names, "fixed_frame": _frame(fixed_frame),
+                           "fixed_frame_given": frame_given, "max_clouds": max_clouds,
+                           "clouds": len(origins), "clouds_in_topic": in_topic})
 
 
 def cloud_xyz(msg, name: str) -> np.ndarray:

@@ -62,6 +62,7 @@ __all__ = [
     "load_posed_scans",
     "load_scenarios",
     "load_sidecar",
+    "map_format",
     "obstacles_from_points",
     "robust_extent",
     "save_points",
@@ -316,3 +317,12 @@ def _resolve_format(p: Path, format: str | None) -> tuple[str, str | None]:
     if compression and fmt != "xyz":
         raise MapError(f"{p.name}: {compression} compression is only supported for text XYZ")
     return fmt, compression
+
+
+def map_format(path: PathLike, format: str | None = None) -> str | None:
+    """The reader :func:`load_obstacles` would choose for ``path`` (a name of the module
+    table), or None when it would refuse the name (the read then says why)."""
+    try:
+        return _resolve_format(Path(path), format)[0]
+    except MapError:
+        return None

@@ -60,6 +60,10 @@ class Obstacles:
     frame : str or None
         The coordinate frame the points are in when the file names one (a bag's fixed
         frame); None otherwise.
+    read : dict or None
+        What the reader chose when the file holds more than it read (a bag: ``topic``,
+        ``topic_given``, ``topics``, ``fixed_frame``, ``fixed_frame_given``, ``max_clouds``,
+        ``clouds``, ``clouds_in_topic``), for path files and reports; None otherwise.
     """
 
     points: np.ndarray
@@ -77,6 +81,7 @@ class Obstacles:
     dropped_nonfinite: int = 0
     dim: int = 3
     frame: str | None = None
+    read: dict | None = None
 
     def __post_init__(self) -> None:
         # Coerce once here so every consumer can rely on float64 (N, d) arrays.

@@ -15,6 +15,7 @@ from planner.budget import require
 from planner.errors import MapError
 from planner.io._files import header_lines, loadtxt, read_bytes
 from planner.io.obstacles import Obstacles
+from planner.io.scans import with_origin
 from planner.io.validate import cloud
 
 _PCD_TYPES = {("F", 4): "f4", ("F", 8): "f8", ("I", 1): "i1", ("I", 2): "i2", ("I", 4): "i4",
@@ -106,7 +107,29 @@ def read_pcd(p: Path) -> Obstacles:
         pts = np.column_stack(cols).astype(np.float64)
     else:
         raise MapError(f"{p.name}: unknown PCD DATA kind {kind!r}")
-    return cloud(pts.reshape(-1, 3), p.name)
+    obst = cloud(pts.reshape(-1, 3), p.name)
+    origin = _viewpoint(hdr.get("VIEWPOINT"), p.name)
+    return obst if origin is None else with_origin(obst, origin)
+
+
+_DEFAULT_VIEWPOINT = (0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0)
+
+
+def _viewpoint(vals: list[str] | None, name: str) -> np.ndarray | None:
+    """The sensor origin (3,) of a PCD's ``VIEWPOINT tx ty tz qw qx qy qz`` (m, in the
+    cloud's frame), or None when it is absent or PCL's default ``0 0 0 1 0 0 0``: PCL writes
+    that default for every cloud, a merged map too, so it says nothing about a sensor
+    (``--origin 0,0,0`` says it for a scan saved in its sensor frame)."""
+    if not vals:
+        return None
+    try:
+        v = tuple(float(x) for x in vals)
+    except ValueError:
+        raise MapError(f"{name}: PCD VIEWPOINT must be 7 numbers, got {' '.join(vals)[:60]!r}")\
+            from None
+    if len(v) != 7 or not np.isfinite(v).all():
+        raise MapError(f"{name}: PCD VIEWPOINT must be 7 finite numbers tx ty tz qw qx qy qz")
+    return None if v == _DEFAULT_VIEWPOINT else np.array(v[:3])
 
 
 def _pcd_decompress(body: bytes, npts: int, point_step: int, name: str) -> bytes:

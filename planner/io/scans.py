@@ -134,3 +134,41 @@ def check_pose(pose: np.ndarray, where: str) -> None:
     # Loose tolerance: poses saved with 6 significant digits are still accepted.
     if not np.allclose(r @ r.T, np.eye(3), atol=1e-3) or np.linalg.det(r) < 0:
         raise MapError(f"{where}: pose rotation is not a proper rotation matrix")
+
+
+def with_origin(obst: Obstacles, origin) -> Obstacles:
+    """A single scan with its sensor origin: free space is then ray-cast from ``origin`` to
+    every point and the rest is unknown (blocked by default), so a path cannot cross space
+    the sensor never saw (a wall above a lidar's vertical field of view).
+
+    Parameters
+    ----------
+    obst : Obstacles
+        A 3D point cloud that records no free space (no boxes, no origins).
+    origin : array_like, shape (3,)
+        Sensor position in the cloud's frame (m).
+
+    Returns
+    -------
+    Obstacles
+        ``obst`` with ``origins`` = [origin], every point from it, ``unknown_default``
+        ``"blocked"``.
+
+    Raises
+    ------
+    MapError
+        A 2D map, a map of boxes or one that already records free space or origins, or a
+        non-finite origin.
+    """
+    o = np.asarray(origin, dtype=np.float64).reshape(-1)
+    if o.shape != (3,) or not np.isfinite(o).all():
+        raise MapError(f"{obst.source}: a sensor origin is three finite numbers x,y,z")
+    if obst.dim != 3 or len(obst.boxes) or obst.has_free_space:
+        what = ("a 2D map" if obst.dim != 3 else "records its free space already"
+                if obst.has_free_space else "is a map of boxes, not a scan")
+        raise MapError(f"{obst.source}: {what}; a sensor origin applies to a single point "
+                       f"cloud only")
+    from dataclasses import replace
+
+    return replace(obst, origins=o[None, :], point_origin=np.zeros(len(obst.points), np.int64),
+                   unknown_default=None)

@@ -32,7 +32,7 @@ __all__ = ["MapDefaults", "as_obstacles", "build_world", "default_cell_volume",
            "inflated_obstacles", "map_box", "resolve_defaults", "sidecar"]
 
 # Default planning resolution for raw clouds: about this many cells in the bounding box.
-_DEFAULT_CELLS = 2_000_000
+DEFAULT_CELLS = 2_000_000
 
 
 def as_obstacles(source, format: str | None = None):
@@ -113,7 +113,7 @@ def default_cell_volume(obst, bounds: np.ndarray | None = None) -> float:
     # largest extent instead, so that the default does not ask for millimetre cells.
     vol = float(np.prod(np.maximum(ext, max(1e-3, 0.01 * float(ext.max())))))
     _warn_far_points(obst, b)
-    return vol / _DEFAULT_CELLS
+    return vol / DEFAULT_CELLS
 
 
 def _warn_far_points(obst, b: np.ndarray) -> None:
