@@ -44,6 +44,10 @@ class _HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
         return super()._get_help_string(action)
 
 
+class _TableHelpFormatter(_HelpFormatter, argparse.RawDescriptionHelpFormatter):
+    """An epilog printed as written (a table of keys)."""
+
+
 class _Parser(argparse.ArgumentParser):
     def __init__(self, *args, **kwargs):
         kwargs.setdefault("formatter_class", _HelpFormatter)
@@ -249,7 +253,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--force", action="store_true", help="delete finished rows, start again")
     p.add_argument("--no-progress", action="store_true", help="no progress on stderr")
 
-    p = sub.add_parser("bench", help="run a benchmark suite (which lattice for my map?)")
+    from planner.bench.schema import KEYS_HELP  # a table of text; imports nothing heavy
+
+    p = sub.add_parser("bench", help="run a benchmark suite (which lattice for my map?)",
+                       formatter_class=_TableHelpFormatter,
+                       epilog="suite file keys (TOML):\n\n" + KEYS_HELP)
     p.add_argument("suite", help="bundled suite name (quick, paper, full) or a TOML file")
     p.add_argument("--out", default=None, help="output folder (default: results/<suite>)")
     p.add_argument("--jobs", type=T.int_range(1), default=1, help="local worker processes")

@@ -46,7 +46,12 @@ def results_lock(out: Path) -> Iterator[None]:
     """
     created = not out.exists()
     out.mkdir(parents=True, exist_ok=True)
-    fd = os.open(out / ".lock", os.O_RDWR | os.O_CREAT, 0o644)
+    try:  # made here, or left by an earlier run
+        fd = os.open(out / ".lock", os.O_RDWR | os.O_CREAT | os.O_EXCL, 0o644)
+        made_lock = True
+    except FileExistsError:
+        fd = os.open(out / ".lock", os.O_RDWR)
+        made_lock = False
     held = refused = False
     try:
         try:
@@ -63,17 +68,17 @@ def results_lock(out: Path) -> Iterator[None]:
         refused = True
         raise
     finally:
-        if held and refused and not (out / "results.jsonl").exists():
+        if held and refused:
             # a run refused before any result leaves nothing of its own behind (the world
             # cache and its marker included: an edited suite is another suite)
             with contextlib.suppress(OSError):
-                if created:
+                if created and not (out / "results.jsonl").exists():
                     remove_world_cache(out / "worlds")
                     (out / MARKER).unlink(missing_ok=True)
-                if [q.name for q in out.iterdir()] == [".lock"]:
+                if made_lock or [q.name for q in out.iterdir()] == [".lock"]:
                     os.unlink(out / ".lock")
-                    if created:
-                        out.rmdir()
+                if created:
+                    out.rmdir()  # only when empty
         os.close(fd)  # closing releases the lock
 
 
