@@ -17,10 +17,11 @@ from pathlib import Path
 import numpy as np
 
 from planner import argtypes as T
-from planner._interrupt import install_sigint
+from planner._interrupt import Terminated, install_sigint, install_sigterm
 from planner.budget import ENV
 from planner.commands.outputs import check_outputs
 from planner.errors import PlannerError
+from planner.fsutil import staged_outputs
 from planner.lattice import NAMED_LATTICES
 from planner.lattice.paper import NAMED_LATTICES_2D
 
@@ -313,6 +314,9 @@ _COMMANDS = {"lattices": "tables:lattices", "stats": "tables:stats", "plan": "pl
              "match-experiment": "runs:match_experiment", "bench": "runs:bench"}
 
 
+_UNSTAGED = ("bench", "match-experiment", "stats")  # long runs: results kept as they finish
+
+
 def _command(name: str):
     """The function that does the work of command ``name`` (:mod:`planner.commands`)."""
     import importlib
@@ -341,14 +345,31 @@ def _leave(status: int) -> None:
     os._exit(status)
 
 
+def _stopped(exc: BaseException, standalone: bool) -> int:
+    """One line for a Ctrl-C (130) or SIGTERM (143); a standalone program ends at once."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # a second signal: no traceback
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    term = isinstance(exc.__cause__ if isinstance(exc, SystemError) else exc, Terminated)
+    print(f"planner: {'terminated' if term else 'interrupted'}", file=sys.stderr)
+    if standalone:
+        _leave(143 if term else 130)
+    return 143 if term else 130
+
+
 def main(argv: list[str] | None = None) -> int:
     """The ``planner`` program (``argv`` None: ``sys.argv[1:]``, and an interrupted run
     ends the process at once with 130 / 143; with ``argv`` given it returns the status)."""
     standalone = argv is None
     if standalone:  # the process is ours: a Ctrl-C during a kernel's load is not lost
         install_sigint()
+        install_sigterm()
     argv = sys.argv[1:] if argv is None else list(argv)
-    a = build_parser().parse_args(_hoist_global_options(_join_negative_values(argv)))
+    try:  # parsing imports the readers (a map name is resolved): a signal may come here
+        a = build_parser().parse_args(_hoist_global_options(_join_negative_values(argv)))
+    except KeyboardInterrupt as exc:
+        return _stopped(exc, standalone)
     if a.memory_budget is not None:  # the one budget model reads it (and so do workers)
         os.environ[ENV] = str(a.memory_budget)
     # numpy warnings are shown only when the command succeeds: an error is one line
@@ -356,7 +377,9 @@ def main(argv: list[str] | None = None) -> int:
         warnings.simplefilter("always", RuntimeWarning)
         try:
             check_outputs(a)
-            with np.errstate(all="warn"):
+            # one command's outputs all or nothing; a suite keeps its own files as it goes
+            stage = staged_outputs() if a.command not in _UNSTAGED else contextlib.nullcontext()
+            with np.errstate(all="warn"), stage:
                 status = _command(a.command)(a)
         except PlannerError as exc:
             print(f"planner: error: {' '.join(str(exc).split())}", file=sys.stderr)
@@ -366,13 +389,7 @@ def main(argv: list[str] | None = None) -> int:
             if not isinstance(exc.__cause__ if isinstance(exc, SystemError) else exc,
                               KeyboardInterrupt):
                 raise
-            import signal
-
-            signal.signal(signal.SIGINT, signal.SIG_IGN)  # a second Ctrl-C: no traceback
-            print("planner: interrupted", file=sys.stderr)
-            if standalone:
-                _leave(130)
-            return 130
+            return _stopped(exc, standalone)
         except BrokenPipeError:  # output piped into `head`: stop quietly, as Unix tools do
             os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
             return 141
