@@ -97,8 +97,13 @@ def _add_world_args(p: argparse.ArgumentParser, *, lattice: bool = True,
                         "poses (a pose list of scans, merged)")
     p.add_argument("--check-source", action="store_true",
                    help="with a saved world: refuse it unless its source map (beside the "
-                        "world file or in the current folder) still has the SHA-256 "
-                        "recorded at save")
+                        "world file, in the current folder or bundled) still has the "
+                        "SHA-256 recorded at save and gives the same cells (rebuilt and "
+                        "compared; done by default whenever that source is found)")
+    p.add_argument("--trust-world", action="store_true",
+                   help="with a saved world: skip the default re-check against its source "
+                        "map (the world is then trusted by its digest, which catches damage, "
+                        "not edits)")
     _add_bag_args(p)
     if not unknown:  # explore: the robot itself decides what unknown space is
         return

@@ -27,6 +27,18 @@ def map_source(a: argparse.Namespace):
     return load_obstacles(a.map, a.format, **bag)
 
 
+def trust_check(world, a: argparse.Namespace) -> None:
+    """A saved world re-verified against its source map (:mod:`planner.world.trust`):
+    required with ``--check-source``, by default when the unchanged source is found, never
+    with ``--trust-world``."""
+    if getattr(a, "trust_world", False) and not getattr(a, "check_source", False):
+        return
+    from planner.world.trust import verify_world  # lazy: numba, scipy
+
+    verify_world(world, required=getattr(a, "check_source", False),
+                 format=getattr(a, "format", None))
+
+
 def build(a: argparse.Namespace):
     """The world of a command's map options, and its lattice's name.
 
@@ -39,10 +51,8 @@ def build(a: argparse.Namespace):
     lattice = a.generator if a.generator is not None else a.lattice
     world = build_world(map_source(a), lattice, cell_volume=a.cell_volume, radius=a.radius,
                         bounds=a.bounds, format=a.format, unknown=a.unknown)
-    if getattr(a, "check_source", False) and is_world_file(a.map):
-        from planner.world.check import check_source  # lazy: numba, scipy
-
-        check_source(world)
+    if is_world_file(a.map):
+        trust_check(world, a)
     return world, (a.generator.name if a.generator is not None else world.lattice.name
                    or "custom")
 
