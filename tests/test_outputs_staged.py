@@ -118,3 +118,22 @@ def test_sigterm_ends_a_world_build_with_143_and_no_temporary_file(tmp_path, del
     assert "Traceback" not in err and err.strip().splitlines()[-1:] in ([],
                                                                        ["planner: terminated"])
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_full_disk_under_the_planner_arena_database_is_an_os_error(tmp_path, monkeypatch):
+    import sqlite3
+
+    from planner.export import arena
+
+    class Full:
+        def executescript(self, _):
+            raise sqlite3.OperationalError("database or disk is full")
+
+        def close(self):
+            pass
+
+    monkeypatch.setattr(arena.sqlite3, "connect", lambda _: Full())
+    with pytest.raises(OSError, match="disk is full") as got:
+        arena.write_arena_db(tmp_path / "planner_arena.db", [])
+    assert got.value.filename == str(tmp_path / "planner_arena.db")
+    assert list(tmp_path.iterdir()) == []  # the temporary file is gone too
