@@ -245,3 +245,40 @@ def test_suite_keys_are_in_bench_help(capsys):
     out = capsys.readouterr().out
     for key in ("min_distance", "cell_volumes", "[ompl]", "[paper]", "rotations", "a label"):
         assert key in out, key
+
+
+def test_a_task_lost_with_its_dask_scheduler_is_one_line(monkeypatch):
+    import distributed
+
+    from planner.bench import runner
+    from planner.errors import PlannerError
+
+    class Future:
+        status = "cancelled"
+
+    class Client:
+        def __init__(self, *a, **k):
+            pass
+
+        def __enter__(self):
+            return self
+
+        def __exit__(self, *exc):
+            return False
+
+        def map(self, *a, **k):
+            return [Future()]
+
+        def cancel(self, futs):
+            raise OSError("the scheduler is gone")  # cancelling fails too: still one line
+
+    def completed(futs, with_results=False, raise_errors=True):
+        # what distributed yields for a future cancelled when its scheduler died
+        yield futs[0], distributed.client.FutureCancelledError("k", "scheduler-connection-lost")
+
+    monkeypatch.setattr(distributed, "Client", Client)
+    monkeypatch.setattr(distributed, "as_completed", completed)
+    written = []
+    with pytest.raises(PlannerError, match="a task was lost .*--resume"):
+        runner._run_dask([{"queries": []}], "tcp://127.0.0.1:1", written.append)
+    assert written == []
