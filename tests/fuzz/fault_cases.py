@@ -14,7 +14,7 @@ Classes (the category's first part):
   record, or whose suite was edited since.
 * ``trust``: saved worlds edited and re-digested, beside their source map.
 * ``budget2``: map_server YAML alias bombs, map images over the memory budget, data after a
-  PGM / PNG, bad ``--generator`` files.
+  PGM / PNG, bad ``--generator`` files, bag chunks inflating past the decompression budget.
 * ``outputs2``: a path's sidecar the user did not name, a later output that fails, names at
   the file system's length limit.
 """
@@ -376,6 +376,29 @@ def budget_runs(root: Path) -> list[Run]:
     return runs
 
 
+def bag_runs(root: Path) -> list[Run]:
+    """Bags whose compressed chunk inflates past the decompression budget (ROS 1 bz2 / lz4,
+    rosbag2 zstd messages / files, mcap): one line each (none without ``rosbags``)."""
+    try:
+        import rosbags  # noqa: F401
+        from test_bag_budget import _write  # the same bags as tests/test_bag_budget.py
+    except ImportError:
+        return []
+    root.mkdir(parents=True, exist_ok=True)
+    runs = []
+    for kind in ("ros1_bz2", "ros1_lz4", "ros2_message", "ros2_file", "mcap"):
+        path = root / (f"{kind}.bag" if kind.startswith("ros1") else kind)
+        try:
+            _write(path, kind)
+        except ImportError:  # a compressor rosbags needs is missing
+            continue
+        for budget in ("8M", "4M"):
+            runs.append(Run("budget2:bag", ("--memory-budget", budget, "plan", str(path),
+                                            "--fixed-frame", "map", "--start", "0,0,0",
+                                            "--goal", "1,1,1", "--radius", "0.1"), True))
+    return runs
+
+
 def output_runs(root: Path) -> list[Run]:
     """Outputs: sidecars the user did not name, later outputs failing, long names."""
     root.mkdir(parents=True, exist_ok=True)
@@ -420,4 +443,5 @@ def fault_runs(corpus, root: Path, rng: random.Random) -> list[Run]:
     """Every class above, in a fixed order."""
     return (folder_runs(corpus, root / "folders") + suite_runs(root / "suites")
             + resume_runs(root / "resume") + trust_runs(corpus, root / "trust", rng)
-            + budget_runs(root / "budget2") + output_runs(root / "outputs2"))
+            + budget_runs(root / "budget2") + bag_runs(root / "bags")
+            + output_runs(root / "outputs2"))
