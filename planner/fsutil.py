@@ -43,7 +43,12 @@ def staged_outputs() -> Iterator[None]:
                                         str(target))
         while staged:
             tmp, target, clean = staged[0]
-            os.replace(tmp, target)
+            try:
+                os.replace(tmp, target)
+            except OSError as exc:
+                if exc.filename is None:  # a rename error names no file: name the output
+                    raise OSError(exc.errno, exc.strerror or str(exc), str(target)) from exc
+                raise
             staged.pop(0)
             if clean:
                 clean()

@@ -2,13 +2,16 @@
 
 ``tests/fuzz/cli_cases.py`` generates (seeded) every reader's malformed inputs, tampered
 saved worlds, complete files with trailing data, malformed arguments, inputs the memory
-budget must refuse and outputs failing with OS errors. They run in two long-lived child
-processes (``tests/fuzz/batch.py``: ``planner.cli.main`` in-process per case) under a
-3 GB address-space cap; a case still running after :data:`HANG` seconds is a hang (its
-child is killed and another takes the rest). Every run must exit 0, 1 or 2 without a
-traceback; an exit 2 prints exactly one ``planner: error:`` line and writes nothing; a
-``strict`` case (everything but the byte-level reader variants, some of which are still
-valid files) must exit 2. Counts per category are printed (``pytest -s``).
+budget must refuse and outputs failing with OS errors; ``tests/fuzz/fault_cases.py`` adds
+user folders, suite schemas, resume files, edited worlds beside their source, readers'
+budgets and staged outputs (a case whose ``keep`` folder changed is a problem). They run
+in two long-lived child processes (``tests/fuzz/batch.py``: ``planner.cli.main``
+in-process per case) under a 3 GB address-space cap; a case still running after
+:data:`HANG` seconds is a hang (its child is killed and another takes the rest). Every
+run must exit 0, 1 or 2 without a traceback; an exit 2 prints exactly one
+``planner: error:`` line and writes nothing; a ``strict`` case (everything but the
+byte-level reader variants, some of which are still valid files) must exit 2. Counts per
+category are printed (``pytest -s``).
 """
 
 from __future__ import annotations
