@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 
 import numpy as np
 
@@ -12,6 +13,7 @@ from planner.budget import parse_size
 from planner.errors import PlannerError
 from planner.lattice import NAMED_LATTICES, Lattice
 from planner.lattice.paper import NAMED_LATTICES_2D
+from planner.npyfile import read_array
 
 
 def numbers(text: str, n: int, what: str) -> np.ndarray:
@@ -117,10 +119,6 @@ def fov(text: str) -> tuple[float, float]:
 def _generator_file(text: str) -> np.ndarray:
     """The matrix of a ``.npy`` file through the checked reader (declared size against the
     file and the budget, no pickles, no trailing data): real, finite, 2x2 or 3x3."""
-    import os
-
-    from planner.npyfile import read_array
-
     try:
         with open(text, "rb") as f:
             g = read_array(f, os.fstat(f.fileno()).st_size, text)

@@ -16,6 +16,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation, Slerp
 
 from planner.errors import MapError
+from planner.io.bag_limits import limited_decompression
 from planner.io.obstacles import Obstacles
 from planner.io.validate import finite_points, no_return_mask
 
@@ -62,8 +63,6 @@ def read_bag(p: Path, topic: str | None = None, fixed_frame: str | None = None,
         ``point_origin`` (N,), ``dropped_nonfinite``, ``frame`` (the fixed frame).
     """
     require("rosbags", ".bag", p.name)
-    from planner.io.bag_limits import limited_decompression
-
     if max_clouds is not None and (not isinstance(max_clouds, int) or max_clouds < 1):
         raise MapError(f"{p.name}: max_clouds must be a positive integer, got {max_clouds!r}")
     # A rosbag2 is a folder; its storage or metadata file stands for it.
