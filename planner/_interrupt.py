@@ -17,7 +17,7 @@ import threading
 from collections.abc import Callable
 from types import FrameType
 
-__all__ = ["deferred", "install_sigint"]
+__all__ = ["deferred", "install_sigint", "install_sigterm", "Terminated"]
 
 _NATIVE = "llvmlite"  # a frame of this package may sit in a C callback
 _AGAIN = 0.005  # s until a deferred signal is sent again
@@ -55,3 +55,20 @@ def install_sigint() -> None:
     if (threading.current_thread() is threading.main_thread()
             and signal.getsignal(signal.SIGINT) is signal.default_int_handler):
         signal.signal(signal.SIGINT, deferred(signal.default_int_handler))
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised like Ctrl-C's KeyboardInterrupt so that the same clean-up runs
+    (temporary files removed) and the program ends with 143."""
+
+
+def _terminate(signum: int, frame: FrameType | None):
+    raise Terminated()
+
+
+def install_sigterm() -> None:
+    """Make SIGTERM raise :class:`Terminated` (through :func:`deferred`) for the rest of the
+    process, where it is handled by default (killing the process with no clean-up)."""
+    if (threading.current_thread() is threading.main_thread()
+            and signal.getsignal(signal.SIGTERM) is signal.SIG_DFL):
+        signal.signal(signal.SIGTERM, deferred(_terminate))

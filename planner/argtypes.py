@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 
 import numpy as np
 
@@ -12,6 +13,7 @@ from planner.budget import parse_size
 from planner.errors import PlannerError
 from planner.lattice import NAMED_LATTICES, Lattice
 from planner.lattice.paper import NAMED_LATTICES_2D
+from planner.npyfile import read_array
 
 
 def numbers(text: str, n: int, what: str) -> np.ndarray:
@@ -114,13 +116,30 @@ def fov(text: str) -> tuple[float, float]:
     return float(h), float(v)
 
 
+def _generator_file(text: str) -> np.ndarray:
+    """The matrix of a ``.npy`` file through the checked reader (declared size against the
+    file and the budget, no pickles, no trailing data): real, finite, 2x2 or 3x3."""
+    try:
+        with open(text, "rb") as f:
+            g = read_array(f, os.fstat(f.fileno()).st_size, text)
+    except OSError as exc:
+        raise argparse.ArgumentTypeError(f"{text}: cannot read a matrix: "
+                                         f"{exc.strerror or exc}") from None
+    except PlannerError as exc:
+        raise argparse.ArgumentTypeError(" ".join(str(exc).split())) from None
+    if g.dtype.kind not in "iuf" or g.shape not in ((2, 2), (3, 3)):
+        raise argparse.ArgumentTypeError(f"{text}: a generator is a real 2x2 or 3x3 matrix, "
+                                         f"got {g.dtype} of shape {g.shape}")
+    g = g.astype(np.float64)
+    if not np.isfinite(g).all():
+        raise argparse.ArgumentTypeError(f"{text}: generator entries must be finite")
+    return g
+
+
 def generator(text: str):
     """A custom lattice: ``"a,b,c;d,e,f;g,h,i"`` (rows of G) or a ``.npy`` file."""
     if text.endswith(".npy"):
-        try:
-            g = np.load(text, allow_pickle=False)
-        except (OSError, ValueError) as exc:
-            raise argparse.ArgumentTypeError(f"{text}: cannot read a matrix: {exc}") from None
+        g = _generator_file(text)
     else:
         rows = [r for r in text.split(";") if r.strip()]
         try:
@@ -129,9 +148,13 @@ def generator(text: str):
             raise argparse.ArgumentTypeError(
                 f"expected rows 'a,b,c;d,e,f;g,h,i', got {text!r}") from None
     try:
-        return Lattice(g, name="custom")
+        with np.errstate(over="raise", invalid="raise"):  # 1e300 entries: no overflow warning
+            return Lattice(g, name="custom")
     except PlannerError as exc:
         raise argparse.ArgumentTypeError(str(exc)) from None
+    except FloatingPointError:
+        raise argparse.ArgumentTypeError(f"{text}: generator entries too large (its "
+                                         f"determinant overflows)") from None
 
 
 def pose6(text: str) -> np.ndarray:

@@ -17,10 +17,11 @@ from pathlib import Path
 import numpy as np
 
 from planner import argtypes as T
-from planner._interrupt import install_sigint
+from planner._interrupt import Terminated, install_sigint, install_sigterm
 from planner.budget import ENV
 from planner.commands.outputs import check_outputs
 from planner.errors import PlannerError
+from planner.fsutil import staged_outputs
 from planner.lattice import NAMED_LATTICES
 from planner.lattice.paper import NAMED_LATTICES_2D
 
@@ -42,6 +43,10 @@ class _HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
         if action.default is None or action.default is False:
             return text
         return super()._get_help_string(action)
+
+
+class _TableHelpFormatter(_HelpFormatter, argparse.RawDescriptionHelpFormatter):
+    """An epilog printed as written (a table of keys)."""
 
 
 class _Parser(argparse.ArgumentParser):
@@ -94,8 +99,13 @@ def _add_world_args(p: argparse.ArgumentParser, *, lattice: bool = True,
                         "sensor-to-world matrix; # comments; paths relative to the list)")
     p.add_argument("--check-source", action="store_true",
                    help="with a saved world: refuse it unless its source map (beside the "
-                        "world file or in the current folder) still has the SHA-256 "
-                        "recorded at save")
+                        "world file, in the current folder or bundled) still has the "
+                        "SHA-256 recorded at save and gives the same cells (rebuilt and "
+                        "compared; done by default whenever that source is found)")
+    p.add_argument("--trust-world", action="store_true",
+                   help="with a saved world: skip the default re-check against its source "
+                        "map (the world is then trusted by its digest, which catches damage, "
+                        "not edits)")
     _add_bag_args(p)
     if not unknown:  # explore: the robot itself decides what unknown space is
         return
@@ -274,7 +284,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--force", action="store_true", help="delete finished rows, start again")
     p.add_argument("--no-progress", action="store_true", help="no progress on stderr")
 
-    p = sub.add_parser("bench", help="run a benchmark suite (which lattice for my map?)")
+    from planner.bench.schema import KEYS_HELP  # a table of text; imports nothing heavy
+
+    p = sub.add_parser("bench", help="run a benchmark suite (which lattice for my map?)",
+                       formatter_class=_TableHelpFormatter,
+                       epilog="suite file keys (TOML):\n\n" + KEYS_HELP)
     p.add_argument("suite", help="bundled suite name (quick, paper, full) or a TOML file")
     p.add_argument("--out", default=None, help="output folder (default: results/<suite>)")
     p.add_argument("--jobs", type=T.int_range(1), default=1, help="local worker processes")
@@ -330,6 +344,9 @@ _COMMANDS = {"lattices": "tables:lattices", "stats": "tables:stats", "plan": "pl
              "match-experiment": "runs:match_experiment", "bench": "runs:bench"}
 
 
+_UNSTAGED = ("bench", "match-experiment", "stats")  # long runs: results kept as they finish
+
+
 def _command(name: str):
     """The function that does the work of command ``name`` (:mod:`planner.commands`)."""
     import importlib
@@ -358,14 +375,31 @@ def _leave(status: int) -> None:
     os._exit(status)
 
 
+def _stopped(exc: BaseException, standalone: bool) -> int:
+    """One line for a Ctrl-C (130) or SIGTERM (143); a standalone program ends at once."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # a second signal: no traceback
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    term = isinstance(exc.__cause__ if isinstance(exc, SystemError) else exc, Terminated)
+    print(f"planner: {'terminated' if term else 'interrupted'}", file=sys.stderr)
+    if standalone:
+        _leave(143 if term else 130)
+    return 143 if term else 130
+
+
 def main(argv: list[str] | None = None) -> int:
     """The ``planner`` program (``argv`` None: ``sys.argv[1:]``, and an interrupted run
     ends the process at once with 130 / 143; with ``argv`` given it returns the status)."""
     standalone = argv is None
     if standalone:  # the process is ours: a Ctrl-C during a kernel's load is not lost
         install_sigint()
+        install_sigterm()
     argv = sys.argv[1:] if argv is None else list(argv)
-    a = build_parser().parse_args(_hoist_global_options(_join_negative_values(argv)))
+    try:  # parsing imports the readers (a map name is resolved): a signal may come here
+        a = build_parser().parse_args(_hoist_global_options(_join_negative_values(argv)))
+    except KeyboardInterrupt as exc:
+        return _stopped(exc, standalone)
     if a.memory_budget is not None:  # the one budget model reads it (and so do workers)
         os.environ[ENV] = str(a.memory_budget)
     # numpy warnings are shown only when the command succeeds: an error is one line
@@ -373,7 +407,9 @@ def main(argv: list[str] | None = None) -> int:
         warnings.simplefilter("always", RuntimeWarning)
         try:
             check_outputs(a)
-            with np.errstate(all="warn"):
+            # one command's outputs all or nothing; a suite keeps its own files as it goes
+            stage = staged_outputs() if a.command not in _UNSTAGED else contextlib.nullcontext()
+            with np.errstate(all="warn"), stage:
                 status = _command(a.command)(a)
         except PlannerError as exc:
             print(f"planner: error: {' '.join(str(exc).split())}", file=sys.stderr)
@@ -383,13 +419,7 @@ def main(argv: list[str] | None = None) -> int:
             if not isinstance(exc.__cause__ if isinstance(exc, SystemError) else exc,
                               KeyboardInterrupt):
                 raise
-            import signal
-
-            signal.signal(signal.SIGINT, signal.SIG_IGN)  # a second Ctrl-C: no traceback
-            print("planner: interrupted", file=sys.stderr)
-            if standalone:
-                _leave(130)
-            return 130
+            return _stopped(exc, standalone)
         except BrokenPipeError:  # output piped into `head`: stop quietly, as Unix tools do
             os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
             return 141

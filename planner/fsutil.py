@@ -3,11 +3,78 @@
 from __future__ import annotations
 
 import contextlib
+import errno
 import hashlib
 import os
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
+
+NAME_MAX = 255  # bytes of one file name on the usual file systems (ext4, xfs, btrfs, tmpfs)
+_RANDOM = 8  # characters mkstemp adds
+
+
+def temp_prefix(name: str, suffix: str) -> str:
+    """``.NAME.`` for a temporary file beside ``name``, NAME cut so that the temporary name
+    (prefix, mkstemp's random characters, ``suffix``) fits in :data:`NAME_MAX` bytes."""
+    room = NAME_MAX - 2 - _RANDOM - len(suffix.encode())
+    cut = name.encode()[:max(room, 1)].decode(errors="ignore")
+    return f".{cut}."
+
+
+_STAGE: list | None = None  # (temporary path, target, clean-up) while outputs are staged
+
+
+@contextlib.contextmanager
+def staged_outputs() -> Iterator[None]:
+    """Outputs of one command, all or nothing: inside the block every :func:`atomic_path`
+    (and :func:`stage_rename`) output stays under its temporary name; when the block
+    succeeds they are renamed into place (after checking that none of the targets is a
+    folder), when it fails they are all removed, so no output is left from a command that
+    failed at a later output."""
+    global _STAGE
+    outer, _STAGE = _STAGE, []
+    staged = _STAGE
+    try:
+        yield
+        for _, target, _ in staged:  # e.g. a folder where a CSV's JSON sidecar goes
+            if Path(target).is_dir():
+                raise IsADirectoryError(errno.EISDIR, "is a directory, not a file",
+                                        str(target))
+        while staged:
+            tmp, target, clean = staged[0]
+            try:
+                os.replace(tmp, target)
+            except OSError as exc:
+                if exc.filename is None:  # a rename error names no file: name the output
+                    raise OSError(exc.errno, exc.strerror or str(exc), str(target)) from exc
+                raise
+            staged.pop(0)
+            if clean:
+                clean()
+    finally:
+        _STAGE = outer
+        for tmp, _, clean in staged:  # left: the block or a rename failed
+            with contextlib.suppress(OSError):
+                if Path(tmp).is_dir():
+                    import shutil
+
+                    shutil.rmtree(tmp)
+                else:
+                    os.unlink(tmp)
+            if clean:
+                with contextlib.suppress(OSError):
+                    clean()
+
+
+def stage_rename(src: Path, target: Path, clean=None) -> bool:
+    """Rename ``src`` to ``target`` now, or (inside :func:`staged_outputs`) when every
+    output of the command is written; ``clean`` runs after the rename. False: staged."""
+    if _STAGE is None:
+        os.replace(src, target)
+        return True
+    _STAGE.append((Path(src), Path(target), clean))
+    return False
 
 
 @contextlib.contextmanager
@@ -22,12 +89,13 @@ def atomic_path(path: str | os.PathLike, keep_suffix: bool = False) -> Iterator[
     target = Path(path)
     target.parent.mkdir(parents=True, exist_ok=True)
     suffix = ".tmp" + (target.suffix if keep_suffix else "")
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=suffix, dir=target.parent)
+    fd, tmp = tempfile.mkstemp(prefix=temp_prefix(target.name, suffix), suffix=suffix,
+                               dir=target.parent)
     os.close(fd)
     try:
         yield Path(tmp)
         os.chmod(tmp, file_mode())  # mkstemp makes 0600 files; outputs get the usual mode
-        os.replace(tmp, target)
+        stage_rename(Path(tmp), target)
     except OSError as exc:
         with contextlib.suppress(OSError):
             os.unlink(tmp)

@@ -2,13 +2,16 @@
 
 ``tests/fuzz/cli_cases.py`` generates (seeded) every reader's malformed inputs, tampered
 saved worlds, complete files with trailing data, malformed arguments, inputs the memory
-budget must refuse and outputs failing with OS errors. They run in two long-lived child
-processes (``tests/fuzz/batch.py``: ``planner.cli.main`` in-process per case) under a
-3 GB address-space cap; a case still running after :data:`HANG` seconds is a hang (its
-child is killed and another takes the rest). Every run must exit 0, 1 or 2 without a
-traceback; an exit 2 prints exactly one ``planner: error:`` line and writes nothing; a
-``strict`` case (everything but the byte-level reader variants, some of which are still
-valid files) must exit 2. Counts per category are printed (``pytest -s``).
+budget must refuse and outputs failing with OS errors; ``tests/fuzz/fault_cases.py`` adds
+user folders, suite schemas, resume files, edited worlds beside their source, readers'
+budgets and staged outputs (a case whose ``keep`` folder changed is a problem). They run
+in two long-lived child processes (``tests/fuzz/batch.py``: ``planner.cli.main``
+in-process per case) under a 3 GB address-space cap; a case still running after
+:data:`HANG` seconds is a hang (its child is killed and another takes the rest). Every
+run must exit 0, 1 or 2 without a traceback; an exit 2 prints exactly one
+``planner: error:`` line and writes nothing; a ``strict`` case (everything but the
+byte-level reader variants, some of which are still valid files) must exit 2. Counts per
+category are printed (``pytest -s``).
 """
 
 from __future__ import annotations
@@ -28,6 +31,7 @@ from test_fuzz_readers import corpus  # tests/fuzz/make_corpus.py, loaded once
 
 sys.path.insert(0, str(Path(__file__).parent / "fuzz"))
 import cli_cases  # noqa: E402 - tests/fuzz is not a package
+import fault_cases  # noqa: E402
 
 CAP = 3 * 2**30  # bytes of address space per child: an allocation past it is a MemoryError
 HANG = 60  # seconds: a case still running after this is a hang (CI machines are shared)
@@ -109,6 +113,13 @@ def _problem(case, got: dict | None) -> str | None:
         return f"exit {got['rc']}: {err[-400:]!r}"
     if got["maxrss"] > CAP:
         return f"peak memory {got['maxrss']} bytes over the cap"
+    if case.keep and fault_cases.snapshot(Path(case.keep[0])) != case.keep[1]:
+        return f"{case.keep[0]}: files the user did not name were changed"
+    if case.category == "outputs2:long" and got["rc"] != 0:
+        return f"a valid output name refused: {err[-300:]!r}"
+    if case.category == "outputs2:long" and [p for p in Path(case.out).parent.iterdir()
+                                             if p.name.startswith(".")]:
+        return "a temporary file was left"
     if got["rc"] != 2:
         return "accepted although it must be refused" if case.strict else None
     lines = err.strip().splitlines()
@@ -125,7 +136,14 @@ def _problem(case, got: dict | None) -> str | None:
 
 
 @pytest.fixture(scope="module")
-def runs(tmp_path_factory) -> list:
+def fault_runs(tmp_path_factory) -> list:
+    """The fault classes of ``tests/fuzz/fault_cases.py``."""
+    return fault_cases.fault_runs(corpus, tmp_path_factory.mktemp("faults"),
+                                  random.Random(46))
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory, fault_runs) -> list:
     import planner
     from planner.world.file import save_world
 
@@ -143,7 +161,8 @@ def runs(tmp_path_factory) -> list:
             + cli_cases.trailing_runs(corpus, root / "trailing")
             + cli_cases.argument_runs(root / "args", rng)
             + cli_cases.budget_runs(corpus, root / "budget")
-            + cli_cases.os_error_runs(corpus, root / "os"))
+            + cli_cases.os_error_runs(corpus, root / "os")
+            + fault_runs)
 
 
 def test_the_corpus_is_seeded(tmp_path):
@@ -152,13 +171,13 @@ def test_the_corpus_is_seeded(tmp_path):
     assert [r.argv for r in a] == [r.argv for r in b]
 
 
-@pytest.mark.slow
-def test_every_case_is_one_clean_line_or_a_usable_file(runs):
-    assert len(runs) >= 500, len(runs)
+def _check_all(runs: list, level: int = 1) -> Counter:
+    """Run every case; assert no problem; the counts per class (the category's first
+    ``level`` parts) and exit status, printed (``pytest -s``)."""
     results = _run_all(runs)
     counts, problems = Counter(), []
     for case, got in zip(runs, results, strict=True):
-        group = case.category.split(":")[0]
+        group = ":".join(case.category.split(":")[:level])
         counts[group, "hang" if got is None else got["rc"]] += 1
         why = _problem(case, got)
         if why:
@@ -167,5 +186,20 @@ def test_every_case_is_one_clean_line_or_a_usable_file(runs):
                                                                        key=str))
     print(f"\n{len(runs)} cases: {summary}")
     assert not problems, "\n".join(problems[:80]) + f"\n({len(problems)} problems)"
+    return counts
+
+
+@pytest.mark.slow
+def test_every_case_is_one_clean_line_or_a_usable_file(runs):
+    assert len(runs) >= 1000, len(runs)
+    counts = _check_all(runs)
     refused = sum(n for (_, rc), n in counts.items() if rc == 2)
-    assert refused >= 0.85 * len(runs), summary
+    assert refused >= 0.85 * len(runs), counts
+
+
+@pytest.mark.slow
+def test_the_fault_classes_alone(fault_runs):
+    """The classes of ``tests/fuzz/fault_cases.py`` by themselves (a shorter run of the
+    same checks: ``pytest tests/test_fuzz_corpus.py --slow -s -k fault_classes``)."""
+    assert len(fault_runs) >= 300, len(fault_runs)
+    _check_all(fault_runs, level=2)

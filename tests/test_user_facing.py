@@ -59,8 +59,12 @@ def test_plan_line_gives_the_cell_edge_and_says_when_unseen_space_counts_as_free
 
 
 def test_rerunning_a_suite_into_a_folder_with_results_needs_resume_or_force(tmp_path, capsys):
+    from planner.bench.run_folder import write_marker
+    from planner.bench.suite import load_suite
+
     out = tmp_path / "out"
     out.mkdir()
+    write_marker(out, load_suite("quick"))  # a run of the same suite left it
     row = '{"map": "office.ply", "found": true}\n'
     (out / "results.jsonl").write_text(row)
     assert main(["bench", "quick", "--out", str(out), "--no-progress"]) == 2

@@ -8,6 +8,7 @@ raises :class:`~planner.bench.stopping.Interrupted` after the finished rows are 
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -23,6 +24,7 @@ from planner.bench.stopping import (
     worker_init,
 )
 from planner.bench.task import run_task
+from planner.errors import PlannerError
 from planner.progress import Progress
 
 __all__ = ["run"]
@@ -101,11 +103,25 @@ def _run_dask(todo: list[dict], scheduler: str, write) -> None:
     from distributed import Client
     from distributed import as_completed as dask_completed
 
-    with Client(scheduler) as client:
+    try:
+        client = Client(scheduler, timeout="20s")
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise PlannerError(f"--scheduler {scheduler}: cannot connect to the Dask scheduler: "
+                           f"{' '.join(str(exc).split()) or type(exc).__name__}") from None
+    with client:
         futs = client.map(run_task, todo, pure=False)
         try:
-            for _, rows in dask_completed(futs, with_results=True):
+            for fut, rows in dask_completed(futs, with_results=True, raise_errors=False):
+                if fut.status == "error" and isinstance(rows, BaseException):
+                    raise rows  # the task's own error, as a local run would raise it
+                if fut.status != "finished" or not isinstance(rows, list):
+                    # cancelled: the scheduler or the worker holding it went away
+                    raise PlannerError(f"--scheduler {scheduler}: a task was lost ("
+                                       f"{fut.status}: {type(rows).__name__}); the scheduler "
+                                       f"or its workers stopped; finished rows are saved, "
+                                       f"--resume runs the rest")
                 write(rows)
         except BaseException:
-            client.cancel(futs)
+            with contextlib.suppress(Exception):
+                client.cancel(futs)
             raise

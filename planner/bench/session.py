@@ -18,6 +18,13 @@ from pathlib import Path
 
 from planner.bench import rows as rowfile
 from planner.bench import runner, summary
+from planner.bench.run_folder import (
+    MARKER,
+    check_folder,
+    check_saved_queries,
+    remove_world_cache,
+    write_marker,
+)
 from planner.bench.stopping import Interrupted
 from planner.bench.suite import Suite, SuiteError, load_suite
 from planner.bench.tasks import plan_tasks
@@ -39,8 +46,13 @@ def results_lock(out: Path) -> Iterator[None]:
     """
     created = not out.exists()
     out.mkdir(parents=True, exist_ok=True)
-    fd = os.open(out / ".lock", os.O_RDWR | os.O_CREAT, 0o644)
-    held = failed = False
+    try:  # made here, or left by an earlier run
+        fd = os.open(out / ".lock", os.O_RDWR | os.O_CREAT | os.O_EXCL, 0o644)
+        made_lock = True
+    except FileExistsError:
+        fd = os.open(out / ".lock", os.O_RDWR)
+        made_lock = False
+    held = refused = False
     try:
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
@@ -52,16 +64,21 @@ def results_lock(out: Path) -> Iterator[None]:
         os.ftruncate(fd, 0)
         os.pwrite(fd, str(os.getpid()).encode(), 0)
         yield
-    except BaseException:
-        failed = True
+    except (PlannerError, OSError):
+        refused = True
         raise
     finally:
-        if held and failed and [q.name for q in out.iterdir()] == [".lock"]:
-            # a run refused before writing anything leaves nothing behind
+        if held and refused:
+            # a run refused before any result leaves nothing of its own behind (the world
+            # cache and its marker included: an edited suite is another suite)
             with contextlib.suppress(OSError):
-                os.unlink(out / ".lock")
+                if created and not (out / "results.jsonl").exists():
+                    remove_world_cache(out / "worlds")
+                    (out / MARKER).unlink(missing_ok=True)
+                if made_lock or [q.name for q in out.iterdir()] == [".lock"]:
+                    os.unlink(out / ".lock")
                 if created:
-                    out.rmdir()
+                    out.rmdir()  # only when empty
         os.close(fd)  # closing releases the lock
 
 
@@ -89,29 +106,39 @@ def run_suite(name: str, *, out: str | None = None, jobs: int = 1,
         Unreadable suite, no map files, a results folder in use, nothing to report.
     """
     suite = load_suite(name)
-    folder = Path(out) if out else Path("results") / suite.name
+    folder = Path(out) if out else Path("results") / suite.name  # a label, never a path
     if jobs < 1:
         raise SuiteError(f"--jobs must be at least 1, got {jobs}")
+    # before the lock file: a folder that is not this suite's run is refused untouched
+    check_folder(folder, suite, resume=resume or report_only, force=force)
     if suite.kind == "paper":
         with results_lock(folder):
+            check_folder(folder, suite, resume=resume or report_only, force=force)
+            write_marker(folder, suite)
             return _paper(suite, folder, jobs)
     if not suite.maps:
         raise SuiteError(f"suite {suite.name}: no map files found "
                          f"(skipped: {', '.join(suite.skipped) or 'none'})")
     log = (lambda m: print(m, file=sys.stderr)) if progress else (lambda m: None)
     with results_lock(folder):
+        check_folder(folder, suite, resume=resume or report_only, force=force)
         results = folder / "results.jsonl"
         if (results.is_file() and results.stat().st_size and not
                 (resume or force or report_only)):
             raise SuiteError(f"{folder} already holds results; pass --resume to keep them "
                              "and run the rest, or --force to start again")
+        if resume or report_only:
+            rowfile.read_rows(results)  # every row checked before anything runs
+        write_marker(folder, suite)
         saved_path = folder / "queries.json"
         saved = None
         if (resume or report_only) and saved_path.is_file():
             try:
                 saved = json.loads(saved_path.read_text())
-            except ValueError:
-                saved = None  # a damaged record: sample again
+            except (ValueError, RecursionError):
+                saved = None  # a damaged record: sample again (seeded: the same queries)
+            else:
+                check_saved_queries(saved_path, saved)
         try:
             tasks, record = plan_tasks(suite, log=log, saved=saved,
                                        world_cache=str(folder / "worlds"),
@@ -120,6 +147,13 @@ def run_suite(name: str, *, out: str | None = None, jobs: int = 1,
             print(f"\nplanner bench: {exc} while building the worlds; built ones are kept "
                   f"in {folder / 'worlds'} for --resume", file=sys.stderr)
             return exc.exit_code
+        empty = [g for g, r in record.items() if not r.get("queries")]
+        if empty:
+            why = ", ".join(f"{k} {v}" for k, v in record[empty[0]].get("dropped", {}).items())
+            why = why or "none"
+            raise SuiteError(f"suite {suite.name}: no query kept for {empty[0]} (of "
+                             f"{record[empty[0]].get('wanted')} wanted; dropped: {why}); lower "
+                             f"min_distance or check the map")
         write_text_atomic(saved_path, json.dumps(record, indent=1))
         results = folder / "results.jsonl"
         interrupted = None
@@ -151,9 +185,7 @@ def run_suite(name: str, *, out: str | None = None, jobs: int = 1,
         rep = summary.write_report(folder, suite, rows, summ, record, figs, cmd,
                                    partial=partial, jobs=jobs)
     if not partial:  # the worlds are only kept for --resume
-        import shutil
-
-        shutil.rmtree(folder / "worlds", ignore_errors=True)
+        remove_world_cache(folder / "worlds")
     if interrupted is not None:
         print(f"\nplanner bench: {partial}; partial report: {rep}", file=sys.stderr)
         return interrupted.exit_code

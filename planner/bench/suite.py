@@ -30,20 +30,17 @@ Example::
 from __future__ import annotations
 
 import math
-import tomllib
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from planner.bench.schema import SuiteError, check_suite_table, label_ok, parse_suite
 from planner.budget import require
 from planner.errors import PlannerError
 from planner.lattice import NAMED_LATTICES, Lattice
 
 SUITES = Path(__file__).resolve().parent / "suites"
 """Bundled suites (package data): ``planner bench quick`` reads ``SUITES / "quick.toml"``."""
-
-
-class SuiteError(PlannerError):
-    """A suite file that cannot be run."""
 
 
 @dataclass(frozen=True)
@@ -118,11 +115,8 @@ def load_suite(name_or_path: str) -> Suite:
     if not path.is_file():
         known = ", ".join(sorted(p.stem for p in SUITES.glob("*.toml")))
         raise SuiteError(f"{name_or_path}: no such suite (bundled: {known})")
-    try:
-        raw = tomllib.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
-        raise SuiteError(f"{path}: not a valid TOML suite: {exc}") from None
-    _check_raw(path, raw)
+    raw = parse_suite(path)
+    check_suite_table(path, raw)
     base = path.parent
     maps, skipped = [], []
     try:
@@ -147,7 +141,7 @@ def load_suite(name_or_path: str) -> Suite:
             ))
         ompl = raw.get("ompl", {})
         suite = Suite(
-            name=str(raw.get("name", path.stem)),
+            name=str(raw.get("name", _label(path.stem))),
             maps=tuple(maps),
             lattices=tuple(raw.get("lattices", NAMED_LATTICES)),
             neighbors=tuple(raw.get("neighbors", ("face", "full"))),
@@ -198,6 +192,13 @@ def load_suite(name_or_path: str) -> Suite:
     return suite
 
 
+def _label(stem: str) -> str:
+    """A suite file's stem as a label (a name when the suite gives none): characters other
+    than letters, digits and ``_ . + - ( )`` and space become ``_``."""
+    name = re.sub(r"[^\w .+()-]|\.\.", "_", stem)[:100]
+    return name if label_ok(name) else f"suite_{name}"[:100]
+
+
 def _check_size(path: Path, suite: Suite) -> None:
     """Refuse a suite whose run list (every map x cell volume x radius x rotation x lattice
     x move set x method x query) would not fit the memory budget, before it is listed."""
@@ -208,90 +209,3 @@ def _check_size(path: Path, suite: Suite) -> None:
     # a run's task and its result row: a few kB each
     require(runs * 4096, f"{path.name}: the list of {runs:.3g} runs ({suite.rotations} "
             f"rotations)", error=SuiteError)
-
-
-_KEYS = {"": {"name", "seed", "queries", "lattices", "neighbors", "methods", "min_distance",
-              "ompl", "maps", "kind", "paper", "rotation", "rotations", "explore"},
-         "maps": {"path", "cell_volumes", "cell_volume", "radii", "radius", "scenarios",
-                  "queries"},
-         "ompl": {"planners", "time", "seeds", "lattice"}}
-_LISTS = ("lattices", "neighbors", "methods")
-
-
-def _check_raw(path: Path, raw: dict) -> None:
-    """Refuse unknown keys and values of the wrong type or range, naming the key (a typo
-    must not silently fall back to a default)."""
-    def bad(key: str, want: str) -> SuiteError:
-        return SuiteError(f"{path}: {key!r} must be {want}")
-
-    def unknown(table: dict, where: str) -> None:
-        extra = sorted(set(table) - _KEYS[where])
-        if extra:
-            at = f" in [{where}]" if where else ""
-            raise SuiteError(f"{path}: unknown key {extra[0]!r}{at} (known: "
-                             f"{', '.join(sorted(_KEYS[where]))})")
-
-    unknown(raw, "")
-    for key, lo, hi in (("queries", 1, 10**6), ("seed", 0, 2**32 - 1),
-                        ("rotations", 1, 10**6)):
-        v = raw.get(key, lo)
-        if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
-            raise bad(key, f"an integer in {lo}..{hi}")
-    paper = raw.get("paper", {})
-    if not isinstance(paper, dict):
-        raise bad("paper", "a [paper] table")
-    for key, lo in (("rotations", 1), ("samples", 100), ("seed", 0)):
-        v = paper.get(key, lo)
-        if isinstance(v, bool) or not isinstance(v, int) or v < lo:
-            raise bad(f"paper.{key}", f"an integer >= {lo}")
-    vols = paper.get("volumes", [1.0])
-    if not isinstance(vols, list) or not vols or not all(
-            isinstance(x, int | float) and not isinstance(x, bool) and 0 < x < math.inf
-            for x in vols):
-        raise bad("paper.volumes", "a non-empty list of positive cell volumes")
-    if not isinstance(paper.get("quick", False), bool):
-        raise bad("paper.quick", "true or false")
-    d = raw.get("min_distance", 0.3)
-    if isinstance(d, bool) or not isinstance(d, int | float) or not 0 <= d < math.inf:
-        raise bad("min_distance", "a finite number >= 0")
-    for key in _LISTS:  # methods may be empty: an OMPL-only suite
-        v = raw.get(key, ["x"])
-        if not isinstance(v, list) or not (v or key == "methods") or not all(
-                isinstance(x, str) for x in v):
-            raise bad(key, "a non-empty list of names")
-    if not isinstance(raw.get("name", ""), str):
-        raise bad("name", "a string")
-    if not isinstance(raw.get("kind", "planning"), str) or raw.get("kind") not in (
-            None, "planning", "paper"):
-        raise bad("kind", '"planning" or "paper"')
-    if not isinstance(raw.get("maps", []), list) or not all(
-            isinstance(m, dict) for m in raw.get("maps", [])):
-        raise bad("maps", "a list of [[maps]] tables")
-    for m in raw.get("maps", []):
-        unknown(m, "maps")
-        if not isinstance(m.get("path"), str):
-            raise bad("maps.path", "a string")
-        q = m.get("queries", 1)
-        if isinstance(q, bool) or not isinstance(q, int) or not 1 <= q <= 10**6:
-            raise bad("maps.queries", "an integer in 1..1000000")
-    ex = raw.get("explore", {})
-    if not isinstance(ex, dict):
-        raise bad("explore", "an [explore] table")
-    if ex and "explore" not in raw.get("methods", ()):
-        raise SuiteError(f"{path}: an [explore] table needs \"explore\" in methods")
-    from planner.bench.explore_rows import check_explore_table  # lazy: scipy
-
-    why = check_explore_table(ex)
-    if why:
-        raise SuiteError(f"{path}: {why}")
-    ompl = raw.get("ompl", {})
-    if not isinstance(ompl, dict):
-        raise bad("ompl", "an [ompl] table")
-    unknown(ompl, "ompl")
-    t = ompl.get("time", 1.0)
-    if isinstance(t, bool) or not isinstance(t, int | float) or not 0 < t < math.inf:
-        raise bad("ompl.time", "a positive number of seconds")
-    seeds = ompl.get("seeds", [0])
-    if not isinstance(seeds, list) or not all(
-            isinstance(x, int) and not isinstance(x, bool) and 0 <= x < 2**32 for x in seeds):
-        raise bad("ompl.seeds", "a list of integers in 0..4294967295")

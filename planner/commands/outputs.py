@@ -48,8 +48,37 @@ def check_output(option: str, text: str, suffixes: tuple[str, ...]) -> None:
         raise PlannerError(f"{where}: cannot write into {parent}: {exc.strerror}") from None
 
 
+def check_sidecar(text: str) -> None:
+    """Refuse ``--out X.csv`` when ``X.json`` (the path's metadata sidecar, a name the user
+    did not give) exists and is not a sidecar this program wrote: it is never overwritten.
+
+    Raises
+    ------
+    PlannerError
+        One line naming both files.
+    """
+    import json
+
+    side = Path(text).with_suffix(".json")
+    if len(side.name.encode()) > 255:
+        raise PlannerError(f"argument --out: {text}: its metadata sidecar {side.name} would "
+                           f"be longer than 255 bytes; choose a shorter name")
+    if not side.exists() and not side.is_symlink():
+        return
+    try:
+        rec = json.loads(side.read_text(encoding="utf-8")) if side.is_file() else None
+    except (OSError, ValueError, RecursionError):
+        rec = None
+    if not (isinstance(rec, dict) and "waypoint_columns" in rec and "path" in rec):
+        raise PlannerError(f"argument --out: {text}: its metadata goes to {side}, which "
+                           f"exists and is not a path sidecar written by planner; move it or "
+                           f"choose another --out")
+
+
 def check_outputs(a: argparse.Namespace) -> None:
     """:func:`check_output` for every output option of the command ``a.command``."""
     for (cmd, option), suffixes in OUTPUTS.items():
         if a.command == cmd and getattr(a, option, None):
             check_output(option, getattr(a, option), suffixes)
+    if a.command == "plan" and (a.out or "").lower().endswith(".csv"):
+        check_sidecar(a.out)

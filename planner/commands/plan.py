@@ -7,7 +7,14 @@ import json
 
 from planner import planning as api
 from planner.analysis import compare as comparison
-from planner.commands.worlds import build, check_dim, check_neighbors, map_source, reads_source
+from planner.commands.worlds import (
+    build,
+    check_dim,
+    check_neighbors,
+    map_source,
+    reads_source,
+    trust_check,
+)
 from planner.export import write_path_bag, write_tum
 from planner.path import write_path
 
@@ -50,10 +57,7 @@ def compare(a: argparse.Namespace) -> int:
     radius = a.radius
     if is_world_file(a.map):  # one lattice: the saved one
         saved = load_world(a.map)
-        if a.check_source:
-            from planner.world.check import check_source  # lazy: numba, scipy
-
-            check_source(saved)
+        trust_check(saved, a)
         lattices = [saved.lattice]
         radius = saved.radius if radius is None else radius
     check_neighbors(lattices, a.neighbors, a.method)

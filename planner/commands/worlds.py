@@ -69,6 +69,18 @@ def reads_source(a: argparse.Namespace) -> bool:
             or _is_bag(a))
 
 
+def trust_check(world, a: argparse.Namespace) -> None:
+    """A saved world re-verified against its source map (:mod:`planner.world.trust`):
+    required with ``--check-source``, by default when the unchanged source is found, never
+    with ``--trust-world``."""
+    if getattr(a, "trust_world", False) and not getattr(a, "check_source", False):
+        return
+    from planner.world.trust import verify_world  # lazy: numba, scipy
+
+    verify_world(world, required=getattr(a, "check_source", False),
+                 format=getattr(a, "format", None))
+
+
 def build(a: argparse.Namespace):
     """The world of a command's map options, and its lattice's name.
 
@@ -97,10 +109,8 @@ def build(a: argparse.Namespace):
               f"default for the box of what was read (~{DEFAULT_CELLS:,} cells): it "
               f"changes with --max-clouds, --topic and the bag; give --cell-volume to keep "
               f"it", file=sys.stderr)
-    if getattr(a, "check_source", False) and is_world_file(a.map):
-        from planner.world.check import check_source  # lazy: numba, scipy
-
-        check_source(world)
+    if is_world_file(a.map):
+        trust_check(world, a)
     return world, (a.generator.name if a.generator is not None else world.lattice.name
                    or "custom")
 

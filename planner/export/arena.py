@@ -16,6 +16,7 @@ scripts open the file as they open OMPL's. Mapping:
 from __future__ import annotations
 
 import datetime
+import errno
 import json
 import math
 import os
@@ -65,7 +66,11 @@ def write_arena_db(out: str | os.PathLike, rows: list[dict], *, suite: str = "")
     date = datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M:%S")
     with atomic_path(out) as tmp:
         tmp.unlink()  # sqlite creates its own file
-        con = sqlite3.connect(tmp)
+        try:
+            con = sqlite3.connect(tmp)
+        except sqlite3.Error as exc:
+            raise OSError(errno.EIO, f"cannot create the Planner Arena database: {exc}",
+                          str(out)) from None
         try:
             con.executescript(SCHEMA)
             planners: dict[str, int] = {}
@@ -104,6 +109,10 @@ def write_arena_db(out: str | os.PathLike, rows: list[dict], *, suite: str = "")
                          r.get("cell_checks"), r.get("expansions")))
                     n += 1
             con.commit()
+        except sqlite3.Error as exc:  # a full disk ("database or disk is full"), I/O errors
+            code = errno.ENOSPC if "full" in str(exc) else errno.EIO
+            raise OSError(code, f"cannot write the Planner Arena database: {exc}",
+                          str(out)) from None
         finally:
             con.close()
     return n

@@ -17,6 +17,7 @@ from pathlib import Path
 
 from planner.errors import PlanError
 from planner.export.trajectory import path_poses
+from planner.fsutil import stage_rename, temp_prefix
 
 __all__ = ["write_path_bag"]
 
@@ -61,12 +62,15 @@ def write_path_bag(out: str | os.PathLike, path, *, frame: str = "map",
         for ti, (x, y, z), (a, b, c, d) in zip(t, p, q, strict=True)]
     msg = T["nav_msgs/msg/Path"](header=header(base), poses=poses)
     target.parent.mkdir(parents=True, exist_ok=True)
-    work = Path(tempfile.mkdtemp(prefix=f".{target.name}.", dir=target.parent))
+    work = Path(tempfile.mkdtemp(prefix=temp_prefix(target.name, ""), dir=target.parent))
     bag = work / target.name
+    staged = False
     try:
         with Writer(bag, version=8) as w:
             conn = w.add_connection(TOPIC, msg.__msgtype__, typestore=ts)
             w.write(conn, base, ts.serialize_cdr(msg, msg.__msgtype__))
-        os.replace(bag, target)
+        # with the command's other outputs (planner.fsutil.staged_outputs), or now
+        staged = not stage_rename(bag, target, lambda: shutil.rmtree(work, ignore_errors=True))
     finally:
-        shutil.rmtree(work, ignore_errors=True)
+        if not staged:
+            shutil.rmtree(work, ignore_errors=True)

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from planner.budget import memory_budget
+from planner.budget import memory_budget, require
 from planner.errors import MapError
 
 # Largest decompressed size a compressed text file may inflate to (None: a quarter of the
@@ -146,6 +146,9 @@ def header_lines(data: bytes, name: str, what: str, end_key: str,
     raise MapError(f"{name}: {what} header has no '{end_key}' line")
 
 
+_TEXT_PARSE_BYTES = 8  # per character of text parsed by loadtxt
+
+
 def loadtxt(text: str, name: str, ncols: int, first_line: int = 1, exact: bool = False,
             usecols: tuple[int, ...] | None = None) -> np.ndarray:
     """Parse whitespace/comma separated numbers, '#' comments, as float64 (rows, ncols).
@@ -154,6 +157,10 @@ def loadtxt(text: str, name: str, ncols: int, first_line: int = 1, exact: bool =
     ``usecols`` columns (default the first ``ncols``) and any other columns are ignored.
     ``first_line`` is the file line number of ``text``'s first line, for messages.
     """
+    # parsing holds the text, numpy's copy of it (up to 4 bytes a character) and its
+    # chunks of numbers: refused over the budget before it starts, not by a MemoryError
+    require(_TEXT_PARSE_BYTES * float(len(text)), f"{name}: parsing {len(text)} characters "
+            f"of numbers")
     if text.startswith("\ufeff"):
         text = text[1:]
     if "," in text:

@@ -16,6 +16,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation, Slerp
 
 from planner.errors import MapError
+from planner.io.bag_limits import limited_decompression
 from planner.io.obstacles import Obstacles
 from planner.io.validate import finite_points, no_return_mask
 from planner.progress import Progress
@@ -68,16 +69,25 @@ def read_bag(p: Path, topic: str | None = None, fixed_frame: str | None = None,
     """
 
     require("rosbags", ".bag", p.name)
-    from rosbags.highlevel import AnyReader
-    from rosbags.typesys import Stores, get_typestore
-
     if max_clouds is not None and (not isinstance(max_clouds, int) or max_clouds < 1):
         raise MapError(f"{p.name}: max_clouds must be a positive integer, got {max_clouds!r}")
     # A rosbag2 is a folder; its storage or metadata file stands for it.
     bag_path = p.parent if p.suffix.lower() in (".db3", ".mcap", ".yaml") else p
+    # every chunk rosbags inflates is limited by the decompression budget (bag_limits)
+    with limited_decompression(p.name):
+        return _read_clouds(p, bag_path, topic, fixed_frame, max_clouds, progress)
+
+
+def _read_clouds(p: Path, bag_path: Path, topic, fixed_frame, max_clouds,
+                 progress: bool) -> Obstacles:
+    from rosbags.highlevel import AnyReader
+    from rosbags.typesys import Stores, get_typestore
+
     try:
         reader = AnyReader([bag_path], default_typestore=get_typestore(Stores.LATEST))
         reader.open()
+    except MapError:  # over the decompression budget while opening
+        raise
     except Exception as exc:  # rosbags raises its own error types on corrupt bags
         raise MapError(f"{p.name}: unreadable ROS bag ({first_line(exc)})") from None
     try:

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from planner.budget import require as require_budget
 from planner.errors import MapError
 from planner.io.bag import first_line, require
 from planner.io.obstacles import Obstacles
@@ -130,6 +131,9 @@ def _las_end(p: Path, head: bytes, points_end: int, size: int) -> int:
     return end
 
 
+_E57_POINT_BYTES = 160  # per declared point: pye57's arrays, ours, and the world's
+
+
 def read_e57(p: Path) -> Obstacles:
     """Every scan of an E57 file, each moved into the file's frame by its pose.
 
@@ -141,11 +145,21 @@ def read_e57(p: Path) -> Obstacles:
     try:
         e57 = pye57.E57(str(p))
         try:
+            declared = 0
             for i in range(e57.scan_count):
+                header = e57.get_header(i)
+                # before reading: the declared points of every scan so far against the
+                # budget (the scan's arrays, the copies made from them and the world's)
+                declared += int(getattr(header, "point_count", 0) or 0)
+                require_budget(_E57_POINT_BYTES * float(declared),
+                               f"{p.name}: {declared} E57 points")
+                rot = getattr(header, "rotation", None)
+                if header.has_pose() and rot is not None and not np.isfinite(
+                        np.asarray(rot, dtype=np.float64)).all():
+                    raise MapError(f"{p.name}: E57 scan {i} rotation is not finite")
                 scan = e57.read_scan(i, transform=True, ignore_missing_fields=True)
                 xyz = np.column_stack([np.asarray(scan[f"cartesian{c}"], dtype=np.float64)
                                        for c in "XYZ"])
-                header = e57.get_header(i)
                 origin = (np.asarray(header.translation, dtype=np.float64).reshape(3)
                           if header.has_pose() else np.zeros(3))
                 pts, keep = finite_points(xyz, p.name)

@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from planner.budget import require
 from planner.errors import MapError
 from planner.io._files import decode_text, read_bytes
 from planner.io.obstacles import Obstacles
@@ -79,6 +80,7 @@ def load_map_yaml(text: str, name: str) -> dict:
     import yaml
 
     try:
+        _check_yaml_size(yaml, text, name)
         meta = yaml.safe_load(text)
     except RecursionError:
         raise MapError(f"{name}: not valid YAML (nested too deeply)") from None
@@ -91,6 +93,23 @@ def load_map_yaml(text: str, name: str) -> dict:
         raise MapError(f"{name}: a map description is a YAML mapping of 'key: value', got "
                        f"{type(meta).__name__}")
     return meta
+
+
+YAML_EVENTS = 10_000  # a map description has a dozen keys
+YAML_ALIASES = 16  # k aliases expand a value at most ~e^(k/e) times: 16 -> ~360
+
+
+def _check_yaml_size(yaml, text: str, name: str) -> None:
+    """Refuse a description of more than :data:`YAML_EVENTS` parse events or
+    :data:`YAML_ALIASES` aliases before anything is built from it: aliases share nodes, so
+    a few lines can stand for billions of values (the "billion laughs")."""
+    events = aliases = 0
+    for ev in yaml.parse(text, Loader=yaml.SafeLoader):
+        events += 1
+        aliases += isinstance(ev, yaml.AliasEvent)
+        if events > YAML_EVENTS or aliases > YAML_ALIASES:
+            raise MapError(f"{name}: a map description of more than {YAML_EVENTS} values or "
+                           f"{YAML_ALIASES} aliases (&anchor / *alias) is refused")
 
 
 def _number(val) -> float | None:
@@ -141,12 +160,31 @@ def read_image(p: Path) -> tuple[np.ndarray, int]:
         from PIL import Image
     except ImportError:  # pragma: no cover - Pillow comes with matplotlib
         raise MapError(f"{p.name}: only PGM images can be read without Pillow") from None
+    if data[:8] == b"\x89PNG\r\n\x1a\n":
+        _check_png_end(data, p.name)
     try:
         with Image.open(p) as im:
+            w, h = im.size
+            require(_PIXEL_BYTES * float(w) * h, f"{p.name}: a {w}x{h} map image")
             grey = np.asarray(im.convert("L"), dtype=np.int64)
+    except MapError:
+        raise
     except Exception as exc:  # Pillow raises many types on corrupt images
         raise MapError(f"{p.name}: unreadable map image ({type(exc).__name__})") from None
     return grey, 255
+
+
+# bytes per pixel while a map image becomes obstacles: grey levels, the masks, the (H, W)
+# grids of cell centres and the boxes (int64 / float64)
+_PIXEL_BYTES = 64
+
+
+def _check_png_end(data: bytes, name: str) -> None:
+    """Refuse bytes after a PNG's IEND chunk (data after a complete file, as elsewhere)."""
+    end = data.rfind(b"IEND")
+    if end >= 4 and len(data) > end + 8:  # type, then its 4-byte CRC: the file's end
+        raise MapError(f"{name}: {len(data) - end - 8} bytes of data after the end of the "
+                       f"PNG image")
 
 
 _PGM_TOKEN = re.compile(rb"(?:\s|#[^\n]*\n?)*(\S+)")
@@ -167,6 +205,7 @@ def read_pgm(data: bytes, name: str) -> tuple[np.ndarray, int]:
         raise MapError(f"{name}: bad PGM size {w}x{h} or maxval {maxval}")
     if w * h > 1 << 30:
         raise MapError(f"{name}: PGM of {w}x{h} pixels is too large")
+    require(_PIXEL_BYTES * float(w) * h, f"{name}: a {w}x{h} map image")
     if data[:2] == b"P5":
         pos += 1  # exactly one whitespace byte before the raster
         dt = np.dtype(">u2") if maxval > 255 else np.dtype("u1")
@@ -174,6 +213,9 @@ def read_pgm(data: bytes, name: str) -> tuple[np.ndarray, int]:
         if len(data) - pos < need:
             raise MapError(f"{name}: truncated PGM: needs {need} bytes of pixels, has "
                            f"{len(data) - pos}")
+        if len(data) - pos > need:
+            raise MapError(f"{name}: {len(data) - pos - need} bytes of data after the end of "
+                           f"the PGM image")
         pix = np.frombuffer(data, dtype=dt, count=w * h, offset=pos).astype(np.int64)
     else:
         tokens = re.sub(rb"#[^\n]*", b" ", data[pos:]).split()

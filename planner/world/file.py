@@ -22,9 +22,10 @@ File format (numpy ``.npz``, members stored uncompressed; written atomically):
 Loading verifies the file (:mod:`planner.world.check`): each member's declared size
 against the memory budget and the member, every key's type, shape, dtype, range and
 order, the lattice name against the generator, and the digest. Any mismatch is a one-line
-``MapError`` "corrupt or modified world file: <what>". ``planner plan/compare WORLD
---check-source`` also checks that the source map (found beside the world file) still has
-the SHA-256 recorded at save.
+``MapError`` "corrupt or modified world file: <what>". The digest catches damage, not an
+edit by someone who recomputes it: :mod:`planner.world.trust` rebuilds the cells from the
+source map and compares them (``planner plan/compare WORLD``: by default when the unchanged
+source is found, required with ``--check-source``).
 """
 
 from __future__ import annotations

@@ -33,6 +33,7 @@ class Run:
     out: str | None = None  # an output that must not exist afterwards when refused
     fault: str | None = None  # an OS error every output rename raises (batch.py)
     name: str = ""  # a file the error line should name
+    keep: tuple[str, str] | None = None  # (folder, snapshot): must be unchanged afterwards
 
 
 def reader_runs(corpus, root: Path) -> list[Run]:
