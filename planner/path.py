@@ -63,6 +63,9 @@ def path_record(res, world, start, goal) -> dict:
         "map": Path(src).name if src else None,
         "map_sha256": digest or None,
         "frame": getattr(world.obstacles, "frame", None) or "map",
+        # the world's local frame in the map's (m): planned in map - offset, all points here
+        # are the map's
+        "local_offset": world.offset[:world.dim].tolist(),
         "dim": world.dim,
         "lattice": res.lattice, "cell_volume": _r(res.cell_volume),
         "cell_volume_unit": "m^2" if world.dim == 2 else "m^3",

@@ -32,7 +32,9 @@ class PlanResult:
     ----------
     found : bool
     path : ndarray, shape (K, 3)
-        World coordinates (metres), start point first, goal point last; empty if not found.
+        Points in the map's frame (metres; a world with a local frame adds its
+        :attr:`World.offset` back, recorded in ``extra["local_offset"]``), start point first,
+        goal point last; empty if not found.
     cells : ndarray, shape (K-2, 3), int64
         Lattice indices of the cells visited between start and goal.
     length : float
@@ -174,9 +176,10 @@ def plan(
     if res is not None:
         s, g = start, goal  # checked: (3,) float64 points
     else:
-        s, s_cell, g, g_cell = world.endpoints(start, goal)
+        s, s_cell, g, g_cell = world.endpoints(start, goal)  # local points
         if method.startswith("ompl:"):
-            return _plan_ompl(world, s, g, method.split(":", 1)[1], time_limit, seed, common)
+            return _plan_ompl(world, start, goal, method.split(":", 1)[1], time_limit, seed,
+                              common)
         res = search.search(
             world, s_cell, g_cell, method=method, neighbors=neighbors,
             corner_cutting=corner_cutting, backend=backend, max_expansions=max_expansions,
@@ -205,13 +208,22 @@ def plan(
         path = _path_points(lat, s, path_cells, g)
         length = path_length(path, 0.0)
     c = common  # the fields in their order: a keyword call costs 2 us more, every plan
-    return PlanResult(
+    out = PlanResult(
         True, path, path_cells, length, checks, res.expansions, res.generated, seconds,
         c["lattice"], c["cell_volume"], method, neighbors, "", res.peak_bytes,
         c["build_seconds"], {"cost_between_centres": res.cost, "raw_length": raw_length,
                              "smoothed_length": length if shortcut else None},
         "found", res.guarantee, unknown_on_path(world, path), c["unknown_note"],
     )
+    return _in_map_frame(out, world) if world.local_frame else out
+
+
+def _in_map_frame(res: PlanResult, world) -> PlanResult:
+    """A result planned in a world's local frame with its path in the map's frame, and the
+    offset recorded (``extra["local_offset"]``, m)."""
+    res.path = world.to_map(res.path)
+    res.extra["local_offset"] = world.offset.tolist()
+    return res
 
 
 def _path_points(lat: Lattice, s: np.ndarray, cells: np.ndarray, g: np.ndarray) -> np.ndarray:
@@ -263,6 +275,7 @@ def unknown_on_path(world, path: np.ndarray) -> int:
 
 
 def _plan_ompl(world, s, g, planner_name, time_limit, seed, common) -> PlanResult:
+    """An OMPL plan from ``s`` to ``g`` (map frame, as the path it returns)."""
     r = ompl.plan_ompl(world, s, g, planner=planner_name, time_limit=time_limit, seed=seed)
     path = r.path_simplified if r.path_simplified is not None else r.path
     d = r.to_dict()
@@ -272,5 +285,6 @@ def _plan_ompl(world, s, g, planner_name, time_limit, seed, common) -> PlanResul
         cell_checks=r.cell_checks, expansions=0, generated=0, seconds=r.seconds,
         reason=r.reason, extra={k: v for k, v in d.items() if k not in ("path", "path_simplified")},
         status="found" if r.found else r.status, guarantee=True,
-        unknown_cells=unknown_on_path(world, path) if r.found else 0, **common,
+        unknown_cells=unknown_on_path(world, world.to_local(path)) if r.found else 0,
+        **common,
     )
