@@ -62,7 +62,8 @@ def plot_paths(path: str, world, results: dict, *, title: str | None = None,
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    paths = {k: r.path for k, r in results.items() if r.found and len(r.path)}
+    # drawn in the world's local frame, where its cells are
+    paths = {k: world.to_local(r.path) for k, r in results.items() if r.found and len(r.path)}
     if not paths:
         raise PlanError("nothing to plot: no path was found")
     allp = np.concatenate(list(paths.values()))

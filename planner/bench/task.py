@@ -93,7 +93,8 @@ def run_task(task: dict) -> list[dict]:
                 raw = raw_path if len(raw_path) > 1 else raw
             elif task["method"] in ("astar", "dijkstra"):
                 cells = search.shortcut(world, res.cells)
-                smooth = np.concatenate([raw[:1], world.lattice.to_world(cells), raw[-1:]])
+                smooth = np.concatenate([raw[:1], world.to_map(world.lattice.to_world(cells)),
+                                         raw[-1:]])
             else:
                 smooth = raw
             c_raw = clear.of_path(raw, step)

@@ -30,7 +30,7 @@ from planner.world.file import check_options, is_world_file, load_world
 from planner.world.frame import local_offset, shifted
 
 __all__ = ["MapDefaults", "as_obstacles", "build_world", "default_cell_volume",
-           "inflated_obstacles", "map_box", "resolve_defaults", "sidecar"]
+           "inflated_obstacles", "lift_planar", "map_box", "resolve_defaults", "sidecar"]
 
 # Default planning resolution for raw clouds: about this many cells in the bounding box.
 _DEFAULT_CELLS = 2_000_000
@@ -196,7 +196,7 @@ def build_world(
                            unknown=unknown, bounds=bounds)
     d, lat, radius, policy, bounds = obst.dim, got.lattice, got.radius, got.unknown, got.bounds
     if d == 2:
-        obst, bounds, lat = _lift(obst), _lift_bounds(bounds), planar_prism(lat)
+        obst, bounds, lat = lift_planar(obst), _lift_bounds(bounds), planar_prism(lat)
     offset = local_offset(lat, bounds)  # far from the origin: a local frame (world.frame)
     if offset.any():
         obst, bounds = shifted(obst, offset), bounds - offset
@@ -317,7 +317,7 @@ def _lattice(lattice, cell_volume, side, obst, bounds) -> Lattice:
     return lat
 
 
-def _lift(obst):
+def lift_planar(obst):
     """A 2D map as 3D obstacles in the plane z = 0: points at z = 0, squares as cubes centred
     on it. A prism cell of the plane and a cube both contain z = 0 in their z-ranges, so
     their distance is the 2D distance of the square and the 2D cell."""
