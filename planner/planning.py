@@ -21,7 +21,8 @@ from planner.search.run import search_points
 from planner.world import World, as_point
 from planner.world.build import build_world
 
-__all__ = ["PlanResult", "build_world", "describe", "plan", "unknown_on_path"]
+__all__ = ["PlanResult", "build_world", "describe", "distinct", "joined", "plan",
+           "unknown_on_path"]
 
 
 @dataclass
@@ -195,7 +196,9 @@ def plan(
     path_cells = res.cells
     checks = res.cell_checks
     seconds = res.seconds
-    path = _path_points(lat, s, path_cells, g)
+    before = world.cell_checks
+    path = joined(world, _path_points(lat, s, path_cells, g))
+    checks += world.cell_checks - before
     # a short path's length from its rows (path_length's float, without its checks)
     length = raw_length = (rows_length(path.tolist()) if len(path) <= SHORT_PATH
                            else path_length(path, 0.0))
@@ -205,7 +208,8 @@ def plan(
         path_cells = search.shortcut(world, path_cells)
         checks += world.cell_checks - before
         seconds += time.perf_counter() - t0
-        path = _path_points(lat, s, path_cells, g)
+        path = joined(world, _path_points(lat, s, path_cells, g))
+        checks += world.cell_checks - before
         length = path_length(path, 0.0)
     c = common  # the fields in their order: a keyword call costs 2 us more, every plan
     out = PlanResult(
@@ -235,6 +239,50 @@ def _path_points(lat: Lattice, s: np.ndarray, cells: np.ndarray, g: np.ndarray) 
     path[-1] = g
     lat.to_world(cells, out=path[1:-1])
     return path
+
+
+def joined(world, path: np.ndarray) -> np.ndarray:
+    """The path a robot drives from a lattice path ``path`` (K + 2, 3): the start point, the
+    centres of the K cells searched (the start's cell first, the goal's last), the goal
+    point (m, the world's frame).
+
+    The start joins the second cell's centre directly when that segment passes the
+    search's own validity rule (:meth:`World.segment_free`: every cell it touches is free),
+    so the path does not first hop to the centre of the start's cell, often backwards; the
+    goal joins the last cell but one likewise. Otherwise the hop stays (it lies in the
+    cell, which is free). Consecutive points equal to 1 um are merged (a start at a cell
+    centre). Each check counts in :attr:`World.cell_checks`.
+
+    Returns
+    -------
+    ndarray, shape (K', 3), K' <= K + 2
+        Starts exactly at ``path[0]`` and ends exactly at ``path[-1]``.
+    """
+    keep = np.ones(len(path), dtype=bool)
+    if len(path) >= 3 and world.segment_free(path[0], path[2]):
+        keep[1] = False
+    if len(path) >= 3 and keep[-2]:
+        prev = np.flatnonzero(keep[:-2])[-1]  # the point before the goal's cell centre
+        if world.segment_free(path[prev], path[-1]):
+            keep[-2] = False
+    out = path[keep] if not keep.all() else path
+    return distinct(out)
+
+
+def distinct(path: np.ndarray) -> np.ndarray:
+    """``path`` (K, d) with each point equal to the one before it to 1 um dropped (the
+    last point is kept: a path ends exactly at its goal)."""
+    if len(path) < 2:
+        return path
+    r = np.round(path, 6)
+    same = np.all(r[1:] == r[:-1], axis=1)
+    if not same.any():
+        return path
+    keep = np.concatenate([[True], ~same])
+    keep[-1] = True
+    if same[-1]:  # the goal replaces the point before it
+        keep[-2] = len(path) == 2 or False
+    return path[keep]
 
 
 def describe(res: PlanResult, world=None) -> str:
