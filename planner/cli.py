@@ -68,7 +68,8 @@ def _add_world_args(p: argparse.ArgumentParser, *, lattice: bool = True,
     p.add_argument("map", type=T.map_file,
                    help="map file: ROS bag (.bag, rosbag2 folder, .db3, .mcap), LAS/LAZ, "
                         "E57, map_server YAML (+ PGM), saved world (.npz), MovingAI .3dmap, "
-                        "PCD, PLY, OctoMap .bt, .npy, text (.xyz/.txt/.dat[.gz|.bz2|.xz]); "
+                        "PCD, PLY, OctoMap .bt, .npy (x,y,z first), KITTI .bin, text "
+                        "(.xyz/.txt/.dat[.gz|.bz2|.xz]); "
                         "or a bundled map name (office, two_storey, warehouse, forest, "
                         "narrow_passage; 2D: floorplan)")
     if lattice:
@@ -88,7 +89,8 @@ def _add_world_args(p: argparse.ArgumentParser, *, lattice: bool = True,
                    help="world box xmin,ymin,zmin,xmax,ymax,zmax (m)")
     p.add_argument("--format", default=None,
                    help="file format instead of the extension: bag, las (LAS/LAZ), e57, "
-                        "rosmap (map_server YAML), 3dmap, pcd, ply, bt, npy, xyz (text), or "
+                        "rosmap (map_server YAML), 3dmap, pcd, ply, bt, npy, kitti (.bin), "
+                        "xyz (text), or "
                         "poses (a pose list of scans, merged)")
     p.add_argument("--check-source", action="store_true",
                    help="with a saved world: refuse it unless its source map (beside the "
