@@ -70,6 +70,8 @@ def run_task(task: dict) -> list[dict]:
                     quaternion_xyzw=list(task.get("quaternion_xyzw", IDENTITY_XYZW)))
         base.update(query=q["id"], start=q["start"], goal=q["goal"],
                     optimal_cost=q.get("optimal_cost"))
+        if task["method"].startswith("ompl:"):  # its budget (s): Planner Arena's timelimit
+            base["time_limit"] = float(task.get("ompl_time", 1.0))
         t0 = time.perf_counter()
         try:
             res = api.plan(world, q["start"], q["goal"], method=task["method"],

@@ -231,8 +231,9 @@ def explore(
     radius = got.radius
     truth = build_world(obst, got.lattice, radius=radius, bounds=got.bounds, unknown="free")
     lat = truth.lattice
-    if obst.dim == 2:  # sensed in the plane z = 0 the world is planned in
+    if obst.dim == 2:  # sensed in the plane z = 0 the world is planned in: a planar scanner
         obst = lift_planar(obst)
+        dirs = ray_directions((fov[0], 0.0), resolution)
     boxes = len(obst.boxes) > 0 and (not len(obst.points) or np.array_equal(obst.points,
                                                                            obst.boxes))
     pts = obst.boxes if boxes else obst.points
