@@ -196,9 +196,10 @@ def plan(
     path_cells = res.cells
     checks = res.cell_checks
     seconds = res.seconds
-    before = world.cell_checks
+    # the lookups joining the ends (joined): in extra, not in the search's count
+    joins = world.cell_checks
     path = joined(world, _path_points(lat, s, path_cells, g))
-    checks += world.cell_checks - before
+    joins = world.cell_checks - joins
     # a short path's length from its rows (path_length's float, without its checks)
     length = raw_length = (rows_length(path.tolist()) if len(path) <= SHORT_PATH
                            else path_length(path, 0.0))
@@ -208,15 +209,17 @@ def plan(
         path_cells = search.shortcut(world, path_cells)
         checks += world.cell_checks - before
         seconds += time.perf_counter() - t0
+        before = world.cell_checks
         path = joined(world, _path_points(lat, s, path_cells, g))
-        checks += world.cell_checks - before
+        joins += world.cell_checks - before
         length = path_length(path, 0.0)
     c = common  # the fields in their order: a keyword call costs 2 us more, every plan
     out = PlanResult(
         True, path, path_cells, length, checks, res.expansions, res.generated, seconds,
         c["lattice"], c["cell_volume"], method, neighbors, "", res.peak_bytes,
         c["build_seconds"], {"cost_between_centres": res.cost, "raw_length": raw_length,
-                             "smoothed_length": length if shortcut else None},
+                             "smoothed_length": length if shortcut else None,
+                             "join_checks": joins},
         "found", res.guarantee, unknown_on_path(world, path), c["unknown_note"],
     )
     return _in_map_frame(out, world) if world.local_frame else out
