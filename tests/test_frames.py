@@ -16,7 +16,7 @@ import pytest
 
 import planner
 from planner.bench.metrics import Clearance
-from planner.errors import PlanError
+from planner.errors import MapError, PlanError
 from planner.lattice import Lattice
 from planner.world.file import load_world, save_world
 from planner.world.frame import local_offset
@@ -74,6 +74,20 @@ def test_a_far_world_plans_and_answers_in_the_map_frame(tmp_path):
     np.testing.assert_array_equal(again.path, res.path)
     # bounds asked of a saved world are the map's
     planner.build_world(out, bounds=world.to_map(world.bounds))
+    # exported cell centres are the map's too
+    from plyfile import PlyData
+
+    from planner.export.cells import write_ply_cells, write_world_cells
+
+    write_ply_cells(tmp_path / "c.ply", world)
+    v = PlyData.read(str(tmp_path / "c.ply"))["vertex"]
+    xyz = np.column_stack([v["x"], v["y"], v["z"]])
+    ijk = np.column_stack([v["i"], v["j"], v["k"]])
+    np.testing.assert_allclose(xyz, world.lattice.to_world(ijk) + world.offset, atol=1e-6)
+    assert np.abs(xyz - CORNER).max() < 25
+    with pytest.raises(MapError, match="OctoMap tree reaches"):
+        write_world_cells(tmp_path / "c.bt", world)
+    assert not (tmp_path / "c.bt").exists()
 
 
 def test_a_far_2d_map_plans_in_the_map_frame(tmp_path):
