@@ -167,7 +167,8 @@ def cached_world(cache_dir: str | None, map_path: str, lattice: str, cell_volume
                              source=str(z["source"]), radius=float(radius),
                              unknown_cells=unpack(np.cumsum(z["unknown_steps"]), 3),
                              unknown_policy=str(z["unknown_policy"]),
-                             build_seconds=float(z["build_seconds"]))
+                             build_seconds=float(z["build_seconds"]),
+                             offset=z["offset"] if "offset" in z.files else None)
         except (OSError, ValueError, KeyError):
             pass  # a damaged file: build again
     w = rotated_world(map_path, lattice, cell_volume, radius, quaternion)
@@ -181,5 +182,6 @@ def cached_world(cache_dir: str | None, map_path: str, lattice: str, cell_volume
                             bounds=w.bounds,
                             source=np.array(str(w.source or "")),
                             unknown_policy=np.array(w.unknown_policy),
-                            build_seconds=w.build_seconds or 0.0)
+                            build_seconds=w.build_seconds or 0.0,
+                            offset=w.offset)  # a local frame (planner.world.frame)
     return w
