@@ -79,7 +79,7 @@ def sample_queries(
         for what, pts in (("start", s), ("goal", g)):
             # Per lattice, so that a point inside a wall (blocked everywhere) is not charged
             # to whichever lattice happens to be checked first.
-            valid = {name: w.points_free(pts) for name, w in worlds.items()}
+            valid = {name: w.points_free(w.to_local(pts)) for name, w in worlds.items()}
             every = np.logical_and.reduce([~v for v in valid.values()])
             dropped[f"{what} blocked in every lattice"] += int(np.sum(ok & every))
             for name, v in valid.items():
@@ -112,7 +112,9 @@ def _connected(worlds: dict, starts: np.ndarray, goals: np.ndarray, neighbors: s
         todo = np.flatnonzero(~linked)
         if not len(todo):
             break
-        q = w.lattice.quantize
+        def q(p, w=w):  # the map's points in the world's (local) cells
+            return w.lattice.quantize(w.to_local(p))
+
         found = search_many(w, q(starts[todo]), q(goals[todo]), neighbors=neighbors)
         linked[todo] = [r.status != "unreachable" for r in found]
     return linked

@@ -7,7 +7,7 @@ import sys
 
 import numpy as np
 
-from planner.errors import PlannerError
+from planner.errors import MapError, PlannerError
 from planner.io import load_points
 from planner.match import anchor
 from planner.match.experiment import run_experiment, trial_methods
@@ -40,7 +40,6 @@ def run_match(source: str, reference: str, *, lattice: str = "fcc", cell_volume:
 def _scan(path: str) -> np.ndarray:
     """(N, 3) the points of a scan or map file (a bundled map by name too); a 2D map is
     refused in one line (the matching is 6-DOF)."""
-    from planner.errors import MapError
     from planner.maps import resolve  # lazy: scipy
 
     pts = load_points(resolve(path))

@@ -16,9 +16,10 @@ import dataclasses
 
 import numpy as np
 
+from planner.errors import MapError
 from planner.lattice import Lattice
 
-__all__ = ["FAR_CELLS", "local_offset", "shifted"]
+__all__ = ["FAR_CELLS", "LocalFrame", "local_offset", "shifted"]
 
 #: a world box reaching farther from the origin than this many cell sizes is built in a
 #: local frame (a sixteenth of the 2**20 index range: nearer maps keep the map's frame)
@@ -64,3 +65,42 @@ def shifted(obst, offset: np.ndarray):
     return dataclasses.replace(obst, points=move(obst.points), boxes=move(obst.boxes),
                                free_boxes=move(obst.free_boxes), origins=move(obst.origins),
                                bounds=move(obst.bounds))
+
+
+class LocalFrame:
+    """The frame part of :class:`planner.World`: where its local frame sits in the map's.
+
+    Attributes
+    ----------
+    local_frame : bool
+        The world has a non-zero :attr:`offset`.
+    """
+
+    def set_offset(self, offset) -> None:
+        """Set :attr:`offset` ((3,) or (2,) m, None: zero); MapError unless finite."""
+        if offset is None:
+            o = np.zeros(3)
+        else:
+            o = np.asarray(offset, dtype=float).reshape(-1)
+            if o.shape == (2,):
+                o = np.append(o, 0.0)
+            if o.shape != (3,) or not np.isfinite(o).all():
+                raise MapError(f"offset must be three finite numbers (m), got {o.tolist()}")
+        self._offset = o
+        self.local_frame = bool(o.any())
+
+    @property
+    def offset(self) -> np.ndarray:
+        """(3,) the local frame's origin in the map's frame (m): a map point ``p`` is the
+        local point ``p - offset``."""
+        return self._offset.copy()
+
+    def to_local(self, points: np.ndarray) -> np.ndarray:
+        """Map-frame points (m, shape (..., 3)) in the world's local frame (the same array
+        when :attr:`offset` is zero)."""
+        return points - self._offset if self.local_frame else points
+
+    def to_map(self, points: np.ndarray) -> np.ndarray:
+        """Local points (m, shape (..., 3)) in the map's frame (the same array when
+        :attr:`offset` is zero)."""
+        return points + self._offset if self.local_frame else points

@@ -44,6 +44,7 @@ from planner.occupancy.walk import Walk, as_cells, c_array, segment_walk, walk_o
 from planner.voxels import OccupiedVoxelList
 from planner.world.cells import CellSets
 from planner.world.checker import ValidityChecker
+from planner.world.frame import LocalFrame
 from planner.world.unknown import SortedKeys, UnknownSpace
 
 __all__ = ["World", "DENSE_BUDGET", "Occupancy", "ValidityChecker", "Walk", "as_point"]
@@ -53,7 +54,7 @@ _BOUNDS_TOL = 1e-9
 _P3, _F8 = (3,), np.dtype(np.float64)
 
 
-class World(CellSets, UnknownSpace):
+class World(CellSets, UnknownSpace, LocalFrame):
     """Lattice + blocked cells + bounds, built complete.
 
     Parameters
@@ -86,12 +87,9 @@ class World(CellSets, UnknownSpace):
     dim : int
         2 for a 2D map planned in the plane z = 0 (see :func:`planner.build_world`).
     offset : array_like, shape (3,) or (2,), optional
-        Where the world's local frame sits in the map's own frame (m): a map point ``p`` is
-        the local point ``p - offset``. :func:`planner.build_world` sets it for a map far
-        from its frame's origin (UTM, ECEF), so lattice indices count cells from the map
-        and not from the origin. ``bounds``, the cells, the obstacles and
-        :attr:`checker` are local; :meth:`endpoint` takes map points and
-        :func:`planner.plan` returns them. Default zero (the frames agree).
+        The local frame's origin in the map's (m; :mod:`planner.world.frame`, set for maps
+        far from their origin). Bounds, cells, obstacles and :attr:`checker` are local;
+        :meth:`endpoint` takes map points and :func:`planner.plan` returns them.
 
     Attributes
     ----------
@@ -184,8 +182,7 @@ class World(CellSets, UnknownSpace):
         self.unknown_policy = unknown_policy
         self.dim = int(dim)  # 2: a 2D map planned in the plane z = 0 of a prism lattice
         self.source_sha256 = ""
-        self._offset = _offset(offset)
-        self.local_frame = bool(self._offset.any())  # see offset
+        self.set_offset(offset)
 
     # -- pickling: plain arrays only; lookup structures rebuilt on first use -----------
     def __getstate__(self) -> dict:
@@ -205,21 +202,6 @@ class World(CellSets, UnknownSpace):
     def bounds(self) -> np.ndarray:
         """(2, 3) world box [min, max] (m)."""
         return self._bounds.copy()
-
-    @property
-    def offset(self) -> np.ndarray:
-        """(3,) the local frame's origin in the map's frame (m; class docstring)."""
-        return self._offset.copy()
-
-    def to_local(self, points: np.ndarray) -> np.ndarray:
-        """Map-frame points (m, shape (..., 3)) in the world's local frame (the same array
-        when :attr:`offset` is zero)."""
-        return points - self._offset if self.local_frame else points
-
-    def to_map(self, points: np.ndarray) -> np.ndarray:
-        """Local points (m, shape (..., 3)) in the map's frame (the same array when
-        :attr:`offset` is zero)."""
-        return points + self._offset if self.local_frame else points
 
     @property
     def cell_size(self) -> float:
@@ -286,7 +268,7 @@ class World(CellSets, UnknownSpace):
         return out
 
     def points_free(self, points: np.ndarray) -> np.ndarray:
-        """(N,) bool: the cell containing each point (m, shape (N, 3)) is free."""
+        """(N,) bool: the cell containing each point (m, (N, 3), local frame) is free."""
         return self.is_free(self._lattice.quantize(points))
 
     def _walk(self, a, b, check: bool):
@@ -317,9 +299,8 @@ class World(CellSets, UnknownSpace):
         return bool(free)
 
     def endpoint(self, p, what: str = "point") -> tuple[np.ndarray, np.ndarray]:
-        """Check a start or goal point (m, in the map's frame): returns the point (3,) in
-        the local frame (the same point when :attr:`offset` is zero) and its cell (3,)
-        int64. A 2D world takes (x, y) or (x, y, 0).
+        """Check a start or goal point (m, map frame): returns the point (3,) in the local
+        frame and its cell (3,) int64. A 2D world takes (x, y) or (x, y, 0).
 
         Raises PlanError saying which end is wrong and why: malformed, outside the bounds,
         inside an obstacle after inflation (with the nearest free cell centre), or blocked
@@ -349,11 +330,8 @@ class World(CellSets, UnknownSpace):
     def end_coords(self, start, goal) -> tuple[float, ...] | None:
         """``(x0, x1, x2, y0, y1, y2)``: a start and a goal point as Python floats (m) when
         both are (3,) float64 arrays that pass :meth:`endpoint`'s bounds test (a plan's
-        usual case), else None (any other input, NaN, infinities, a point outside, a world
-        with an :attr:`offset`)."""
-        if self.local_frame:
-            return None
-        if not (type(start) is np.ndarray and type(goal) is np.ndarray
+        usual case), else None (other input, NaN, infinities, a point outside, an offset)."""
+        if self.local_frame or not (type(start) is np.ndarray and type(goal) is np.ndarray
                 and start.shape == _P3 and goal.shape == _P3 and start.dtype == _F8
                 and goal.dtype == _F8):
             return None
@@ -405,8 +383,7 @@ class World(CellSets, UnknownSpace):
             where = "inside an obstacle (after inflation for the robot radius)"
         near = self.nearest_free(cell)
         hint = "; no free cell nearby" if near is None else (
-            f"; nearest free cell centre: "
-            f"{_fmt(self.to_map(self._lattice.to_world(near[None])[0]))}")
+            f"; nearest free cell centre: {_fmt(self.to_map(self._lattice.to_world(near[None])))}")
         raise PlanError(f"{label} is {where}{hint}")
 
     def nearest_free(self, cell: np.ndarray, max_radius: float | None = None) -> np.ndarray | None:
@@ -441,18 +418,6 @@ class World(CellSets, UnknownSpace):
     def __repr__(self) -> str:
         return (f"World({self._lattice!r}, {self.n_blocked} blocked cells, "
                 f"bounds={self._bounds.tolist()})")
-
-def _offset(offset) -> np.ndarray:
-    """A world's :attr:`World.offset` as a finite (3,) float64 array ((2,) gets z = 0)."""
-    if offset is None:
-        return np.zeros(3)
-    o = np.asarray(offset, dtype=float).reshape(-1)
-    if o.shape == (2,):
-        o = np.append(o, 0.0)
-    if o.shape != (3,) or not np.isfinite(o).all():
-        raise MapError(f"offset must be three finite numbers (m), got {o.tolist()}")
-    return o
-
 
 def as_point(p, what: str = "point", dim: int = 3) -> np.ndarray:
     """``p`` as a finite (3,) float array (m); PlanError naming ``what`` otherwise. With
