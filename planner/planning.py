@@ -36,8 +36,9 @@ class PlanResult:
         Points in the map's frame (metres; a world with a local frame adds its
         :attr:`World.offset` back, recorded in ``extra["local_offset"]``), start point first,
         goal point last; empty if not found.
-    cells : ndarray, shape (K-2, 3), int64
-        Lattice indices of the cells visited between start and goal.
+    cells : ndarray, shape (C, 3), int64
+        Lattice indices of the cells the search visited, the start's first and the goal's
+        last; ``path`` joins its ends to them (:func:`joined`), so ``K <= C + 2``.
     length : float
         Path length in metres (``inf`` when not found).
     cell_checks, expansions, generated : int
@@ -284,7 +285,7 @@ def distinct(path: np.ndarray) -> np.ndarray:
     keep = np.concatenate([[True], ~same])
     keep[-1] = True
     if same[-1]:  # the goal replaces the point before it
-        keep[-2] = len(path) == 2 or False
+        keep[-2] = len(path) == 2
     return path[keep]
 
 
