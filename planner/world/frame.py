@@ -43,8 +43,9 @@ def local_offset(lattice: Lattice, bounds: np.ndarray) -> np.ndarray:
     >>> cubic = Lattice.named("cubic", 0.001)  # 0.1 m cells
     >>> local_offset(cubic, np.array([[0.0, 0, 0], [150, 150, 10]])).tolist()
     [0.0, 0.0, 0.0]
-    >>> local_offset(cubic, np.array([[455000.0, 5410000, 320], [455150, 5410150, 330]]))
-    array([ 455075., 5410075.,     325.])
+    >>> o = local_offset(cubic, np.array([[455000.0, 5410000, 320], [455150, 5410150, 330]]))
+    >>> np.round(o, 6).tolist()
+    [455075.0, 5410075.0, 325.0]
     """
     b = np.asarray(bounds, dtype=float)
     cell = 2.0 * lattice.packing_radius
