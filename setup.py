@@ -40,6 +40,11 @@ class BuildPyWarm(build_py):
         # the package root goes in front of it, never in its place.
         path = [root, *filter(None, os.environ.get("PYTHONPATH", "").split(os.pathsep))]
         env.update(PYTHONPATH=os.pathsep.join(path), PYTHONDONTWRITEBYTECODE="1")
+        # said before the long step (pip shows it with -v; its default output only shows
+        # "Building ..." until the build ends)
+        print("planner: compiling the numba kernels into the package cache (2-3 minutes on "
+              "two cores; PLANNER_NO_WARM=1 skips it and they compile on first use) ...",
+              flush=True)
         t = time.perf_counter()
         try:
             res = subprocess.run([sys.executable, "-m", "planner._warm"], cwd=root, env=env,

@@ -27,11 +27,19 @@ def numbers(text: str, n: int, what: str) -> np.ndarray:
     return v
 
 
+#: 2 when the command line names a 2D map (a map_server YAML, the bundled floorplan), so
+#: that a malformed point asks for x,y; set by :func:`planner.cli.main` before parsing
+MAP_DIM: int | None = None
+
+
 def vec3(text: str) -> np.ndarray:
     """A point x,y,z in metres, shape (3,); x,y (shape (2,)) for a 2D map."""
+    if MAP_DIM == 2:
+        return numbers(text, 2 if text.count(",") < 2 else 3,
+                       "two finite numbers x,y, comma-separated (a 2D map)")
     if text.count(",") == 1:  # x,y on a 2D map (the world checks the map is 2D)
         return numbers(text, 2, "three finite numbers x,y,z (x,y on a 2D map)")
-    return numbers(text, 3, "three finite numbers x,y,z")
+    return numbers(text, 3, "three finite numbers x,y,z, comma-separated")
 
 
 def bounds(text: str) -> np.ndarray:

@@ -73,9 +73,10 @@ def _add_world_args(p: argparse.ArgumentParser, *, lattice: bool = True,
     p.add_argument("map", type=T.map_file,
                    help="map file: ROS bag (.bag, rosbag2 folder, .db3, .mcap), LAS/LAZ, "
                         "E57, map_server YAML (+ PGM), saved world (.npz), MovingAI .3dmap, "
-                        "PCD, PLY, OctoMap .bt, .npy, text (.xyz/.txt/.dat[.gz|.bz2|.xz]); "
+                        "PCD, PLY, OctoMap .bt, .npy (x,y,z first), KITTI .bin, text "
+                        "(.xyz/.txt/.dat[.gz|.bz2|.xz]); "
                         "or a bundled map name (office, two_storey, warehouse, forest, "
-                        "narrow_passage)")
+                        "narrow_passage; 2D: floorplan)")
     if lattice:
         g = p.add_mutually_exclusive_group()
         g.add_argument("--lattice", default=None, choices=NAMED_LATTICES + NAMED_LATTICES_2D,
@@ -93,7 +94,8 @@ def _add_world_args(p: argparse.ArgumentParser, *, lattice: bool = True,
                    help="world box xmin,ymin,zmin,xmax,ymax,zmax (m)")
     p.add_argument("--format", default=None,
                    help="file format instead of the extension: bag, las (LAS/LAZ), e57, "
-                        "rosmap (map_server YAML), 3dmap, pcd, ply, bt, npy, xyz (text), or "
+                        "rosmap (map_server YAML), 3dmap, pcd, ply, bt, npy, kitti (.bin), "
+                        "xyz (text), or "
                         "poses (a pose list of scans, merged: one line per scan, "
                         "'SCAN x y z qx qy qz qw' or 'SCAN' and 16 numbers of the 4x4 "
                         "sensor-to-world matrix; # comments; paths relative to the list)")
@@ -168,7 +170,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--shortcut", action="store_true", help="shortcut the A* path")
     p.add_argument("--time", type=T.positive, default=1.0, help="OMPL time budget (s)")
     p.add_argument("--seed", type=T.int_range(0, 2**32 - 1), default=0, help="OMPL seed")
-    p.add_argument("--out", help="write the path (.json, .csv, or .tum: a TUM trajectory)")
+    p.add_argument("--out", help="write the path (.json, .csv, or .tum: a TUM trajectory, "
+                                 "one 'stamp x y z qx qy qz qw' line per waypoint, stamped "
+                                 "with the arc length to it at 1 m/s)")
     p.add_argument("--bag", help="write the path as a ROS 2 bag folder (nav_msgs/msg/Path on "
                                  "/plan; 'robot' extra)")
     p.add_argument("--plot", help="write a figure of the path")
@@ -177,8 +181,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("compare", help="plan the same queries on every lattice (main job)")
     _add_world_args(p, lattice=False)
-    p.add_argument("--lattices", type=T.lattice_list, default=",".join(NAMED_LATTICES),
-                   help="comma-separated lattice names")
+    p.add_argument("--lattices", type=T.lattice_list, default=None,
+                   help="comma-separated lattice names (default: cubic,bcc,fcc,mcc,hex; on a "
+                        "2D map square,hex2d)")
     p.add_argument("--generator", type=T.generator, default=None,
                    help="also compare a custom lattice: rows 'a,b,c;d,e,f;g,h,i' or a .npy")
     p.add_argument("--start", type=T.vec3, default=None, help="x,y,z (m); default: map's queries")
@@ -388,6 +393,12 @@ def _stopped(exc: BaseException, standalone: bool) -> int:
     return 143 if term else 130
 
 
+def _names_2d_map(arg: str) -> bool:
+    """``arg`` names a 2D map (a map_server YAML or the bundled floorplan): the parser's
+    messages about points then ask for x,y."""
+    return arg == "floorplan" or arg.lower().endswith((".yaml", ".yml"))
+
+
 def main(argv: list[str] | None = None) -> int:
     """The ``planner`` program (``argv`` None: ``sys.argv[1:]``, and an interrupted run
     ends the process at once with 130 / 143; with ``argv`` given it returns the status)."""
@@ -396,6 +407,7 @@ def main(argv: list[str] | None = None) -> int:
         install_sigint()
         install_sigterm()
     argv = sys.argv[1:] if argv is None else list(argv)
+    T.MAP_DIM = 2 if any(_names_2d_map(x) for x in argv) else None
     try:  # parsing imports the readers (a map name is resolved): a signal may come here
         a = build_parser().parse_args(_hoist_global_options(_join_negative_values(argv)))
     except KeyboardInterrupt as exc:

@@ -224,7 +224,8 @@ def plan_ompl(
     ----------
     world : World
     start, goal : array_like, shape (3,)
-        Points (m); each must lie in a free cell (else PlanError, :meth:`World.endpoint`).
+        Points (m, the map's frame); each must lie in a free cell (else PlanError,
+        :meth:`World.endpoint`). The result's paths are in the map's frame too.
     planner : str
         A key of :data:`PLANNERS` (unknown names raise PlanError listing them).
     time_limit : float
@@ -282,6 +283,10 @@ def plan_ompl(
         res.path = np.zeros((0, 3))
         res.path_simplified = res.length_raw = res.length_simplified = None
         res.status = res.status if res.status not in ("", "found") else "no path"
+    else:  # checked in the world's local frame; returned in the map's
+        res.path = world.to_map(res.path)
+        if res.path_simplified is not None:
+            res.path_simplified = world.to_map(res.path_simplified)
     return res
 
 

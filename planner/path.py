@@ -7,7 +7,8 @@ world's local-frame offset when it has one), lattice, cell volume (area for
 a 2D map), radius, unknown policy, start, goal, raw and smoothed length, the number of path
 cells meeting unknown space, ``warnings`` (:func:`planner.world.caveats.world_warnings`: e.g. a
 cloud without a sensor origin), and per distinct waypoint x, y, z and heading (yaw in the x-y plane,
-radians, of the segment leaving the waypoint; the last repeats the one before). Numbers are
+radians, of the segment leaving the waypoint, :func:`headings`; the last repeats the one
+before). Numbers are
 rounded to 1 um / 1 urad so files carry no float noise.
 """
 
@@ -23,22 +24,38 @@ import numpy as np
 from planner.errors import PlanError
 from planner.fsutil import atomic_path, source_sha256
 
-__all__ = ["SHORT_PATH", "headings", "path_length", "path_record", "read_record", "rows_length",
-           "write_path"]
+__all__ = ["MIN_HEADING_MOVE", "SHORT_PATH", "headings", "path_length", "path_record",
+           "read_record", "rows_length", "write_path"]
 
 _DIGITS = 6
 
 
+#: shortest move in the x-y plane (m) with a heading of its own: a shorter segment (a
+#: sub-millimetre hop, a vertical move) takes the heading of the next longer one
+MIN_HEADING_MOVE = 1e-3
+
+
 def headings(path: np.ndarray) -> np.ndarray:
-    """(K,) yaw of each waypoint's outgoing segment (rad, atan2(dy, dx)); 0 for K < 2."""
-    if len(path) < 2:
-        return np.zeros(len(path))
-    d = np.diff(path[:, :2], axis=0)
+    """(K,) yaw of each waypoint (rad, ``atan2(dy, dx)``): the travel direction of the
+    segment leaving it; the last waypoint keeps the one before. A segment shorter than
+    :data:`MIN_HEADING_MOVE` in the x-y plane has no direction of its own (rounding decides
+    it): it takes the next longer segment's heading (the last such ones, the previous).
+    0 for K < 2 or a path that never moves that far.
+
+    >>> np.round(headings(np.array([[0.0, 0], [1e-4, -2e-4], [1, 0], [2, 0], [2, 1]])), 3)
+    array([0.   , 0.   , 0.   , 1.571, 1.571])
+    """
+    p = np.asarray(path, dtype=float)
+    if len(p) < 2:
+        return np.zeros(len(p))
+    d = np.diff(p[:, :2], axis=0)
     yaw = np.arctan2(d[:, 1], d[:, 0])
-    # a zero-length segment (start at a cell centre) keeps the next heading
-    for i in range(len(yaw) - 2, -1, -1):
-        if not d[i].any():
-            yaw[i] = yaw[i + 1]
+    moves = np.hypot(d[:, 0], d[:, 1]) >= MIN_HEADING_MOVE
+    if not moves.any():
+        return np.zeros(len(p))
+    idx = np.flatnonzero(moves)
+    nxt = np.searchsorted(idx, np.arange(len(d)))  # the next moving segment, if any
+    yaw = yaw[idx[np.minimum(nxt, len(idx) - 1)]]
     return np.append(yaw, yaw[-1])
 
 
@@ -49,15 +66,15 @@ def _r(x):
 def read_record(world) -> dict:
     """What was read to make ``world``: a bag's topic, fixed frame and clouds (``None``
     where the map is a single file read whole), and the offset (m) of the world's local
-    frame from the input's when it has one (``None`` otherwise)."""
+    frame from the input's when it has one (``None`` when the world plans in the map's own
+    frame; the path record's ``local_offset`` gives it either way)."""
     obst = getattr(world, "obstacles", None)
     read = dict(getattr(obst, "read", None) or {})
-    offset = getattr(world, "offset", None)
+    offset = np.asarray(getattr(world, "offset", np.zeros(3)), dtype=float)[:world.dim]
     return {"topic": read.get("topic"), "fixed_frame": read.get("fixed_frame"),
             "max_clouds": read.get("max_clouds"), "clouds": read.get("clouds"),
             "clouds_in_topic": read.get("clouds_in_topic"),
-            "local_frame_offset": None if offset is None else
-            [float(v) for v in np.asarray(offset, dtype=float).reshape(-1)]}
+            "local_frame_offset": offset.tolist() if offset.any() else None}
 
 
 def path_record(res, world, start, goal) -> dict:
@@ -81,6 +98,9 @@ def path_record(res, world, start, goal) -> dict:
         "map_sha256": digest or None,
         "frame": getattr(world.obstacles, "frame", None) or "map",
         "read": read_record(world),
+        # the world's local frame in the map's (m): planned in map - offset, all points here
+        # are the map's
+        "local_offset": world.offset[:world.dim].tolist(),
         "dim": world.dim,
         "lattice": res.lattice, "cell_volume": _r(res.cell_volume),
         "cell_volume_unit": "m^2" if world.dim == 2 else "m^3",

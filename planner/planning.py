@@ -22,8 +22,8 @@ from planner.world import World, as_point
 from planner.world.build import build_world
 from planner.world.caveats import NO_ORIGIN, world_warnings
 
-__all__ = ["NO_ORIGIN", "PlanResult", "build_world", "describe", "plan", "unknown_on_path",
-           "world_warnings"]
+__all__ = ["NO_ORIGIN", "PlanResult", "build_world", "describe", "distinct", "joined", "plan",
+           "unknown_on_path", "world_warnings"]
 
 
 @dataclass
@@ -34,9 +34,12 @@ class PlanResult:
     ----------
     found : bool
     path : ndarray, shape (K, 3)
-        World coordinates (metres), start point first, goal point last; empty if not found.
-    cells : ndarray, shape (K-2, 3), int64
-        Lattice indices of the cells visited between start and goal.
+        Points in the map's frame (metres; a world with a local frame adds its
+        :attr:`World.offset` back, recorded in ``extra["local_offset"]``), start point first,
+        goal point last; empty if not found.
+    cells : ndarray, shape (C, 3), int64
+        Lattice indices of the cells the search visited, the start's first and the goal's
+        last; ``path`` joins its ends to them (:func:`joined`), so ``K <= C + 2``.
     length : float
         Path length in metres (``inf`` when not found).
     cell_checks, expansions, generated : int
@@ -176,9 +179,10 @@ def plan(
     if res is not None:
         s, g = start, goal  # checked: (3,) float64 points
     else:
-        s, s_cell, g, g_cell = world.endpoints(start, goal)
+        s, s_cell, g, g_cell = world.endpoints(start, goal)  # local points
         if method.startswith("ompl:"):
-            return _plan_ompl(world, s, g, method.split(":", 1)[1], time_limit, seed, common)
+            return _plan_ompl(world, start, goal, method.split(":", 1)[1], time_limit, seed,
+                              common)
         res = search.search(
             world, s_cell, g_cell, method=method, neighbors=neighbors,
             corner_cutting=corner_cutting, backend=backend, max_expansions=max_expansions,
@@ -194,7 +198,10 @@ def plan(
     path_cells = res.cells
     checks = res.cell_checks
     seconds = res.seconds
-    path = _path_points(lat, s, path_cells, g)
+    # the lookups joining the ends (joined): in extra, not in the search's count
+    joins = world.cell_checks
+    path = joined(world, _path_points(lat, s, path_cells, g))
+    joins = world.cell_checks - joins
     # a short path's length from its rows (path_length's float, without its checks)
     length = raw_length = (rows_length(path.tolist()) if len(path) <= SHORT_PATH
                            else path_length(path, 0.0))
@@ -204,16 +211,28 @@ def plan(
         path_cells = search.shortcut(world, path_cells)
         checks += world.cell_checks - before
         seconds += time.perf_counter() - t0
-        path = _path_points(lat, s, path_cells, g)
+        before = world.cell_checks
+        path = joined(world, _path_points(lat, s, path_cells, g))
+        joins += world.cell_checks - before
         length = path_length(path, 0.0)
     c = common  # the fields in their order: a keyword call costs 2 us more, every plan
-    return PlanResult(
+    out = PlanResult(
         True, path, path_cells, length, checks, res.expansions, res.generated, seconds,
         c["lattice"], c["cell_volume"], method, neighbors, "", res.peak_bytes,
         c["build_seconds"], {"cost_between_centres": res.cost, "raw_length": raw_length,
-                             "smoothed_length": length if shortcut else None},
+                             "smoothed_length": length if shortcut else None,
+                             "join_checks": joins},
         "found", res.guarantee, unknown_on_path(world, path), c["unknown_note"],
     )
+    return _in_map_frame(out, world) if world.local_frame else out
+
+
+def _in_map_frame(res: PlanResult, world) -> PlanResult:
+    """A result planned in a world's local frame with its path in the map's frame, and the
+    offset recorded (``extra["local_offset"]``, m)."""
+    res.path = world.to_map(res.path)
+    res.extra["local_offset"] = world.offset.tolist()
+    return res
 
 
 def _path_points(lat: Lattice, s: np.ndarray, cells: np.ndarray, g: np.ndarray) -> np.ndarray:
@@ -225,6 +244,50 @@ def _path_points(lat: Lattice, s: np.ndarray, cells: np.ndarray, g: np.ndarray) 
     path[-1] = g
     lat.to_world(cells, out=path[1:-1])
     return path
+
+
+def joined(world, path: np.ndarray) -> np.ndarray:
+    """The path a robot drives from a lattice path ``path`` (K + 2, 3): the start point, the
+    centres of the K cells searched (the start's cell first, the goal's last), the goal
+    point (m, the world's frame).
+
+    The start joins the second cell's centre directly when that segment passes the
+    search's own validity rule (:meth:`World.segment_free`: every cell it touches is free),
+    so the path does not first hop to the centre of the start's cell, often backwards; the
+    goal joins the last cell but one likewise. Otherwise the hop stays (it lies in the
+    cell, which is free). Consecutive points equal to 1 um are merged (a start at a cell
+    centre). Each check counts in :attr:`World.cell_checks`.
+
+    Returns
+    -------
+    ndarray, shape (K', 3), K' <= K + 2
+        Starts exactly at ``path[0]`` and ends exactly at ``path[-1]``.
+    """
+    keep = np.ones(len(path), dtype=bool)
+    if len(path) >= 3 and world.segment_free(path[0], path[2]):
+        keep[1] = False
+    if len(path) >= 3 and keep[-2]:
+        prev = np.flatnonzero(keep[:-2])[-1]  # the point before the goal's cell centre
+        if world.segment_free(path[prev], path[-1]):
+            keep[-2] = False
+    out = path[keep] if not keep.all() else path
+    return distinct(out)
+
+
+def distinct(path: np.ndarray) -> np.ndarray:
+    """``path`` (K, d) with each point equal to the one before it to 1 um dropped (the
+    last point is kept: a path ends exactly at its goal)."""
+    if len(path) < 2:
+        return path
+    r = np.round(path, 6)
+    same = np.all(r[1:] == r[:-1], axis=1)
+    if not same.any():
+        return path
+    keep = np.concatenate([[True], ~same])
+    keep[-1] = True
+    if same[-1]:  # the goal replaces the point before it
+        keep[-2] = len(path) == 2
+    return path[keep]
 
 
 def describe(res: PlanResult, world=None) -> str:
@@ -262,6 +325,7 @@ def unknown_on_path(world, path: np.ndarray) -> int:
 
 
 def _plan_ompl(world, s, g, planner_name, time_limit, seed, common) -> PlanResult:
+    """An OMPL plan from ``s`` to ``g`` (map frame, as the path it returns)."""
     r = ompl.plan_ompl(world, s, g, planner=planner_name, time_limit=time_limit, seed=seed)
     path = r.path_simplified if r.path_simplified is not None else r.path
     d = r.to_dict()
@@ -271,5 +335,6 @@ def _plan_ompl(world, s, g, planner_name, time_limit, seed, common) -> PlanResul
         cell_checks=r.cell_checks, expansions=0, generated=0, seconds=r.seconds,
         reason=r.reason, extra={k: v for k, v in d.items() if k not in ("path", "path_simplified")},
         status="found" if r.found else r.status, guarantee=True,
-        unknown_cells=unknown_on_path(world, path) if r.found else 0, **common,
+        unknown_cells=unknown_on_path(world, world.to_local(path)) if r.found else 0,
+        **common,
     )

@@ -13,7 +13,7 @@ from planner import search as S
 from planner.errors import PlanError
 from planner.lattice import Lattice
 from planner.path import path_length
-from planner.planning import plan
+from planner.planning import joined, plan
 from planner.search.run import PROBE_AFTER, search_points
 from planner.world import World
 
@@ -67,20 +67,21 @@ def test_plan_reports_what_it_reported_through_endpoints_and_search():
     for _ in range(3):  # the first call sets up the one-call path of the next
         before = w.cell_checks
         p = plan(w, a, b)
-        assert w.cell_checks - before == p.cell_checks + 2
+        # the search's lookups, the two ends' and those joining the ends to the path
+        assert w.cell_checks - before == p.cell_checks + 2 + p.extra["join_checks"]
         ref = _reference(w, a, b)
         assert p.found and p.length == plan(w, a.tolist(), b.tolist()).length
         assert p.cell_checks == ref.cell_checks and p.expansions == ref.expansions
         assert np.array_equal(p.cells, ref.cells)
-        want = np.concatenate([a[None], w.lattice.to_world(ref.cells), b[None]])
-        assert np.array_equal(p.path, want)
+        want = joined(w, np.concatenate([a[None], w.lattice.to_world(ref.cells), b[None]]))
+        assert np.array_equal(p.path, want) and p.extra["join_checks"] > 0
         assert p.length == path_length(want) and p.generated == ref.generated
         assert (p.lattice, p.cell_volume, p.method, p.neighbors, p.reason, p.status) == (
             "cubic", 1.0, "astar", "full", "", "found")
         assert (p.peak_bytes, p.guarantee, p.unknown_cells) == (ref.peak_bytes, True, 0)
         assert p.build_seconds == (w.build_seconds or 0.0) and p.unknown_note == w.unknown_note
         assert p.extra == {"cost_between_centres": ref.cost, "raw_length": p.length,
-                           "smoothed_length": None}
+                           "smoothed_length": None, "join_checks": p.extra["join_checks"]}
         assert 0 < p.seconds < 1
 
 

@@ -13,13 +13,15 @@ from planner.analysis.path_figure import plot_paths as draw
 from planner.analysis.tables import format_table
 from planner.errors import MapError, PlanError
 from planner.io import load_scenarios
+from planner.lattice import NAMED_LATTICES
+from planner.lattice.paper import NAMED_LATTICES_2D
 from planner.maps import resolve
 from planner.path import path_length, read_record
 from planner.planning import plan
 from planner.progress import Progress
 from planner.search import warm_up
 from planner.view import write_view
-from planner.world.build import build_world, sidecar
+from planner.world.build import as_obstacles, build_world, sidecar
 from planner.world.caveats import world_warnings
 
 __all__ = ["compare", "format_rows", "plot_paths"]
@@ -28,7 +30,7 @@ __all__ = ["compare", "format_rows", "plot_paths"]
 def compare(
     map_path: str,
     *,
-    lattices: list,
+    lattices: list | None = None,
     cell_volume: float | None = None,
     radius: float | None = None,
     bounds=None,
@@ -48,7 +50,8 @@ def compare(
     """Plan the same queries on every lattice and return one summary row per lattice.
 
     ``lattices`` holds names or :class:`~planner.lattice.Lattice` instances (a custom
-    generator, scaled to the common cell volume when one is given or suggested by the map).
+    generator, scaled to the common cell volume when one is given or suggested by the map);
+    None: every named lattice of the map's dimension (square and hex2d on a 2D map).
 
     Queries are ``start``/``goal`` when given, else the map's default queries (bundled
     maps' JSON sidecar). Radius and the rest default as in :func:`planner.build_world`; the
@@ -66,6 +69,9 @@ def compare(
     """
     if not resolve(map_path).exists():
         raise MapError(f"{map_path}: no such file or bundled map")
+    if lattices is None:  # every named lattice of the map's dimension
+        dim = (source if source is not None else as_obstacles(resolve(map_path), format)).dim
+        lattices = list(NAMED_LATTICES_2D if dim == 2 else NAMED_LATTICES)
     side = sidecar(resolve(map_path))
     if cell_volume is None:  # one cell volume for every lattice, custom generators too
         cell_volume = side.get("cell_volume")
@@ -187,19 +193,24 @@ def _smoothed_length(world, res) -> float:
     if res.method not in ("astar", "dijkstra") or len(res.cells) < 3:
         return float(res.length)
     cells = search.shortcut(world, res.cells)
-    pts = np.concatenate([res.path[:1], world.lattice.to_world(cells), res.path[-1:]])
+    pts = np.concatenate([res.path[:1], world.to_map(world.lattice.to_world(cells)),
+                          res.path[-1:]])
     return float(path_length(pts))
 
 
 def format_rows(rows: list[dict], markdown: bool = False) -> str:
-    """Table of :func:`compare` rows, with ratios to cubic where present.
+    """Table of :func:`compare` rows, with ratios to cubic (square on a 2D map) where
+    present, else to the first row.
 
     Raw length: the path as searched; smoothed: after line-of-sight shortcutting (what
     ``planner plan --shortcut`` returns).  Both are sums over the queries solved.
     """
-    base = next((r for r in rows if r["lattice"] == "cubic"), rows[0] if rows else None)
-    head = ["lattice", "found", "raw length m", "vs cubic", "smoothed length m", "vs cubic",
-            "cell checks", "vs cubic",
+    # the reference: the cubic lattice, on a 2D map the square one, else the first row
+    base = next((r for ref in ("cubic", "square") for r in rows if r["lattice"] == ref),
+                rows[0] if rows else None)
+    vs = f"vs {base['lattice']}" if base else "vs cubic"
+    head = ["lattice", "found", "raw length m", vs, "smoothed length m", vs,
+            "cell checks", vs,
             "expansions", "search s", "build s", "compile s", "blocked cells"]
     keys = [f"c{i}" for i in range(len(head))]  # titles repeat ("vs cubic")
     out = []

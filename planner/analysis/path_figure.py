@@ -135,7 +135,9 @@ def plot_paths(path: str, world, results, *, title: str | list[str] | None = Non
 
     queries = results if isinstance(results, list) else [results]
     titles = title if isinstance(title, list) else [None] * len(queries)
-    found = [{k: r.path for k, r in q.items() if r.found and len(r.path)} for q in queries]
+    # drawn in the world's local frame, where its cells are
+    found = [{k: world.to_local(r.path) for k, r in q.items() if r.found and len(r.path)}
+             for q in queries]
     if not any(found):
         raise PlanError("nothing to plot: no path was found")
     three_d = world.dim == 3

@@ -89,8 +89,8 @@ def sample_queries(
         # A pair is kept when some lattice has both ends free (a lattice that blocks an
         # end of it fails the query, and that loss is part of its answer); the drops are
         # counted per lattice for the report.
-        free_s = {name: w.points_free(s) for name, w in worlds.items()}
-        free_g = {name: w.points_free(g) for name, w in worlds.items()}
+        free_s = {name: w.points_free(w.to_local(s)) for name, w in worlds.items()}
+        free_g = {name: w.points_free(w.to_local(g)) for name, w in worlds.items()}
         both = {name: free_s[name] & free_g[name] for name in worlds}
         some = np.logical_or.reduce(list(both.values()))
         dropped["start or goal blocked in every lattice"] += int(np.sum(ok & ~some))
@@ -138,7 +138,10 @@ def _connected(worlds: dict, starts: np.ndarray, goals: np.ndarray, neighbors: s
             todo = todo[free[name][todo]]
             if not len(todo):
                 continue
-        q = w.lattice.quantize
+
+        def q(p, w=w):  # the map's points in the world's (local) cells
+            return w.lattice.quantize(w.to_local(p))
+
         found = search_many(w, q(starts[todo]), q(goals[todo]), neighbors=neighbors)
         linked[todo] = [r.status != "unreachable" for r in found]
     return linked

@@ -38,6 +38,7 @@ from planner.bench.schema import SuiteError, check_suite_table, label_ok, parse_
 from planner.budget import require
 from planner.errors import PlannerError
 from planner.lattice import NAMED_LATTICES, Lattice
+from planner.lattice.paper import NAMED_LATTICES_2D
 
 SUITES = Path(__file__).resolve().parent / "suites"
 """Bundled suites (package data): ``planner bench quick`` reads ``SUITES / "quick.toml"``."""
@@ -78,14 +79,17 @@ class Suite:
 def _resolve(p: str, base: Path) -> Path | None:
     """A map path relative to the suite's folder, then the current folder, else a bundled
     map name (``office``); None when absent."""
-    from planner.maps import MAPS, map_path  # lazy: scipy
+    from planner.maps import MAPS, map_path, resolve  # lazy: scipy
 
     for root in (base, Path.cwd()):
         q = (root / p).resolve()
         if q.exists():
             return q
     stem = p[:-4] if p.endswith(".ply") else p
-    return map_path(stem) if stem in MAPS else None
+    if stem in MAPS:
+        return map_path(stem)
+    q = resolve(p)  # the bundled 2D map (floorplan)
+    return q if q != Path(p) and q.exists() else None
 
 
 def _check_methods(path: Path, methods: tuple[str, ...], planners: tuple[str, ...]) -> None:
@@ -164,7 +168,7 @@ def load_suite(name_or_path: str) -> Suite:
     except (KeyError, TypeError, ValueError) as exc:
         raise SuiteError(f"{path}: bad suite entry: {exc}") from None
     for lat in (*suite.lattices, suite.ompl_lattice):
-        if lat not in NAMED_LATTICES:
+        if lat not in NAMED_LATTICES + NAMED_LATTICES_2D:  # 2D ones for 2D maps
             raise SuiteError(f"{path}: unknown lattice {lat!r}")
     _check_methods(path, suite.methods, suite.ompl_planners)
     from planner.bench.rotations import ROTATION_KINDS  # lazy: scipy

@@ -137,6 +137,8 @@ def run_task(task: dict) -> list[dict]:
         base.update(query=q["id"], start=q["start"], goal=q["goal"],
                     optimal_cost=q.get("optimal_cost"),
                     delivered="smoothed" if smoothed or meth.startswith("ompl:") else "raw")
+        if meth.startswith("ompl:"):  # its budget (s): Planner Arena's timelimit
+            base["time_limit"] = float(task.get("ompl_time", 1.0))
         t0, c0 = time.perf_counter(), time.process_time()
         try:
             res = api.plan(world, q["start"], q["goal"], method=meth,
@@ -165,7 +167,8 @@ def run_task(task: dict) -> list[dict]:
                 t1, c1 = time.perf_counter(), time.process_time()
                 before = world.cell_checks
                 cells = search.shortcut(world, res.cells)
-                smooth = np.concatenate([raw[:1], world.lattice.to_world(cells), raw[-1:]])
+                smooth = np.concatenate([raw[:1], world.to_map(world.lattice.to_world(cells)),
+                                         raw[-1:]])
                 smooth_cost = Cost(world.cell_checks - before, time.perf_counter() - t1,
                                    time.process_time() - c1)
             else:

@@ -20,6 +20,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from planner.bench.rotations import IDENTITY_XYZW
+from planner.errors import PlannerError
 from planner.fsutil import atomic_path
 from planner.io.validate import fill_boxes
 from planner.lattice import Lattice
@@ -55,7 +56,10 @@ class FreeSpace:
             self._flat = np.flatnonzero(self.grid)
         pick = self._flat[rng.integers(0, len(self._flat), n)]
         idx = np.stack(np.unravel_index(pick, self.grid.shape), axis=1)
-        return self.origin + (idx + rng.random((n, 3))) * self.step
+        pts = self.origin + (idx + rng.random((n, 3))) * self.step
+        if self.shape[2] == 1 and self.origin[2] == -self.step / 2:  # a 2D map's plane
+            pts[:, 2] = 0.0
+        return pts
 
     def contains(self, points: np.ndarray) -> np.ndarray:
         """(N,) bool: each point (N, 3), metres, lies in observed free space."""
@@ -78,10 +82,13 @@ class MapFrame:
 
 def map_frame(map_path: str) -> MapFrame:
     """Load a map and its world box as :func:`planner.build_world` would choose it."""
-    from planner.world.build import as_obstacles, map_box  # lazy: numba
+    from planner.world.build import as_obstacles, lift_planar, map_box  # lazy: numba
 
     obst = as_obstacles(map_path)
     bounds = map_box(map_path, obst)
+    if obst.dim == 2:  # planned in the plane z = 0: queries and clearances there too
+        obst = lift_planar(obst)
+        bounds = np.column_stack([bounds, np.zeros(2)])
     free = FreeSpace(obst) if len(obst.free_boxes) else None
     return MapFrame(obst, bounds, free)
 
@@ -105,7 +112,13 @@ def rotated_lattice(lattice: str, cell_volume: float, quaternion):
     q = np.asarray(quaternion, dtype=float)
     if np.allclose(q, IDENTITY_XYZW, atol=0, rtol=0):
         return lat  # the identity keeps the named lattice and its fast quantizer
-    return Lattice(Rotation.from_quat(q).as_matrix().T @ lat.generator, name=lattice)
+    r = Rotation.from_quat(q).as_matrix()
+    if lat.dim == 2:  # a 2D lattice turns in its plane: yaw only
+        if not np.allclose(r[2], [0.0, 0.0, 1.0], atol=1e-12):
+            raise PlannerError(f"{lattice}: a 2D lattice turns about z only (rotation = "
+                               f"\"yaw\" or \"none\" for 2D maps)")
+        r = r[:2, :2]
+    return Lattice(r.T @ lat.generator, name=lattice)
 
 
 def rotated_world(map_path: str, lattice: str, cell_volume: float, radius: float,
@@ -154,7 +167,8 @@ def cached_world(cache_dir: str | None, map_path: str, lattice: str, cell_volume
                              source=str(z["source"]), radius=float(radius),
                              unknown_cells=unpack(np.cumsum(z["unknown_steps"]), 3),
                              unknown_policy=str(z["unknown_policy"]),
-                             build_seconds=float(z["build_seconds"]))
+                             build_seconds=float(z["build_seconds"]),
+                             offset=z["offset"] if "offset" in z.files else None)
         except (OSError, ValueError, KeyError):
             pass  # a damaged file: build again
     w = rotated_world(map_path, lattice, cell_volume, radius, quaternion)
@@ -168,5 +182,6 @@ def cached_world(cache_dir: str | None, map_path: str, lattice: str, cell_volume
                             bounds=w.bounds,
                             source=np.array(str(w.source or "")),
                             unknown_policy=np.array(w.unknown_policy),
-                            build_seconds=w.build_seconds or 0.0)
+                            build_seconds=w.build_seconds or 0.0,
+                            offset=w.offset)  # a local frame (planner.world.frame)
     return w

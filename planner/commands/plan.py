@@ -16,6 +16,7 @@ from planner.commands.worlds import (
     trust_check,
 )
 from planner.export import write_path_bag, write_tum
+from planner.lattice import NAMED_LATTICES
 from planner.path import write_path
 
 
@@ -53,14 +54,17 @@ def compare(a: argparse.Namespace) -> int:
     query found no path."""
     from planner.world.file import is_world_file, load_world  # lazy: numba, scipy
 
-    lattices = list(a.lattices) + ([a.generator] if a.generator is not None else [])
+    # --lattices not given: every named lattice of the map's dimension (2D: square, hex2d)
+    lattices = (list(a.lattices) if a.lattices is not None else
+                None if a.generator is None else list(NAMED_LATTICES))
+    lattices = lattices if a.generator is None else lattices + [a.generator]
     radius = a.radius
     if is_world_file(a.map):  # one lattice: the saved one
         saved = load_world(a.map)
         trust_check(saved, a)
         lattices = [saved.lattice]
         radius = saved.radius if radius is None else radius
-    check_neighbors(lattices, a.neighbors, a.method)
+    check_neighbors(lattices or list(NAMED_LATTICES), a.neighbors, a.method)
     rows = comparison.compare(
         a.map, lattices=lattices, cell_volume=a.cell_volume, radius=radius, bounds=a.bounds,
         start=a.start, goal=a.goal, method=a.method, neighbors=a.neighbors, plot=a.plot,

@@ -39,7 +39,13 @@ from planner.occupancy.walk import walk_of
 from planner.progress import Progress
 from planner.voxels.from_map import inflated_obstacles
 from planner.world import World
-from planner.world.build import as_obstacles, build_world, resolve_defaults, sidecar
+from planner.world.build import (
+    as_obstacles,
+    build_world,
+    lift_planar,
+    resolve_defaults,
+    sidecar,
+)
 
 __all__ = ["ExploreResult", "explore", "ray_directions", "cast_rays"]
 
@@ -225,11 +231,17 @@ def explore(
     radius = got.radius
     truth = build_world(obst, got.lattice, radius=radius, bounds=got.bounds, unknown="free")
     lat = truth.lattice
+    if obst.dim == 2:  # sensed in the plane z = 0 the world is planned in: a planar scanner
+        obst = lift_planar(obst)
+        dirs = ray_directions((fov[0], 0.0), resolution)
     boxes = len(obst.boxes) > 0 and (not len(obst.points) or np.array_equal(obst.points,
                                                                            obst.boxes))
     pts = obst.boxes if boxes else obst.points
     if not len(pts):
         raise MapError(f"{obst.source}: no obstacles to sense")
+    if truth.local_frame:
+        raise MapError(f"{obst.source}: explore needs a map near its frame's origin; this "
+                       f"one lies {np.abs(truth.offset).max():.0f} m away (shift its points)")
     start_p, s = truth.endpoint(start, "start")
     goal_p, gcell = truth.endpoint(goal, "goal")
     known = World(lat, np.zeros((0, 3), np.int64), truth.bounds, radius=truth.radius,

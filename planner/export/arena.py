@@ -80,6 +80,9 @@ def write_arena_db(out: str | os.PathLike, rows: list[dict], *, suite: str = "")
                 for r in group:
                     per[planner_name(r)] = per.get(planner_name(r), 0) + 1
                 total = sum(float(r.get("seconds") or 0.0) for r in group)
+                # OMPL's time budget (s); lattice searches have none (0 when only they ran)
+                limit = max((float(r["time_limit"]) for r in group
+                             if r.get("time_limit") is not None), default=0.0)
                 setup = json.dumps({"suite": suite, "map": m, "cell_volume": cv,
                                     "radius": radius, "rotation": rot})
                 cur = con.execute(
@@ -87,7 +90,7 @@ def write_arena_db(out: str | os.PathLike, rows: list[dict], *, suite: str = "")
                     " version, hostname, cpuinfo, date, seed, setup) VALUES "
                     "(?,?,?,?,?,?,?,?,?,?,?)",
                     (f"{suite} {os.path.basename(m)} cell volume {cv:g} radius {radius:g} "
-                     f"rotation {rot}", total, 0.0, 0.0, max(per.values()),
+                     f"rotation {rot}", total, limit, 0.0, max(per.values()),
                      f"lattice-planner {__version__}", platform.node(), None, date, "0", setup))
                 exp_id = cur.lastrowid
                 for r in group:

@@ -35,7 +35,8 @@ def write_ply_cells(out: str | os.PathLike, world) -> tuple[int, int]:
         blocked = blocked[~world.is_unknown(blocked)]
     cells = np.concatenate([blocked, unknown]).astype(np.int64)
     state = np.concatenate([np.full(len(blocked), BLOCKED), np.full(len(unknown), UNKNOWN)])
-    xyz = world.lattice.to_world(cells) if len(cells) else np.zeros((0, 3))
+    # centres in the map's frame; i, j, k count from the world's local origin (its offset)
+    xyz = world.to_map(world.lattice.to_world(cells)) if len(cells) else np.zeros((0, 3))
     v = np.empty(len(cells), dtype=[("x", "<f8"), ("y", "<f8"), ("z", "<f8"), ("i", "<i4"),
                                     ("j", "<i4"), ("k", "<i4"), ("state", "u1")])
     for n, name in enumerate("xyz"):
@@ -48,6 +49,8 @@ def write_ply_cells(out: str | os.PathLike, world) -> tuple[int, int]:
                 "generator " + "; ".join(" ".join(repr(float(x)) for x in row) for row in g),
                 f"radius {world.radius!r}", f"unknown_policy {world.unknown_policy}",
                 f"state {BLOCKED} blocked, {UNKNOWN} unknown"]
+    if world.local_frame:  # x, y, z = generator @ (i, j, k) + offset
+        comments.append("offset " + " ".join(repr(float(x)) for x in world.offset))
     with atomic_path(out) as tmp:
         PlyData([PlyElement.describe(v, "vertex")], byte_order="<",
                 comments=comments).write(str(tmp))
@@ -61,6 +64,10 @@ def write_world_cells(out: str | os.PathLike, world, cspace: bool = False) -> No
     if suffix == ".ply":
         write_ply_cells(out, world)
     elif suffix == ".bt":
+        if world.local_frame:  # its keys count from the map's origin: they would not fit
+            raise MapError(f"{out}: an OctoMap tree reaches +-32768 cells from its frame's "
+                           f"origin; this map lies {np.abs(world.offset).max():.0f} m from "
+                           "it (write .ply, or shift the map)")
         (write_cspace_octomap if cspace else write_octomap)(out, world)
     else:
         raise MapError(f"{out}: unknown cell file type {suffix!r}; use .ply or .bt")

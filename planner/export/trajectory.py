@@ -2,8 +2,9 @@
 
 A path has no clock: pose ``i`` is stamped with the arc length to it divided by a nominal
 speed (``speed`` m/s, 1 by default), so stamps strictly increase and differences are travel
-times. Orientation is the heading (yaw of the segment leaving the waypoint, about +z; the
-last waypoint keeps the one before) as a unit quaternion ``(x, y, z, w) = (0, 0, sin(yaw/2),
+times. Orientation is the heading (:func:`planner.path.headings`: yaw of the segment leaving
+the waypoint, about +z, a sub-millimetre hop taking the next segment's; the last waypoint
+keeps the one before) as a unit quaternion ``(x, y, z, w) = (0, 0, sin(yaw/2),
 cos(yaw/2))``. Consecutive identical waypoints are merged first (a start at a cell centre
 would otherwise appear twice).
 
@@ -19,6 +20,7 @@ import numpy as np
 
 from planner.errors import PlanError
 from planner.fsutil import atomic_path
+from planner.path import headings
 
 __all__ = ["distinct_waypoints", "path_poses", "write_tum"]
 
@@ -45,12 +47,7 @@ def path_poses(path, speed: float = 1.0) -> tuple[np.ndarray, np.ndarray, np.nda
     p = distinct_waypoints(path)
     seg = np.linalg.norm(np.diff(p, axis=0), axis=1)
     t = np.concatenate([[0.0], np.cumsum(seg)]) / speed
-    d = np.diff(p[:, :2], axis=0)
-    yaw = np.arctan2(d[:, 1], d[:, 0]) if len(d) else np.zeros(0)
-    for i in range(len(yaw) - 2, -1, -1):  # a vertical segment keeps the next heading
-        if not d[i].any():
-            yaw[i] = yaw[i + 1]
-    yaw = np.append(yaw, yaw[-1]) if len(yaw) else np.zeros(1)
+    yaw = headings(p)  # the path files' headings
     q = np.column_stack([np.zeros(len(p)), np.zeros(len(p)), np.sin(yaw / 2), np.cos(yaw / 2)])
     return t, p, q
 

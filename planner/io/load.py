@@ -10,7 +10,10 @@ format       extensions                       contents
 ``pcd``      ``.pcd``                         PCD v0.7 ascii / binary / binary_compressed
 ``xyz``      ``.xyz .txt .dat`` (+ ``.gz``,   one ``x y z [extra ...]`` per line; ``#``
              ``.bz2``, ``.xz``)               comments; whitespace or comma separated
-``npy``      ``.npy``                         (N, 3) numeric array
+``npy``      ``.npy``                         (N, 3) numeric array; (N, 3 + k): x, y, z
+                                              first (intensity, ... dropped)
+``kitti``    ``.bin``                         KITTI velodyne scan: float32 x, y, z,
+                                              reflectance records
 ``bt``       ``.bt``                          OctoMap binary OcTree: occupied + free leaves
 ``3dmap``    ``.3dmap``                       MovingAI voxel map: unit cubes
 ``poses``    (``format="poses"`` only)        pose list of scans (:func:`load_posed_scans`)
@@ -43,6 +46,7 @@ from planner.errors import MapError
 from planner.fsutil import atomic_path
 from planner.io._files import DECOMPRESSED_BUDGET, check_file
 from planner.io.bag import read_bag
+from planner.io.kitti import read_kitti
 from planner.io.lidar import read_e57, read_las
 from planner.io.movingai import load_scenarios, read_3dmap
 from planner.io.obstacles import Obstacles, Scenarios
@@ -75,13 +79,14 @@ _EXTENSIONS = {
     ".ply": "ply", ".pcd": "pcd", ".xyz": "xyz", ".txt": "xyz", ".dat": "xyz", ".npy": "npy",
     ".bt": "bt", ".3dmap": "3dmap", ".yaml": "rosmap", ".yml": "rosmap", ".bag": "bag",
     ".db3": "bag", ".mcap": "bag", ".las": "las", ".laz": "las", ".e57": "e57",
+    ".bin": "kitti",
 }
 # Explicit format names accepted by ``format=`` (aliases included).
 _FORMAT_ALIASES = {
     "ply": "ply", "pcd": "pcd", "xyz": "xyz", "txt": "xyz", "dat": "xyz", "text": "xyz",
     "npy": "npy", "bt": "bt", "octomap": "bt", "3dmap": "3dmap", "movingai": "3dmap",
     "poses": "poses", "rosmap": "rosmap", "yaml": "rosmap", "bag": "bag", "rosbag": "bag",
-    "las": "las", "laz": "las", "e57": "e57",
+    "las": "las", "laz": "las", "e57": "e57", "kitti": "kitti", "bin": "kitti",
 }
 _COMPRESSIONS = (".gz", ".bz2", ".xz")
 
@@ -169,6 +174,8 @@ def _read(p: Path, fmt: str, compression: str | None, budget: int | None,
         return read_bag(p, **options)
     if fmt == "las":
         return read_las(p)
+    if fmt == "kitti":
+        return read_kitti(p)
     return read_e57(p)
 
 

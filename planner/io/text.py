@@ -22,13 +22,14 @@ def read_xyz(p: Path, compression: str | None = None, budget: int | None = None)
 
 
 def read_npy(p: Path) -> Obstacles:
-    """An (N, 3) numeric ``.npy`` array (no pickles)."""
+    """An (N, 3) numeric ``.npy`` array (no pickles); (N, 3 + k) too, its first three
+    columns x, y, z (a scan saved with intensity, ring, time, ... after them)."""
     check_file(p)
     # header first: declared size against the budget and the file, no pickles, no trailer
     arr = read_npy_file(p, p.name)
-    if not isinstance(arr, np.ndarray) or arr.ndim != 2 or arr.shape[1] != 3:
-        raise MapError(f"{p.name}: .npy array must have shape (N, 3), got "
-                       f"{getattr(arr, 'shape', None)}")
+    if not isinstance(arr, np.ndarray) or arr.ndim != 2 or arr.shape[1] < 3:
+        raise MapError(f"{p.name}: .npy array must have shape (N, 3) (or (N, 3 + k): x, y, z "
+                       f"first), got {getattr(arr, 'shape', None)}")
     if arr.dtype.kind not in "fiu":
         raise MapError(f"{p.name}: .npy array must be numeric, got dtype {arr.dtype}")
-    return cloud(arr, p.name)
+    return cloud(arr[:, :3], p.name)

@@ -7,7 +7,7 @@ import sys
 
 import numpy as np
 
-from planner.errors import PlannerError
+from planner.errors import MapError, PlannerError
 from planner.io import load_points
 from planner.match import anchor
 from planner.match.experiment import run_experiment, trial_methods
@@ -24,7 +24,7 @@ def run_match(source: str, reference: str, *, lattice: str = "fcc", cell_volume:
     """Match ``source`` onto ``reference`` (any point format :func:`planner.io.load_points`
     reads) and print the 4x4 transform (row-major, metres), score, levels, iterations and
     time; JSON (key ``transform``) with ``as_json``. Returns the exit status (0)."""
-    src, ref = load_points(source), load_points(reference)
+    src, ref = _scan(source), _scan(reference)
     m0 = None if init is None else pose_matrix(init)
     res = match(src, ref, lattice=lattice, cell_volume=cell_volume, levels=levels, init=m0)
     if as_json:
@@ -48,6 +48,17 @@ def _anchors(a) -> list[str]:
         print(f"planner: note: anchors left out, {anchor.EXTRA_MESSAGE}", file=sys.stderr)
         return []
     return list(anchor.ANCHORS)
+
+
+def _scan(path: str) -> np.ndarray:
+    """(N, 3) the points of a scan or map file (a bundled map by name too); a 2D map is
+    refused in one line (the matching is 6-DOF)."""
+    from planner.maps import resolve  # lazy: scipy
+
+    pts = load_points(resolve(path))
+    if pts.shape[1] != 3:
+        raise MapError(f"{path}: a 2D map; scan matching needs 3D scans (6-DOF poses)")
+    return pts
 
 
 def run_match_experiment(a) -> int:

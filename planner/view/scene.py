@@ -126,9 +126,10 @@ def build_scene(world, paths: list[PathTrace] | None = None, *, start=None, goal
     world : planner.World
         Its blocked cells (those not unknown), unknown cells and raw obstacles are drawn.
     paths : list of PathTrace, optional
-        Paths in metres, (K, 3) each (K, 2 on a 2D map: drawn at z = 0).
+        Paths in metres in the map's frame, (K, 3) each (K, 2 on a 2D map: drawn at z = 0);
+        drawn in the world's local frame (:attr:`planner.World.offset`).
     start, goal : array_like, shape (3,) or (2,), optional
-        Markers (None: the first path's ends).
+        Markers in the map's frame (None: the first path's ends).
     max_cells, max_points : int
         Most cells per layer and most raw points embedded (module docstring).
     """
@@ -141,7 +142,14 @@ def build_scene(world, paths: list[PathTrace] | None = None, *, start=None, goal
     blocked = world.blocked
     if len(unknown) and len(blocked):
         blocked = blocked[~world.is_unknown(blocked)]
-    traces = [PathTrace(p.label, _as3(p.points)) for p in (paths or []) if len(p.points)]
+    # drawn in the world's local frame (float32 in the browser: UTM coordinates would lose
+    # centimetres), said in a note
+    traces = [PathTrace(p.label, world.to_local(_as3(p.points))) for p in (paths or [])
+              if len(p.points)]
+    if start is not None:
+        start = world.to_local(_as3(np.atleast_2d(start))[0])
+    if goal is not None:
+        goal = world.to_local(_as3(np.atleast_2d(goal))[0])
     if start is None and traces:
         start = traces[0].points[0]
     if goal is None and traces:
@@ -150,6 +158,9 @@ def build_scene(world, paths: list[PathTrace] | None = None, *, start=None, goal
                   cell_size=float(world.cell_size), bounds=world.bounds, paths=traces,
                   start=None if start is None else _as3(np.atleast_2d(start))[0],
                   goal=None if goal is None else _as3(np.atleast_2d(goal))[0])
+    if world.local_frame:
+        scene.notes.append("local frame: map coordinates are these plus "
+                           + ", ".join(f"{v:.3f}" for v in world.offset) + " m")
     raw = _raw_points(world.obstacles, max_points, rng)
     if raw is not None:
         scene.layers.append(raw)

@@ -27,9 +27,10 @@ from planner.maps import resolve
 from planner.voxels.from_map import inflated_obstacles, unknown_region
 from planner.world.assemble import assemble
 from planner.world.file import check_options, is_world_file, load_world
+from planner.world.frame import local_offset, shifted
 
 __all__ = ["MapDefaults", "as_obstacles", "build_world", "default_cell_volume",
-           "inflated_obstacles", "map_box", "resolve_defaults", "sidecar"]
+           "inflated_obstacles", "lift_planar", "map_box", "resolve_defaults", "sidecar"]
 
 # Default planning resolution for raw clouds: about this many cells in the bounding box.
 DEFAULT_CELLS = 2_000_000
@@ -166,7 +167,9 @@ def build_world(
     bounds : array_like, shape (2, d), optional
         World box [min, max] (m) the robot centre must stay in. Default: the map's own
         bounds (.3dmap grid box, ROS map image, bundled map sidecar) or the obstacles'
-        bounding box.
+        bounding box. A box far from the origin (UTM, ECEF) is planned in a local frame
+        (:attr:`World.offset`, :mod:`planner.world.frame`): cells are then limited by the
+        map's extent, not its distance from the origin.
     format : str, optional
         File format overriding the extension, or ``"poses"`` for a pose list of scans.
     unknown : {"blocked", "free"}, optional
@@ -193,7 +196,10 @@ def build_world(
                            unknown=unknown, bounds=bounds)
     d, lat, radius, policy, bounds = obst.dim, got.lattice, got.radius, got.unknown, got.bounds
     if d == 2:
-        obst, bounds, lat = _lift(obst), _lift_bounds(bounds), planar_prism(lat)
+        obst, bounds, lat = lift_planar(obst), _lift_bounds(bounds), planar_prism(lat)
+    offset = local_offset(lat, bounds)  # far from the origin: a local frame (world.frame)
+    if offset.any():
+        obst, bounds = shifted(obst, offset), bounds - offset
     if obst.has_free_space and d == 3:  # classified cell by cell: refuse before any work
         lo, hi = unknown_region(lat, bounds, radius)
         n = float(np.prod(hi - lo)) / lat.cell_volume
@@ -202,7 +208,7 @@ def build_world(
                 f"(~{n:,.0f} cells in its box)")
     try:
         world = assemble(obst, lat, bounds, radius, policy, d == 2, source=obst.source,
-                         obstacles=obst, dim=d)
+                         obstacles=obst, dim=d, offset=offset)
     except PlannerError as exc:  # name the map, as the readers do
         if str(obst.source) in str(exc):
             raise
@@ -311,7 +317,7 @@ def _lattice(lattice, cell_volume, side, obst, bounds) -> Lattice:
     return lat
 
 
-def _lift(obst):
+def lift_planar(obst):
     """A 2D map as 3D obstacles in the plane z = 0: points at z = 0, squares as cubes centred
     on it. A prism cell of the plane and a cube both contain z = 0 in their z-ranges, so
     their distance is the 2D distance of the square and the 2D cell."""

@@ -32,11 +32,15 @@ from planner.occupancy.bits import n_bytes
 from planner.world.cells import index_box
 from planner.world.world import _BOUNDS_TOL
 
-__all__ = ["KEYS", "check_schema", "check_source", "corrupt", "digest", "read_members"]
+__all__ = ["KEYS", "OPTIONAL_KEYS", "check_schema", "check_source", "corrupt", "digest",
+           "read_members"]
 
 # every key a saved world holds, besides the digest over them
 KEYS = ("format", "version", "generator", "lattice", "box", "blocked", "unknown", "bounds",
         "radius", "unknown_policy", "source", "source_sha256", "dim")
+# keys a saved world may hold: ``offset`` (3,) float64, its local frame's origin in the map's
+# frame (m; written only when non-zero, :attr:`planner.World.offset`)
+OPTIONAL_KEYS = ("offset",)
 _REL = 1e-9
 
 
@@ -60,7 +64,8 @@ def digest(arrays: dict[str, np.ndarray]) -> str:
 
 def read_members(path: Path) -> dict[str, np.ndarray]:
     """Every member of the ``.npz`` at ``path``, each read through
-    :func:`planner.npyfile.read_array` (exactly the keys :data:`KEYS` and ``digest``)."""
+    :func:`planner.npyfile.read_array` (exactly the keys :data:`KEYS` and ``digest``, and
+    any of :data:`OPTIONAL_KEYS`)."""
     try:
         with open(path, "rb") as f:  # np.savez writes no archive comment: the end record
             f.seek(max(0, f.seek(0, os.SEEK_END) - 22))  # is the last 22 bytes
@@ -76,7 +81,7 @@ def read_members(path: Path) -> dict[str, np.ndarray]:
             missing = sorted(want - set(names))
             if missing:
                 raise corrupt(path, f"missing key {missing[0][:-4]!r}")
-            extra = sorted(set(names) - want)
+            extra = sorted(set(names) - want - {f"{k}.npy" for k in OPTIONAL_KEYS})
             if extra:
                 raise corrupt(path, f"unexpected member {extra[0]!r}")
             out = {}
@@ -119,6 +124,10 @@ def check_schema(d: dict[str, np.ndarray], path: Path) -> None:
         if (bounds.shape != (2, 3) or bounds.dtype != np.float64
                 or not np.isfinite(bounds).all() or (bounds[1] < bounds[0]).any()):
             raise ValueError("'bounds' must be a finite (2, 3) float64 [min, max] box")
+        off = d.get("offset")
+        if off is not None and (off.shape != (3,) or off.dtype != np.float64
+                                or not np.isfinite(off).all()):
+            raise ValueError("'offset' must be a finite (3,) float64")
         radius = float(_scalar(d, "radius", "fiu"))
         if not (math.isfinite(radius) and radius >= 0):
             raise ValueError(f"'radius' must be a finite number >= 0, got {radius}")

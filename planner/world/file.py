@@ -15,6 +15,9 @@ File format (numpy ``.npz``, members stored uncompressed; written atomically):
   changes no plan and no count. One bit a cell of the box before compression, and mostly
   long runs after it;
 * ``bounds`` (2, 3) float64 (m), ``radius`` (m), ``unknown_policy``;
+* ``offset`` (3,) float64 (m), only in a world built in a local frame (a map far from its
+  origin, :mod:`planner.world.frame`): a map point is the local point plus ``offset``;
+  ``bounds`` and the cells are local;
 * ``source`` (the map file name) and ``source_sha256`` (hex digest of its bytes, ``""`` for
   in-memory data); ``dim`` (2 for a 2D map planned on a prism of its 2D lattice);
 * ``digest``: hex BLAKE2b over every other array (:func:`planner.world.check.digest`).
@@ -104,6 +107,8 @@ def save_world(world, path: str | os.PathLike) -> None:
         "source": np.array(Path(src).name if src else ""),
         "source_sha256": np.array(digest), "dim": np.array(getattr(world, "dim", 3)),
     }
+    if world.local_frame:
+        arrays["offset"] = world.offset
     arrays["digest"] = np.array(array_digest(arrays))
     with atomic_path(path) as tmp, open(tmp, "wb") as f:
         np.savez(f, **arrays)
@@ -142,7 +147,8 @@ def load_world(path: str | os.PathLike):
     lat = Lattice(g, name=name)
     world = World(lat, np.zeros((0, dim), np.int64), bounds, source=str(d["source"]),
                   radius=float(d["radius"]), unknown_policy=str(d["unknown_policy"]),
-                  dim=dim, dense_budget=max(DENSE_BUDGET, d["blocked"].nbytes))
+                  dim=dim, dense_budget=max(DENSE_BUDGET, d["blocked"].nbytes),
+                  offset=d.get("offset"))
     # check_schema found the box the world's own and the bits in bounds, as saved.
     free, unknown = world.free_bits, world.unknown_bits
     np.bitwise_and(free.bits, np.invert(d["blocked_bits"]), out=free.bits)
@@ -209,6 +215,6 @@ def check_options(world, lattice=None, cell_volume=None, radius=None, unknown=No
         raise bad("unknown policy", unknown, world.unknown_policy)
     if bounds is not None:
         b = np.asarray(bounds, dtype=float)
-        if b.shape != world.bounds.shape or not np.allclose(b, world.bounds, rtol=_REL,
-                                                            atol=1e-9):
-            raise bad("bounds", b.tolist(), world.bounds.tolist())
+        has = world.to_map(world.bounds)  # asked in the map's frame
+        if b.shape != has.shape or not np.allclose(b, has, rtol=_REL, atol=1e-9):
+            raise bad("bounds", b.tolist(), has.tolist())

@@ -44,6 +44,7 @@ from planner.occupancy.walk import Walk, as_cells, c_array, segment_walk, walk_o
 from planner.voxels import OccupiedVoxelList
 from planner.world.cells import CellSets
 from planner.world.checker import ValidityChecker
+from planner.world.frame import LocalFrame
 from planner.world.unknown import SortedKeys, UnknownSpace
 
 __all__ = ["World", "DENSE_BUDGET", "Occupancy", "ValidityChecker", "Walk", "as_point"]
@@ -53,7 +54,7 @@ _BOUNDS_TOL = 1e-9
 _P3, _F8 = (3,), np.dtype(np.float64)
 
 
-class World(CellSets, UnknownSpace):
+class World(CellSets, UnknownSpace, LocalFrame):
     """Lattice + blocked cells + bounds, built complete.
 
     Parameters
@@ -85,6 +86,10 @@ class World(CellSets, UnknownSpace):
         them).
     dim : int
         2 for a 2D map planned in the plane z = 0 (see :func:`planner.build_world`).
+    offset : array_like, shape (3,) or (2,), optional
+        The local frame's origin in the map's (m; :mod:`planner.world.frame`, set for maps
+        far from their origin). Bounds, cells, obstacles and :attr:`checker` are local;
+        :meth:`endpoint` takes map points and :func:`planner.plan` returns them.
 
     Attributes
     ----------
@@ -115,6 +120,7 @@ class World(CellSets, UnknownSpace):
         unknown_cells: np.ndarray | None = None,
         unknown_policy: str = "free",
         dim: int = 3,
+        offset=None,
     ):
         if not isinstance(lattice, Lattice):
             raise MapError(f"lattice must be a Lattice, got {type(lattice).__name__}")
@@ -176,6 +182,7 @@ class World(CellSets, UnknownSpace):
         self.unknown_policy = unknown_policy
         self.dim = int(dim)  # 2: a 2D map planned in the plane z = 0 of a prism lattice
         self.source_sha256 = ""
+        self.set_offset(offset)
 
     # -- pickling: plain arrays only; lookup structures rebuilt on first use -----------
     def __getstate__(self) -> dict:
@@ -261,7 +268,7 @@ class World(CellSets, UnknownSpace):
         return out
 
     def points_free(self, points: np.ndarray) -> np.ndarray:
-        """(N,) bool: the cell containing each point (m, shape (N, 3)) is free."""
+        """(N,) bool: the cell containing each point (m, (N, 3), local frame) is free."""
         return self.is_free(self._lattice.quantize(points))
 
     def _walk(self, a, b, check: bool):
@@ -292,20 +299,21 @@ class World(CellSets, UnknownSpace):
         return bool(free)
 
     def endpoint(self, p, what: str = "point") -> tuple[np.ndarray, np.ndarray]:
-        """Check a start or goal point (m): returns the point (3,) and its cell (3,) int64.
-        A 2D world takes (x, y) or (x, y, 0).
+        """Check a start or goal point (m, map frame): returns the point (3,) in the local
+        frame and its cell (3,) int64. A 2D world takes (x, y) or (x, y, 0).
 
         Raises PlanError saying which end is wrong and why: malformed, outside the bounds,
         inside an obstacle after inflation (with the nearest free cell centre), or blocked
         by unknown space.
         """
-        a = as_point(p, what, self.dim)
+        given = as_point(p, what, self.dim)
+        a = self.to_local(given)
         lo, hi = self._bounds
         x, bl, bh = a.tolist(), lo.tolist(), hi.tolist()  # floats: a plan checks two ends
         for i in range(3):
             if x[i] < bl[i] - _BOUNDS_TOL or x[i] > bh[i] + _BOUNDS_TOL:
-                raise PlanError(f"{what} {_fmt(a)} is outside the map bounds {_fmt(lo)} .. "
-                                f"{_fmt(hi)}")
+                raise PlanError(f"{what} {_fmt(given)} is outside the map bounds "
+                                f"{_fmt(self.to_map(lo))} .. {_fmt(self.to_map(hi))}")
         hit = self.checker.locate(x[0], x[1], x[2])  # quantize and look up: one call
         if hit is None:  # no named rounding kernel
             cell = self._lattice.quantize(a[None])[0]
@@ -316,14 +324,14 @@ class World(CellSets, UnknownSpace):
             cell, free = hit
             self.cell_checks += 1
         if not free:  # the message only when needed
-            self._not_free(cell, f"{what} {_fmt(a)}")
+            self._not_free(cell, f"{what} {_fmt(given)}")
         return a, cell
 
     def end_coords(self, start, goal) -> tuple[float, ...] | None:
         """``(x0, x1, x2, y0, y1, y2)``: a start and a goal point as Python floats (m) when
         both are (3,) float64 arrays that pass :meth:`endpoint`'s bounds test (a plan's
-        usual case), else None (any other input, NaN, infinities, a point outside)."""
-        if not (type(start) is np.ndarray and type(goal) is np.ndarray
+        usual case), else None (other input, NaN, infinities, a point outside, an offset)."""
+        if self.local_frame or not (type(start) is np.ndarray and type(goal) is np.ndarray
                 and start.shape == _P3 and goal.shape == _P3 and start.dtype == _F8
                 and goal.dtype == _F8):
             return None
@@ -360,7 +368,7 @@ class World(CellSets, UnknownSpace):
             raise PlanError(f"{what} must be one cell (i, j, k), got shape {c.shape}")
         c = c[0]
         if not self.is_free(c[None])[0]:  # the message only when needed: searches are short
-            centre = self._lattice.to_world(c[None])[0]
+            centre = self.to_map(self._lattice.to_world(c[None])[0])
             self._not_free(c, f"{what} cell {c.tolist()} (centre {_fmt(centre)})")
         return c
 
@@ -375,7 +383,7 @@ class World(CellSets, UnknownSpace):
             where = "inside an obstacle (after inflation for the robot radius)"
         near = self.nearest_free(cell)
         hint = "; no free cell nearby" if near is None else (
-            f"; nearest free cell centre: {_fmt(self._lattice.to_world(near[None])[0])}")
+            f"; nearest free cell centre: {_fmt(self.to_map(self._lattice.to_world(near[None])))}")
         raise PlanError(f"{label} is {where}{hint}")
 
     def nearest_free(self, cell: np.ndarray, max_radius: float | None = None) -> np.ndarray | None:
