@@ -65,6 +65,37 @@ class _Level:
         self.cosets = coset_quantizer(self.lattice)  # None: the generic tables score
         self.side = self.lattice.cell_volume ** (1 / 3)
 
+    def score(self, pts: np.ndarray, wts: np.ndarray, rots: np.ndarray, trans: np.ndarray,
+              rounding: str = "auto") -> np.ndarray:
+        """(M,) scores of the poses (:meth:`MultiResVoxelList.score`; contiguous float
+        arrays of checked shapes, as the matcher's loop passes them)."""
+        cq = self.cosets
+        if rounding == "auto":
+            rounding = "generic" if cq is None else "cosets"
+        out = np.empty(len(rots))
+        if rounding == "cosets":
+            if cq is None:
+                raise LatticeError("this lattice has no coset rounding: use 'generic'")
+            # the box frame folded into the poses: y = F (R p + t)
+            _kernels.score_poses_cosets(pts, wts, np.ascontiguousarray(cq.frame @ rots),
+                                        np.ascontiguousarray(trans @ cq.frame.T),
+                                        cq.inv_sides, cq.sides, cq.shifts, cq.index_basis,
+                                        cq.index_offsets, self.table, self.bits, out)
+        elif rounding == "generic":
+            _kernels.score_poses(pts, wts, rots, trans, *self.tables, self.table, self.bits,
+                                 out)
+        elif rounding == "cubic":
+            g = self.lattice.generator
+            if not np.array_equal(g, g[0, 0] * np.eye(3)) or g[0, 0] <= 0:
+                raise LatticeError("rounding 'cubic' needs an axis-aligned cubic lattice, "
+                                   f"got {self.lattice.name or 'a custom lattice'}")
+            _kernels.score_poses_cubic(pts, wts, rots, trans, 1.0 / g[0, 0], self.table,
+                                       self.bits, out)
+        else:
+            raise LatticeError(f"rounding must be auto, cosets, generic or cubic, got "
+                               f"{rounding!r}")
+        return out
+
 
 class MultiResVoxelList:
     """Occupied voxel lists of one point set at ``levels`` resolutions of one lattice.
@@ -201,32 +232,7 @@ class MultiResVoxelList:
                else np.ascontiguousarray(np.asarray(weights, dtype=float)))
         if wts.shape != (len(pts),):
             raise MapError(f"weights must have shape ({len(pts)},), got {wts.shape}")
-        lv = self._levels[int(level)]
-        cq = lv.cosets
-        if rounding == "auto":
-            rounding = "generic" if cq is None else "cosets"
-        out = np.empty(len(rots))
-        if rounding == "cosets":
-            if cq is None:
-                raise LatticeError("this lattice has no coset rounding: use 'generic'")
-            # the box frame folded into the poses: y = F (R p + t)
-            _kernels.score_poses_cosets(pts, wts, np.ascontiguousarray(cq.frame @ rots),
-                                        np.ascontiguousarray(trans @ cq.frame.T),
-                                        cq.inv_sides, cq.sides, cq.shifts, cq.index_basis,
-                                        cq.index_offsets, lv.table, lv.bits, out)
-        elif rounding == "generic":
-            _kernels.score_poses(pts, wts, rots, trans, *lv.tables, lv.table, lv.bits, out)
-        elif rounding == "cubic":
-            g = lv.lattice.generator
-            if not np.array_equal(g, g[0, 0] * np.eye(3)) or g[0, 0] <= 0:
-                raise LatticeError("rounding 'cubic' needs an axis-aligned cubic lattice, "
-                                   f"got {lv.lattice.name or 'a custom lattice'}")
-            _kernels.score_poses_cubic(pts, wts, rots, trans, 1.0 / g[0, 0], lv.table,
-                                       lv.bits, out)
-        else:
-            raise LatticeError(f"rounding must be auto, cosets, generic or cubic, got "
-                               f"{rounding!r}")
-        return out
+        return self._levels[int(level)].score(pts, wts, rots, trans, rounding)
 
     def __repr__(self) -> str:
         counts = ", ".join(str(len(v)) for v in self.voxels)
