@@ -7,8 +7,9 @@
 * Sides: :func:`interleaved` runs every side of a comparison on one item, then the next
   item, ``repeat`` rounds per item, and keeps each item's fastest round on each side (load
   on a shared machine slows whichever side it meets; the minimum filters it out).
-* Statistics: :func:`ratio_line` prints the median of the paired per-item ratios with its
-  95% BCa bootstrap interval and Wilcoxon p (:func:`planner.analysis.stats.paired_ratio`).
+* Statistics: :func:`ratio_line` prints the Hodges-Lehmann median of the paired per-item
+  ratios (the median of the Walsh averages of their logs) with the 95% interval of the
+  Wilcoxon signed-rank test that matches it (:func:`planner.analysis.stats.paired_ratio`).
   Every script prints at least one such line, starting with ``ratio``; the smoke test
   (``tests/test_benchmarks.py``) looks for it.
 * Memory: :func:`peak_rss` is the process's resident high-water mark (Linux ``VmHWM``,
@@ -141,7 +142,8 @@ class Ratio:
     n : int
         Pairs used (both finite and positive).
     median, low, high : float
-        Median of the per-item ratios and its 95% bootstrap interval.
+        Hodges-Lehmann median of the per-item ratios and its 95% interval (0 and inf when
+        there are too few pairs for one).
     p : float
         Wilcoxon signed-rank p-value (NaN when it is undefined).
     total : float
@@ -157,8 +159,9 @@ class Ratio:
 
 
 def paired(x, y, seed: int = 0) -> Ratio:
-    """Median of the paired ratios ``x_i / y_i`` with a BCa bootstrap interval (the
-    package's :func:`planner.analysis.stats.paired_ratio`) and the ratio of the sums."""
+    """Hodges-Lehmann median of the paired ratios ``x_i / y_i`` with its signed-rank
+    interval (the package's :func:`planner.analysis.stats.paired_ratio`) and the ratio of
+    the sums."""
     from planner.analysis.stats import paired_ratio
 
     x = np.asarray(x, dtype=float).ravel()
@@ -166,7 +169,7 @@ def paired(x, y, seed: int = 0) -> Ratio:
     s = paired_ratio(x, y, n_boot=2000, seed=seed)
     ok = np.isfinite(x) & np.isfinite(y) & (x > 0) & (y > 0)
     total = float(x[ok].sum() / y[ok].sum()) if ok.any() else math.nan
-    return Ratio(s.n, s.median, s.low, s.high, s.p, total)
+    return Ratio(s.n, s.estimate, s.low, s.high, s.p, total)
 
 
 def ratio_line(what: str, x, y, *, goal: str = "", note: str = "",

@@ -1,7 +1,7 @@
 """PoseIndex query and add times from 1e3 to 1e6 stored poses, against scipy's cKDTree.
 
 Run: ``python benchmarks/pose_index_speed.py [--sizes 1000,10000,100000,1000000]
-[--queries 20000] [--lattice fcc]``.
+[--queries 20000] [--lattice fcc] [--smoke]``.
 
 Radius r = 0.5 m. Two densities: **uniform**, poses uniform in a cube whose volume grows
 with their number (one pose per 8 m^3: constant density), and **piled**, poses uniform in
@@ -14,24 +14,28 @@ of 1,000 single-pose ``add`` calls (500 at 1e3) into the index holding that many
 (Python's call overhead included; the largest is the call that doubled the arrays, if one
 did). cKDTree
 has no add: its build time over the poses is shown instead. Answers are checked equal to
-the tree's on every query.
+the tree's on every query. CPU times are this thread's (``benchmarks/harness.py``); the
+``ratio`` line per density pairs ``near`` with the tree's query, size by size.
+
+``--smoke``: 1,000 and 4,000 poses, 2,000 queries.
 """
 
+from __future__ import annotations
+
 import argparse
-import time
+import sys
+from pathlib import Path
 
 import numpy as np
 from scipy.spatial import cKDTree
 
-from planner.match import PoseIndex
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import harness  # noqa: E402  (the sibling module)
+
+from planner.match import PoseIndex  # noqa: E402
 
 R = 0.5
-
-
-def _cpu(fn):
-    t0 = time.process_time()
-    out = fn()
-    return out, time.process_time() - t0
+_cpu = harness.cpu_result  # (result, thread CPU seconds)
 
 
 def run(kind: str, sizes: list[int], n_queries: int, lattice: str) -> None:
@@ -41,12 +45,14 @@ def run(kind: str, sizes: list[int], n_queries: int, lattice: str) -> None:
           f"{'kd build s':>10s} {'true %':>6s}")
     rng = np.random.default_rng(0)
     first = None
+    near_all, kd_all = [], []
     for n in sizes:
         side = (8.0 * n) ** (1 / 3) if kind == "uniform" else 10.0
         poses = rng.uniform(0, side, (n, 3))
         queries = rng.uniform(0, side, (n_queries, 3))
         idx = PoseIndex(R, lattice=lattice)
-        idx.add(poses[:10])  # compiled kernels loaded before any timing
+        for p in np.array_split(poses[:2000], 200):  # compiled kernels loaded (growth
+            idx.add(p)  # included) before any timing
         idx.near(queries[:10])
         idx = PoseIndex(R, lattice=lattice)
         k = min(1000, n // 2)  # single adds at the end (half the poses at 1e3)
@@ -62,22 +68,30 @@ def run(kind: str, sizes: list[int], n_queries: int, lattice: str) -> None:
         assert np.array_equal(got, want), f"{kind} {n}: answers differ from the tree's"
         q_us, kd_us = 1e6 * near_s / n_queries, 1e6 * kd_s / n_queries
         first = first or (q_us, kd_us)
+        near_all.append(near_s)
+        kd_all.append(kd_s)
         print(f"{n:9d} {q_us:8.2f} {q_us / first[0]:6.2f} {kd_us:7.2f} {kd_us / first[1]:6.2f} "
               f"{q_us / kd_us:7.2f} {1e6 * bulk_s / len(body):13.3f} "
               f"{1e6 * add_s / len(extra):7.2f} {1e3 * add_max:7.2f} {build_s:10.3f} "
               f"{100 * want.mean():6.1f}")
+    print(harness.ratio_line(f"PoseIndex.near/cKDTree.query CPU per query ({kind})",
+                             near_all, kd_all, note=f"paired by size, {len(sizes)} sizes"))
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser()
+def main(argv=None) -> int:
+    ap = harness.add_arguments(argparse.ArgumentParser(description=__doc__.split("\n")[0]),
+                               repeat=None)
     ap.add_argument("--sizes", default="1000,10000,100000,1000000")
     ap.add_argument("--queries", type=int, default=20000)
     ap.add_argument("--lattice", default="fcc")
-    a = ap.parse_args()
-    sizes = [int(s) for s in a.sizes.split(",")]
-    for kind in ("uniform", "piled"):
-        run(kind, sizes, a.queries, a.lattice)
+    a = ap.parse_args(argv)
+    sizes = [1000, 4000] if a.smoke else [int(s) for s in a.sizes.split(",")]
+    queries = 2000 if a.smoke else a.queries
+    with harness.session("pose_index_speed: PoseIndex against cKDTree", smoke=a.smoke):
+        for kind in ("uniform", "piled"):
+            run(kind, sizes, queries, a.lattice)
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

@@ -8,8 +8,9 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from planner.cli import main
-from planner.lattice import NAMED_LATTICES
-from planner.match import PoseIndex, match, pose_error, pose_matrix
+from planner.errors import LatticeError, MapError
+from planner.lattice import NAMED_LATTICES, Lattice
+from planner.match import MultiResVoxelList, PoseIndex, match, pose_error, pose_matrix
 
 DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
 VELODYNE = DATA / "velodyne"
@@ -88,6 +89,38 @@ def test_cli_match_bad_input_is_one_line_exit_2(tmp_path, capsys):
     with pytest.raises(SystemExit) as exc:
         main(["match", "a.npy", "b.npy", "--init", "1,2,3"])
     assert exc.value.code == 2
+
+
+@pytest.mark.parametrize("lattice", NAMED_LATTICES)
+def test_score_counts_the_moved_points_in_occupied_cells_by_every_rounding(lattice):
+    """``MultiResVoxelList.score`` equals counting ``contains`` of the moved points, with
+    the coset rounding, the generic quantizer and (cubic only) the dedicated rounding."""
+    rng = np.random.default_rng(3)
+    ref = _room(rng, 5000)
+    mr = MultiResVoxelList(ref, Lattice.named(lattice, 0.001), 2)
+    src = _room(rng, 2000)
+    rots = Rotation.from_rotvec(rng.normal(scale=0.05, size=(5, 3))).as_matrix()
+    trans = rng.normal(scale=0.05, size=(5, 3))
+    roundings = ["auto", "cosets", "generic"] + (["cubic"] if lattice == "cubic" else [])
+    for level in (0, 1):
+        want = [mr.contains(src @ r.T + t, level).sum() for r, t in zip(rots, trans, strict=True)]
+        assert 0 < min(want) < len(src)
+        for rounding in roundings:
+            got = mr.score(src, rots, trans, level=level, rounding=rounding)
+            assert got.tolist() == want, (rounding, level)
+    w = rng.uniform(0, 2, len(src))
+    got = mr.score(src, rots[:1], trans[:1], weights=w)
+    assert np.isclose(got[0], w[mr.contains(src @ rots[0].T + trans[0])].sum())
+
+
+def test_score_names_a_rounding_the_lattice_lacks():
+    mr = MultiResVoxelList(_room(np.random.default_rng(0), 500), Lattice.named("fcc", 0.001))
+    with pytest.raises(LatticeError, match="axis-aligned cubic"):
+        mr.score(np.zeros((3, 3)), np.eye(3)[None], np.zeros((1, 3)), rounding="cubic")
+    with pytest.raises(LatticeError, match="rounding must be"):
+        mr.score(np.zeros((3, 3)), np.eye(3)[None], np.zeros((1, 3)), rounding="round")
+    with pytest.raises(MapError, match="level must be"):
+        mr.score(np.zeros((3, 3)), np.eye(3)[None], np.zeros((1, 3)), level=4)
 
 
 @pytest.mark.parametrize("lattice", ["cubic", "fcc"])

@@ -135,6 +135,30 @@ def score_poses_cosets(pts, wts, rots, trans, inv_sides, sides, shifts, mb, mo, 
 
 
 @njit_cached(nogil=True)
+def score_poses_cubic(pts, wts, rots, trans, inv_side, table, bits,
+                      out):  # pragma: no cover - compiled
+    """:func:`score_poses` on an axis-aligned cubic lattice of side ``1 / inv_side`` with
+    the rounding written for it (``rint(x / side)`` per axis, no quantizer tables): the
+    floor the other roundings are measured against (``benchmarks/match_speed.py``)."""
+    mask = (1 << bits) - 1
+    for p in range(rots.shape[0]):
+        r = rots[p]
+        tx, ty, tz = trans[p, 0], trans[p, 1], trans[p, 2]
+        s = 0.0
+        for i in range(pts.shape[0]):
+            a0, a1, a2 = pts[i, 0], pts[i, 1], pts[i, 2]
+            w0 = np.int64(np.rint((r[0, 0] * a0 + r[0, 1] * a1 + r[0, 2] * a2 + tx) * inv_side))
+            w1 = np.int64(np.rint((r[1, 0] * a0 + r[1, 1] * a1 + r[1, 2] * a2 + ty) * inv_side))
+            w2 = np.int64(np.rint((r[2, 0] * a0 + r[2, 1] * a1 + r[2, 2] * a2 + tz) * inv_side))
+            if (w0 < -_LIM or w0 >= _LIM or w1 < -_LIM or w1 >= _LIM
+                    or w2 < -_LIM or w2 >= _LIM):
+                continue  # beyond the packable range: no stored cell is there
+            if in_key_set(table, mask, pack3(w0, w1, w2)):
+                s += wts[i]
+        out[p] = s
+
+
+@njit_cached(nogil=True)
 def cast_rays(origin, dirs, grid, lo, h, max_range, out):  # pragma: no cover - compiled
     """Distance along each unit ray to the first occupied voxel of ``grid`` (inf: none
     within ``max_range`` or the grid).

@@ -36,7 +36,6 @@ from scipy.spatial.transform import Rotation
 
 from planner.errors import MapError, PlannerError
 from planner.lattice import Lattice, cosets
-from planner.match import _kernels
 from planner.match.multires import MultiResVoxelList, resolve_lattice
 from planner.match.refine import refine as refine_pose
 from planner.occupancy.keys import pack
@@ -151,18 +150,8 @@ class _Scorer:
         self.evaluations = 0
 
     def __call__(self, rots: np.ndarray, trans: np.ndarray) -> np.ndarray:
-        out = np.empty(len(rots))
-        cq = self.lv.cosets
-        if cq is None:
-            _kernels.score_poses(self.pts, self.wts, np.ascontiguousarray(rots),
-                                 np.ascontiguousarray(trans), *self.lv.tables, self.lv.table,
-                                 self.lv.bits, out)
-        else:  # the box frame folded into the poses: y = F (R p + t)
-            _kernels.score_poses_cosets(self.pts, self.wts,
-                                        np.ascontiguousarray(cq.frame @ rots),
-                                        np.ascontiguousarray(trans @ cq.frame.T),
-                                        cq.inv_sides, cq.sides, cq.shifts, cq.index_basis,
-                                        cq.index_offsets, self.lv.table, self.lv.bits, out)
+        out = self.lv.score(self.pts, self.wts, np.ascontiguousarray(rots),
+                            np.ascontiguousarray(trans))
         self.evaluations += len(rots)
         return out
 
