@@ -1,4 +1,4 @@
-"""The search's indexed binary heap (planner.search._heap) against heapq."""
+"""The search's indexed 4-ary heap (planner.search._heap) against heapq."""
 
 from __future__ import annotations
 

@@ -1,11 +1,13 @@
-"""Indexed binary min-heap kernels (numba) for every engine: push, pop, decrease-key, key
+"""Indexed 4-ary min-heap kernels (numba) for every engine: push, pop, decrease-key, key
 change and removal.
 
 The heap holds node slots; ``pos[slot]`` is the slot's index in the heap (the caller marks
 closed / unseen slots with negative values, the heap only writes positions of entries it
 holds). Each entry keeps its key ``f`` and tie-breaker ``g`` beside the slot
 (:class:`Heap`): sifting then compares contiguous memory instead of chasing slots into the
-node table (a cache miss per level).
+node table (a cache miss per level). Four children per entry: half the levels of a binary
+heap, and the four keys a sift-down compares sit side by side (``benchmarks/cpp_anchor.py
+--variants`` measures the same choice on the compiled floor).
 
 Order: lower ``f`` first; among equal ``f`` the larger ``g`` first (deeper nodes: fewer
 expansions on the many equal-cost paths of a lattice). Entries equal in both come out in an
@@ -38,7 +40,7 @@ import numpy as np
 
 from planner._numba import njit_cached
 
-_U0, _U1 = np.uint64(0), np.uint64(1)
+_U0, _U1, _U2, _U4 = np.uint64(0), np.uint64(1), np.uint64(2), np.uint64(4)
 
 __all__ = ["Heap", "new_heap", "push", "pop", "decrease_key", "change_key", "remove",
            "sift_up", "sift_down", "SIDE", "side_index", "pq_push", "pq_pop", "pq_decrease",
@@ -78,7 +80,7 @@ def sift_up(h, pos, i0):  # pragma: no cover - compiled
     i = np.uint64(i0)
     x, xf, xg = slot[i], hf[i], hg[i]
     while i > _U0:
-        parent = (i - _U1) >> _U1
+        parent = (i - _U1) >> _U2
         if not _before(xf, xg, hf[parent], hg[parent]):
             break
         _put(h, pos, i, slot[parent], hf[parent], hg[parent])
@@ -94,12 +96,14 @@ def sift_down(h, pos, i0, n0):  # pragma: no cover - compiled
     n = np.uint64(n0)
     x, xf, xg = slot[i], hf[i], hg[i]
     while True:
-        c = i + i + _U1
-        if c >= n:
+        c0 = (i << _U2) + _U1
+        if c0 >= n:
             break
-        d = c + _U1
-        if d < n and _before(hf[d], hg[d], hf[c], hg[c]):
-            c = d
+        c = c0
+        end = min(c0 + _U4, n)
+        for d in range(c0 + _U1, end):
+            if _before(hf[d], hg[d], hf[c], hg[c]):
+                c = d
         if not _before(hf[c], hg[c], xf, xg):
             break
         _put(h, pos, i, slot[c], hf[c], hg[c])
