@@ -1,4 +1,4 @@
-"""The search's indexed binary heap (planner.search._heap) against heapq."""
+"""The search's indexed 4-ary heap (planner.search._heap) against heapq."""
 
 from __future__ import annotations
 
@@ -147,3 +147,60 @@ def test_remove_and_key_change_match_a_reference_on_random_sequences(seed):
         assert n == len(key)
         assert sorted(int(s) for s in h.slot[:n]) == sorted(key)
     assert pops > 300 and removes > 300 and changes > 300
+
+
+def _pq_positions_exact(h, pos, hn, sn):
+    top = len(h.slot) - 1
+    for i in range(hn):
+        assert pos[h.slot[i]] == i
+    for i in range(sn):
+        assert pos[h.slot[top - i]] == H.SIDE - i
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_plateau_queue_pops_in_key_order_on_random_sequences(seed):
+    """The A* queue (main heap + side heap of the f plateau, pq_*): random push / pop /
+    decrease-key / flush with many ties, keys below the plateau included: every pop gives
+    the key a sorted reference holds first, (f, -g) ascending, and every queued slot knows
+    where it is in either part."""
+    rng = np.random.default_rng(200 + seed)
+    cap = 1200
+    h, pos = _heap(cap)
+    hn = sn = 0
+    fcur = np.nan
+    key: dict[int, tuple[float, float]] = {}
+    nxt = 0
+    pops = side_pops = flushes = 0
+    for _ in range(4000):
+        op = rng.random()
+        if (op < 0.45 or not key) and nxt < cap:
+            base = 10.0 if np.isnan(fcur) else fcur
+            f = base + float(rng.choice([0, 0, 0, 1, 2, -1]))  # mostly on the plateau
+            g = float(rng.integers(0, 6))
+            hn, sn = H.pq_push(h, pos, hn, sn, fcur, nxt, f, g)
+            key[nxt] = (f, g)
+            nxt += 1
+        elif op < 0.75 and key:
+            want = min((f, -g) for f, g in key.values())
+            side = sn > 0
+            s, hn, sn2, fcur = H.pq_pop(h, pos, hn, sn, fcur)
+            side_pops += side and sn2 < sn
+            sn = sn2
+            pos[s] = -1
+            f, g = key.pop(int(s))
+            assert (f, -g) == want
+            pops += 1
+        elif op < 0.97 and key:
+            x = int(rng.choice(list(key)))
+            f, g = key[x]
+            nf = f - float(rng.choice([0, 0, 1]))
+            ng = g - float(rng.integers(1, 3))
+            hn, sn = H.pq_decrease(h, pos, hn, sn, fcur, x, nf, ng)
+            key[x] = (nf, ng)
+        else:
+            hn = H.pq_flush(h, pos, hn, sn, fcur)
+            sn = 0
+            flushes += 1
+        assert hn + sn == len(key)
+        _pq_positions_exact(h, pos, hn, sn)
+    assert pops > 500 and side_pops > 100 and flushes > 10

@@ -1,16 +1,29 @@
-"""Indexed binary min-heap kernels (numba) for every engine: push, pop, decrease-key, key
+"""Indexed 4-ary min-heap kernels (numba) for every engine: push, pop, decrease-key, key
 change and removal.
 
 The heap holds node slots; ``pos[slot]`` is the slot's index in the heap (the caller marks
 closed / unseen slots with negative values, the heap only writes positions of entries it
 holds). Each entry keeps its key ``f`` and tie-breaker ``g`` beside the slot
 (:class:`Heap`): sifting then compares contiguous memory instead of chasing slots into the
-node table (a cache miss per level).
+node table (a cache miss per level). Four children per entry: half the levels of a binary
+heap, and the four keys a sift-down compares sit side by side (``benchmarks/cpp_anchor.py
+--variants`` measures the same choice on the compiled floor).
 
 Order: lower ``f`` first; among equal ``f`` the larger ``g`` first (deeper nodes: fewer
 expansions on the many equal-cost paths of a lattice). Entries equal in both come out in an
 unspecified order. A* keys its entries (f, g); D* Lite (k1, tie-break) with the same rule
 (:mod:`planner.search.dstar.kernel`).
+
+The A* loops queue through the ``pq_*`` functions: the same storage, split in two. Entries
+whose f equals the f of the current plateau (``fcur``: the f popped last while the plateau
+was empty) go to a side heap ordered by g alone, kept at the top end of the arrays (side
+entry ``i`` at index ``cap - 1 - i``, ``pos = SIDE - i``); all others to the main heap at
+the bottom end. On a lattice most generated nodes lie on the plateau (a move towards the
+goal keeps f), so most pushes and pops run in a small heap and compare one float,
+instead of sifting through the whole open list. A pop compares the two tops by (f, g) as
+above, so the order is the one heap's order for any keys, consistent or not; only entries
+equal in both f and g may come out in another order. ``fcur`` changes only when the side
+heap is empty, so every side entry always has f == fcur.
 
 All functions are ``inline="always"`` (numba copies their bodies into each caller): as
 calls, the dense A* loop ran about 4% slower on long queries
@@ -27,10 +40,11 @@ import numpy as np
 
 from planner._numba import njit_cached
 
-_U0, _U1 = np.uint64(0), np.uint64(1)
+_U0, _U1, _U2, _U4 = np.uint64(0), np.uint64(1), np.uint64(2), np.uint64(4)
 
 __all__ = ["Heap", "new_heap", "push", "pop", "decrease_key", "change_key", "remove",
-           "sift_up", "sift_down"]
+           "sift_up", "sift_down", "SIDE", "side_index", "pq_push", "pq_pop", "pq_decrease",
+           "pq_flush"]
 
 
 class Heap(NamedTuple):
@@ -66,7 +80,7 @@ def sift_up(h, pos, i0):  # pragma: no cover - compiled
     i = np.uint64(i0)
     x, xf, xg = slot[i], hf[i], hg[i]
     while i > _U0:
-        parent = (i - _U1) >> _U1
+        parent = (i - _U1) >> _U2
         if not _before(xf, xg, hf[parent], hg[parent]):
             break
         _put(h, pos, i, slot[parent], hf[parent], hg[parent])
@@ -82,12 +96,14 @@ def sift_down(h, pos, i0, n0):  # pragma: no cover - compiled
     n = np.uint64(n0)
     x, xf, xg = slot[i], hf[i], hg[i]
     while True:
-        c = i + i + _U1
-        if c >= n:
+        c0 = (i << _U2) + _U1
+        if c0 >= n:
             break
-        d = c + _U1
-        if d < n and _before(hf[d], hg[d], hf[c], hg[c]):
-            c = d
+        c = c0
+        end = min(c0 + _U4, n)
+        for d in range(c0 + _U1, end):
+            if _before(hf[d], hg[d], hf[c], hg[c]):
+                c = d
         if not _before(hf[c], hg[c], xf, xg):
             break
         _put(h, pos, i, slot[c], hf[c], hg[c])
@@ -146,4 +162,149 @@ def remove(h, pos, n, x):  # pragma: no cover - compiled
         _put(h, pos, i, y, h.f[n], h.g[n])
         sift_up(h, pos, i)
         sift_down(h, pos, pos[y], n)
+    return n
+
+
+#: ``pos`` of side entry 0 (``SIDE - i`` for entry i); below the callers' own marks
+#: (-1 closed, -2 generated but not queued)
+SIDE = -3
+
+
+@njit_cached(inline="always")
+def side_index(p):  # pragma: no cover - compiled
+    """Side heap index of an entry whose ``pos`` is ``p`` (<= SIDE)."""
+    return SIDE - p
+
+
+@njit_cached(inline="always")
+def _sput(h, pos, top, i, x, xg):  # pragma: no cover - compiled
+    a = np.uint64(top - i)
+    h.slot[a] = x
+    h.g[a] = xg
+    pos[np.uint64(x)] = SIDE - i
+
+
+@njit_cached(inline="always")
+def _side_up(h, pos, i, x, xg):  # pragma: no cover - compiled
+    """Place slot ``x`` (g ``xg``) at side index ``i`` or above (larger g first)."""
+    slot, hg = h.slot, h.g
+    top = slot.shape[0] - 1
+    while i > 0:
+        p = (i - 1) >> 1
+        a = np.uint64(top - p)
+        if hg[a] >= xg:
+            break
+        _sput(h, pos, top, i, slot[a], hg[a])
+        i = p
+    _sput(h, pos, top, i, x, xg)
+
+
+@njit_cached(inline="always")
+def _side_down(h, pos, i, sn, x, xg):  # pragma: no cover - compiled
+    """Place slot ``x`` (g ``xg``) at side index ``i`` or below in a side heap of ``sn``."""
+    slot, hg = h.slot, h.g
+    top = slot.shape[0] - 1
+    while True:
+        c = i + i + 1
+        if c >= sn:
+            break
+        if c + 1 < sn and hg[np.uint64(top - c - 1)] > hg[np.uint64(top - c)]:
+            c += 1
+        a = np.uint64(top - c)
+        if hg[a] <= xg:
+            break
+        _sput(h, pos, top, i, slot[a], hg[a])
+        i = c
+    _sput(h, pos, top, i, x, xg)
+
+
+@njit_cached(inline="always")
+def _side_take(h, pos, sn, i):  # pragma: no cover - compiled
+    """Remove side entry ``i`` from a side heap of ``sn``; returns sn - 1."""
+    sn -= 1
+    if i < sn:
+        a = np.uint64(h.slot.shape[0] - 1 - sn)
+        x, xg = h.slot[a], h.g[a]
+        _side_up(h, pos, i, x, xg)
+        _side_down(h, pos, side_index(pos[np.uint64(x)]), sn, x, xg)
+    return sn
+
+
+@njit_cached(inline="always")
+def pq_push(h, pos, hn, sn, fcur, x, xf, xg):  # pragma: no cover - compiled
+    """Queue slot ``x`` with key ``xf`` / tie-breaker ``xg``; returns ``(hn, sn)``, the main
+    and side heap sizes. The two together hold at most ``len(h.slot)`` entries."""
+    if xf == fcur:
+        _side_up(h, pos, sn, x, xg)
+        return hn, sn + 1
+    return push(h, pos, hn, x, xf, xg), sn
+
+
+@njit_cached(inline="always")
+def pq_pop(h, pos, hn, sn, fcur):  # pragma: no cover - compiled
+    """Take the first entry (``hn + sn > 0``); returns ``(slot, hn, sn, fcur)``. The
+    popped slot's ``pos`` is left for the caller to mark (closed)."""
+    top = np.uint64(h.slot.shape[0] - 1)
+    if sn > 0 and (hn == 0 or not _before(h.f[0], h.g[0], fcur, h.g[top])):
+        s = h.slot[top]
+        sn -= 1
+        if sn > 0:
+            a = np.uint64(h.slot.shape[0] - 1 - sn)
+            _side_down(h, pos, 0, sn, h.slot[a], h.g[a])
+        return s, hn, sn, fcur
+    if sn == 0:
+        fcur = h.f[0]
+    s, hn = pop(h, pos, hn)
+    return s, hn, sn, fcur
+
+
+@njit_cached(inline="always")
+def pq_decrease(h, pos, hn, sn, fcur, x, xf, xg):  # pragma: no cover - compiled
+    """Lower the g of queued slot ``x`` to ``xg`` and its f to ``xf`` (<= its f); returns
+    ``(hn, sn)``."""
+    p = pos[np.uint64(x)]
+    if p >= 0:
+        if xf != fcur:
+            i = np.uint64(p)
+            if xf < h.f[i]:
+                decrease_key(h, pos, x, xf, xg)
+            else:  # f kept (the 1e-9 grid), smaller g: later among its equals
+                h.g[i] = xg
+                sift_down(h, pos, i, hn)
+            return hn, sn
+        hn = _take(h, pos, hn, p)
+        _side_up(h, pos, sn, x, xg)
+        return hn, sn + 1
+    i = side_index(p)
+    if xf == fcur:  # stays on the plateau: a smaller g moves it down
+        _side_down(h, pos, i, sn, x, xg)
+        return hn, sn
+    sn = _side_take(h, pos, sn, i)  # below the plateau (inconsistent keys only)
+    return push(h, pos, hn, x, xf, xg), sn
+
+
+@njit_cached(inline="always")
+def pq_flush(h, pos, hn, sn, fcur):  # pragma: no cover - compiled
+    """Move every side entry into the main heap (before the storage is copied or the
+    search pauses); returns the main heap's new size."""
+    top = h.slot.shape[0] - 1
+    # deepest first: the main heap then grows into cells already read
+    for i in range(sn - 1, -1, -1):
+        a = np.uint64(top - i)
+        hn = push(h, pos, hn, h.slot[a], fcur, h.g[a])
+    return hn
+
+
+@njit_cached(inline="always")
+def _take(h, pos, n, i0):  # pragma: no cover - compiled
+    """Remove the entry at index ``i0`` of a heap of ``n``; returns n - 1 (the removed
+    slot's ``pos`` is left for the caller)."""
+    i = np.uint64(i0)
+    n -= 1
+    u = np.uint64(n)
+    if i < u:
+        y = h.slot[u]
+        _put(h, pos, i, y, h.f[u], h.g[u])
+        sift_up(h, pos, i)
+        sift_down(h, pos, pos[np.uint64(y)], n)
     return n

@@ -216,17 +216,19 @@ def dense_astar(grid, lo, dims, ms, nodes, heap, dsl, st, max_nodes, max_exp, go
     fq_inv = 1.0 / fq
     n = st.nodes
     hn = st.queued
+    sn = 0  # the side heap of the f plateau (planner.search._heap): empty between runs
+    fcur = np.nan
     expansions = st.expansions
     lookups = st.lookups
     status = RUN_EXHAUSTED
-    while hn > 0:
+    while hn + sn > 0:
         if n + nm > cap:
             status = RUN_GROW
             break
         if max_exp > 0 and expansions >= max_exp:
             status = RUN_BUDGET
             break
-        s, hn = _heap.pop(heap, npos, hn)
+        s, hn, sn, fcur = _heap.pq_pop(heap, npos, hn, sn, fcur)
         su = np.uint64(s)  # unsigned node indices: no negative-index fix-up on each access
         npos[su] = -1
         expansions += 1
@@ -290,7 +292,7 @@ def dense_astar(grid, lo, dims, ms, nodes, heap, dsl, st, max_nodes, max_exp, go
                 f = np.floor((gt + nh[tu]) * fq_inv + 0.5) * fq
                 nf[tu] = f
                 npar[tu] = s
-                _heap.decrease_key(heap, npos, np.int64(v) - 1, f, gt)
+                hn, sn = _heap.pq_decrease(heap, npos, hn, sn, fcur, np.int64(v) - 1, f, gt)
                 continue
             t = n
             tn = np.uint64(t)
@@ -329,7 +331,9 @@ def dense_astar(grid, lo, dims, ms, nodes, heap, dsl, st, max_nodes, max_exp, go
             f = np.floor((gt + hv) * fq_inv + 0.5) * fq
             nf[tn] = f
             npar[tn] = s
-            hn = _heap.push(heap, npos, hn, t, f, gt)
+            hn, sn = _heap.pq_push(heap, npos, hn, sn, fcur, t, f, gt)
+    if status != RUN_FOUND:  # the arrays may be copied or the search resumed
+        hn = _heap.pq_flush(heap, npos, hn, sn, fcur)
     st.nodes = n
     st.queued = hn
     st.expansions = expansions

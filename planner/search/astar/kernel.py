@@ -201,17 +201,25 @@ def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, 
     fq_inv = 1.0 / fq
     n = st.nodes
     hn = st.queued
+    # The f plateau's side heap (planner.search._heap) for lattice A* / Dijkstra; the
+    # any-angle methods keep the one heap (fcur stays NaN: nothing equals it), as the dense
+    # Lazy Theta* loop does, so that the two loops tie-break alike.
+    sn = 0
+    fcur = np.nan
+    plateau = anyangle == 0
     expansions = st.expansions
     lookups = st.lookups
     status = RUN_EXHAUSTED
-    while hn > 0:
+    while hn + sn > 0:
         if n + nm > cap or st.pages + nm > pcap or 2 * (st.pages + nm) > bsize:
             status = RUN_GROW
             break
         if max_exp > 0 and expansions >= max_exp:
             status = RUN_BUDGET
             break
-        s, hn = _heap.pop(heap, npos, hn)
+        s, hn, sn, fc = _heap.pq_pop(heap, npos, hn, sn, fcur)
+        if plateau:
+            fcur = fc
         npos[s] = -1
         expansions += 1
         u0, u1, u2 = unpack3(nkey[s])
@@ -388,9 +396,11 @@ def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, 
                 nf[t] = np.floor((gt + nh[t]) * fq_inv + 0.5) * fq
                 npar[t] = par
                 if npos[t] == -2:
-                    hn = _heap.push(heap, npos, hn, t, nf[t], gt)
+                    hn, sn = _heap.pq_push(heap, npos, hn, sn, fcur, t, nf[t], gt)
                 else:
-                    _heap.decrease_key(heap, npos, t, nf[t], gt)
+                    hn, sn = _heap.pq_decrease(heap, npos, hn, sn, fcur, t, nf[t], gt)
+    if status != RUN_FOUND:  # the arrays may be copied or the search resumed
+        hn = _heap.pq_flush(heap, npos, hn, sn, fcur)
     st.nodes = n
     st.queued = hn
     st.expansions = expansions
