@@ -35,7 +35,7 @@ from planner._numba import njit_cached
 from planner.lattice import Lattice
 from planner.occupancy.grid import cell_free
 
-__all__ = ["FaceTable", "face_scratch", "face_table", "face_walk"]
+__all__ = ["FaceTable", "face_scratch", "face_table", "face_walk", "recorded"]
 
 SEG_TOL = 1e-9  # relative slack on each Voronoi half-space of every walk: contact counts
 _PAR = 1e-12  # |cos| below which a facet is parallel to the segment
@@ -56,10 +56,13 @@ I_R, I_NF, I_SM, I_REACH = 0, 1, 2, 3  # reach: |index - segment point| bound, 3
 I_FMASK, I_STARN, I_STAROFF, I_STARMASK, I_RIDX = 6, 7, 8, 9, 10
 # Scratch (``sf`` float64, ``si`` int64, from face_scratch): exit time of forward slot k,
 # 1 / (d . v) of slot k, d . v_r of facet r, the change of slot k's time on a step through
-# slot i (8, 8); the facet of slot k, its flat index step (dense grid), the cells the
-# segment runs along (SM, 3), the number of cells to record and the record (tests).
+# slot i (8, 8); the facet of slot k, the step through slot k's facet (index offset and
+# flat index step in a dense grid: 4 per slot), the cells the segment runs along (SM, 3),
+# the number of cells to record and the record (tests).
 S_T, S_IDQ, S_DQ, S_INC, S_F = 0, 8, 16, 32, 96
-S_FW, S_FSTEP, S_CUR = 0, 8, 16
+S_FW, S_STEP, S_CUR = 0, 8, 40
+# Trailing zeros of 1..255: the slot of the one exit time at the minimum.
+_TZ = np.array([0] + [(b & -b).bit_length() - 1 for b in range(1, 256)], np.int64)
 
 
 class FaceTable(NamedTuple):
@@ -145,7 +148,8 @@ def face_scratch(sm: int, record: int = 0) -> tuple[np.ndarray, np.ndarray]:
     return np.zeros(S_F), si
 
 
-def recorded(si: np.ndarray, sm: int, n: int) -> np.ndarray:
+@njit_cached
+def recorded(si, sm, n):  # pragma: no cover - compiled
     """The first ``n`` cells :func:`face_walk` looked up, (n, 3), from a recording scratch."""
     o = S_CUR + 3 * max(sm, 1) + 1
     return si[o:o + 3 * n].reshape(-1, 3)
@@ -202,8 +206,12 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
             sf[S_IDQ + nfw] = iy
             sf[S_T + nfw] = h * iy  # exact exit times (no tolerance): ties to rounding
             gap = max(gap, _GAP * h * iy)
-            si[S_FSTEP + nfw] = (fi[I_RIDX + 3 * r] * s0 + fi[I_RIDX + 3 * r + 1] * s1
-                                 + fi[I_RIDX + 3 * r + 2])
+            a = I_RIDX + 3 * r
+            b = S_STEP + 4 * nfw
+            si[b] = fi[a]
+            si[b + 1] = fi[a + 1]
+            si[b + 2] = fi[a + 2]
+            si[b + 3] = fi[a] * s0 + fi[a + 1] * s1 + fi[a + 2]
             nfw += 1
     for i in range(nfw):
         a = o_vv + nrel * si[S_FW + i]
@@ -238,33 +246,29 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
         if m >= 1.0:
             break
         lim = m + gap
-        ties = (np.int64(t0 <= lim) + np.int64(t1 <= lim) + np.int64(t2 <= lim)
-                + np.int64(t3 <= lim) + np.int64(t4 <= lim) + np.int64(t5 <= lim)
-                + np.int64(t6 <= lim) + np.int64(t7 <= lim))
-        if pm == 0 and ties == 1:
-            # One facet at the exit point: step through it.
-            st = 7
-            st = 6 if t6 == m else st
-            st = 5 if t5 == m else st
-            st = 4 if t4 == m else st
-            st = 3 if t3 == m else st
-            st = 2 if t2 == m else st
-            st = 1 if t1 == m else st
-            st = 0 if t0 == m else st
-            r = I_RIDX + 3 * si[S_FW + st]
-            u0 += fi[r]
-            u1 += fi[r + 1]
-            u2 += fi[r + 2]
-            idx += si[S_FSTEP + st]
-            a = S_INC + _SLOTS * st
+        # bit k: slot k's exit is at the minimum (up to the tie margin)
+        at = (np.int64(t0 <= lim) | (np.int64(t1 <= lim) << 1) | (np.int64(t2 <= lim) << 2)
+              | (np.int64(t3 <= lim) << 3) | (np.int64(t4 <= lim) << 4)
+              | (np.int64(t5 <= lim) << 5) | (np.int64(t6 <= lim) << 6)
+              | (np.int64(t7 <= lim) << 7))
+        if pm == 0 and at & (at - 1) == 0:
+            # One facet at the exit point: step through it. (Unsigned indices: no
+            # negative-index fix-up on each load.)
+            st = _TZ[at]
+            b = np.uint64(S_STEP + 4 * st)
+            u0 += si[b]
+            u1 += si[b + np.uint64(1)]
+            u2 += si[b + np.uint64(2)]
+            idx += si[b + np.uint64(3)]
+            a = np.uint64(S_INC + _SLOTS * st)
             t0 += sf[a]
-            t1 += sf[a + 1]
-            t2 += sf[a + 2]
-            t3 += sf[a + 3]
-            t4 += sf[a + 4]
-            t5 += sf[a + 5]
-            t6 += sf[a + 6]
-            t7 += sf[a + 7]
+            t1 += sf[a + np.uint64(1)]
+            t2 += sf[a + np.uint64(2)]
+            t3 += sf[a + np.uint64(3)]
+            t4 += sf[a + np.uint64(4)]
+            t5 += sf[a + np.uint64(5)]
+            t6 += sf[a + np.uint64(6)]
+            t7 += sf[a + np.uint64(7)]
             ncur = 0
             # The lookup written out: a call here would spill the eight exit times.
             if lookups < nrec:
