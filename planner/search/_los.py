@@ -6,7 +6,10 @@ segment touches is free (the same test as a motion check of :class:`planner.worl
 ValidityChecker`). On the cubic lattice those cells are enumerated directly, with no walk
 search: by nested clipping (:func:`cubic_sight`, the reference) and, faster, by integer
 stepping from cell to cell (:func:`cubic_walk`, used by the searches and shortcutting);
-tests check that both accept and reject exactly as the generic walk's cells say.
+on every other lattice by the face walk (:func:`planner.occupancy.facewalk.face_walk`,
+from Voronoi cell to cell through the facet the segment leaves by), the generic walk
+taking over only at a tie the face walk's table does not know. Tests check that each
+accepts and rejects exactly as the generic walk's cells say.
 """
 
 from __future__ import annotations
