@@ -56,11 +56,10 @@ I_R, I_NF, I_SM, I_REACH = 0, 1, 2, 3  # reach: |index - segment point| bound, 3
 I_FMASK, I_STARN, I_STAROFF, I_STARMASK, I_RIDX = 6, 7, 8, 9, 10
 # Scratch (``sf`` float64, ``si`` int64, from face_scratch): exit time of forward slot k,
 # 1 / (d . v) of slot k, d . v_r of facet r, the change of slot k's time on a step through
-# slot i (8, 8); the facet of slot k, the step through slot k's facet (index offset and
-# flat index step in a dense grid: 4 per slot), the cells the segment runs along (SM, 3),
-# the number of cells to record and the record (tests).
+# slot i (8, 8); the facet of slot k, the flat index step through slot k's facet, the
+# cells the segment runs along (SM, 3), the number of cells to record and the record.
 S_T, S_IDQ, S_DQ, S_INC, S_F = 0, 8, 16, 32, 96
-S_FW, S_STEP, S_CUR = 0, 8, 40
+S_FW, S_STEP, S_CUR = 0, 8, 16
 # Trailing zeros of 1..255: the slot of the one exit time at the minimum.
 _TZ = np.array([0] + [(b & -b).bit_length() - 1 for b in range(1, 256)], np.int64)
 
@@ -178,16 +177,22 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
     x1 = gg[1, 0] * e0 + gg[1, 1] * e1 + gg[1, 2] * e2
     x2 = gg[2, 0] * e0 + gg[2, 1] * e1 + gg[2, 2] * e2
     dn2 = x0 * x0 + x1 * x1 + x2 * x2
-    # Dense grid and every touched cell inside its box: flat indices, no bound tests.
-    dense = mode == 0
+    # The walk tracks one flat index in a box holding every touched cell: the dense grid's
+    # box when it holds them (then a lookup is a bit test), else the segment's own box
+    # (cells from the index by division). One integer instead of three keeps the step's
+    # state in registers. Recording (tests) takes the second way.
+    b0 = min(p0, q0) - fi[I_REACH]
+    b1 = min(p1, q1) - fi[I_REACH + 1]
+    b2 = min(p2, q2) - fi[I_REACH + 2]
+    d1 = max(p1, q1) + fi[I_REACH + 1] + 1 - b1
+    d2 = max(p2, q2) + fi[I_REACH + 2] + 1 - b2
+    dense = (mode == 0 and nrec == 0 and b0 >= lo[0] and b1 >= lo[1] and b2 >= lo[2]
+             and max(p0, q0) + fi[I_REACH] < lo[0] + dims[0] and b1 + d1 <= lo[1] + dims[1]
+             and b2 + d2 <= lo[2] + dims[2])
     if dense:
-        dense = (min(p0, q0) - fi[I_REACH] >= lo[0] and min(p1, q1) - fi[I_REACH + 1] >= lo[1]
-                 and min(p2, q2) - fi[I_REACH + 2] >= lo[2]
-                 and max(p0, q0) + fi[I_REACH] < lo[0] + dims[0]
-                 and max(p1, q1) + fi[I_REACH + 1] < lo[1] + dims[1]
-                 and max(p2, q2) + fi[I_REACH + 2] < lo[2] + dims[2])
-    s1 = dims[2]
-    s0 = dims[1] * dims[2]
+        b0, b1, b2, d1, d2 = lo[0], lo[1], lo[2], dims[1], dims[2]
+    s1 = d2
+    s0 = d1 * d2
     nfw = 0
     fwm = np.int64(0)
     parm = np.int64(0)
@@ -207,23 +212,18 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
             sf[S_T + nfw] = h * iy  # exact exit times (no tolerance): ties to rounding
             gap = max(gap, _GAP * h * iy)
             a = I_RIDX + 3 * r
-            b = S_STEP + 4 * nfw
-            si[b] = fi[a]
-            si[b + 1] = fi[a + 1]
-            si[b + 2] = fi[a + 2]
-            si[b + 3] = fi[a] * s0 + fi[a + 1] * s1 + fi[a + 2]
+            si[S_STEP + nfw] = fi[a] * s0 + fi[a + 1] * s1 + fi[a + 2]
             nfw += 1
     for i in range(nfw):
         a = o_vv + nrel * si[S_FW + i]
-        for k in range(_SLOTS):
-            sf[S_INC + _SLOTS * i + k] = (fd[a + si[S_FW + k]] * sf[S_IDQ + k] if k < nfw
-                                          else 0.0)
-    for k in range(nfw, _SLOTS):  # empty slots: never the next exit
+        b = S_INC + _SLOTS * i
+        for k in range(nfw):
+            sf[b + k] = fd[a + si[S_FW + k]] * sf[S_IDQ + k]
+    # Empty slots: never the next exit. Their steps keep what an earlier walk left (finite
+    # numbers, zero at first), which moves 1e300 by nothing.
+    for k in range(nfw, _SLOTS):
         sf[S_T + k] = _NEVER
-    u0 = np.int64(0)
-    u1 = np.int64(0)
-    u2 = np.int64(0)
-    idx = ((p0 - lo[0]) * dims[1] + (p1 - lo[1])) * dims[2] + (p2 - lo[2])
+    idx = ((p0 - b0) * d1 + (p1 - b1)) * d2 + (p2 - b2)
     if nrec > 0:
         si[o_rec] = p0
         si[o_rec + 1] = p1
@@ -255,11 +255,7 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
             # One facet at the exit point: step through it. (Unsigned indices: no
             # negative-index fix-up on each load.)
             st = _TZ[at]
-            b = np.uint64(S_STEP + 4 * st)
-            u0 += si[b]
-            u1 += si[b + np.uint64(1)]
-            u2 += si[b + np.uint64(2)]
-            idx += si[b + np.uint64(3)]
+            idx += si[np.uint64(S_STEP + st)]
             a = np.uint64(S_INC + _SLOTS * st)
             t0 += sf[a]
             t1 += sf[a + np.uint64(1)]
@@ -270,20 +266,26 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
             t6 += sf[a + np.uint64(6)]
             t7 += sf[a + np.uint64(7)]
             ncur = 0
-            # The lookup written out: a call here would spill the eight exit times.
-            if lookups < nrec:
-                si[o_rec + 3 * lookups] = p0 + u0
-                si[o_rec + 3 * lookups + 1] = p1 + u1
-                si[o_rec + 3 * lookups + 2] = p2 + u2
             lookups += 1
+            # The dense lookup written out: a call would spill the eight exit times.
             if dense:
                 if (grid[np.uint64(idx) >> np.uint64(3)] >> (idx & 7)) & 1 == 0:
                     return False, lookups, True
-            elif not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi,
-                               p0 + u0, p1 + u1, p2 + u2):
+                continue
+            c2 = idx % d2 + b2
+            c1 = (idx // d2) % d1 + b1
+            c0 = idx // s0 + b0
+            if lookups <= nrec:
+                si[o_rec + 3 * lookups - 3] = c0
+                si[o_rec + 3 * lookups - 2] = c1
+                si[o_rec + 3 * lookups - 1] = c2
+            if not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi, c0, c1, c2):
                 return False, lookups, True
             continue
         # An edge or a vertex, or a facet the segment runs in: the face table.
+        u2 = idx % d2 + b2 - p2  # the chain cell's offset from p
+        u1 = (idx // d2) % d1 + b1 - p1
+        u0 = idx // s0 + b0 - p0
         sf[S_T], sf[S_T + 1], sf[S_T + 2], sf[S_T + 3] = t0, t1, t2, t3
         sf[S_T + 4], sf[S_T + 5], sf[S_T + 6], sf[S_T + 7] = t4, t5, t6, t7
         am = pm
@@ -345,7 +347,7 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
         u0 += fi[a]
         u1 += fi[a + 1]
         u2 += fi[a + 2]
-        idx = ((p0 + u0 - lo[0]) * dims[1] + (p1 + u1 - lo[1])) * dims[2] + (p2 + u2 - lo[2])
+        idx = ((p0 + u0 - b0) * d1 + (p1 + u1 - b1)) * d2 + (p2 + u2 - b2)
         for k in range(nfw):
             r = si[S_FW + k]
             w = o_wv + 3 * r
