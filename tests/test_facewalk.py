@@ -1,8 +1,9 @@
 """The face walk (sight lines on every lattice) looks up exactly the cells the generic segment
 walk touches, and so accepts and rejects exactly as it: random centre-to-centre segments and
 tie-heavy ones (along full-neighbour offsets, through edges and vertices, in facet planes,
-axis-aligned, zero length), in empty worlds and in worlds with blocked cells, dense and
-hashed. The fast tier checks 20,000 segments per lattice; the slow tier 10**6."""
+axis-aligned, zero length), on every lattice (turned ones too), in empty worlds and in
+worlds with blocked cells, dense and hashed. The fast tier checks 20,000 segments per
+lattice; the slow tier 10**6."""
 
 from __future__ import annotations
 
@@ -19,11 +20,22 @@ from planner.occupancy.walk import walk_on, walk_scratch
 from planner.search._los import los, new_scratch
 from planner.world import World
 
-LATTICES = [*NAMED_LATTICES, "hex2d"]
+LATTICES = [*NAMED_LATTICES, "hex2d", "bcc turned", "mcc turned"]
 
 
 def _lattice(name: str) -> Lattice:
-    return planar_prism(Lattice.named(name)) if name == "hex2d" else Lattice.named(name, 0.7)
+    """A named lattice; ``hex2d``: its planar prism; ``<name> turned``: turned about z, y
+    and x (the benchmark suite's rotated worlds are such generators)."""
+    if name == "hex2d":
+        return planar_prism(Lattice.named(name))
+    base, _, turned = name.partition(" ")
+    lat = Lattice.named(base, 0.7)
+    if turned:
+        from scipy.spatial.transform import Rotation
+
+        turn = Rotation.from_euler("zyx", (0.7, 0.3, -1.1)).as_matrix()
+        lat = Lattice(turn @ lat.generator, name=base)
+    return lat
 
 
 def segments(lat: Lattice, n: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
