@@ -154,6 +154,63 @@ def recorded(si, sm, n):  # pragma: no cover - compiled
     return si[o:o + 3 * n].reshape(-1, 3)
 
 
+_END, _BLOCKED, _TIE, _STEPPED = 0, 1, 2, 3  # how _run stops
+
+
+@njit_cached(_nrt=False)
+def _run(grid, sf, si, idx, lookups, gap, dense):  # pragma: no cover - compiled
+    """The walk's fast steps, from the exit times in ``sf``: while one facet alone is at the
+    exit point, step through it and (``dense``) test the cell's bit at flat index ``idx``.
+    Stops at the segment's end (``_END``), a blocked cell (``_BLOCKED``), a tie
+    (``_TIE``) or, not dense, after one step (``_STEPPED``: the caller looks the cell up).
+    Returns ``(code, idx, lookups, m)``, ``m`` the next exit time; the exit times back in
+    ``sf``. A function of its own, with few arguments and little state, so that the eight
+    exit times stay in registers (in the walk's body the compiler spilled the step's state
+    around them)."""
+    # Eight locals: at most half the facets face forward, and a 3D Voronoi cell has at
+    # most 14. Branch-free minima: which facet comes next is not predictable (a
+    # mispredicted branch per facet doubled the step's time).
+    t0, t1, t2, t3 = sf[S_T], sf[S_T + 1], sf[S_T + 2], sf[S_T + 3]
+    t4, t5, t6, t7 = sf[S_T + 4], sf[S_T + 5], sf[S_T + 6], sf[S_T + 7]
+    code = _END
+    while True:
+        m = min(min(min(t0, t1), min(t2, t3)), min(min(t4, t5), min(t6, t7)))
+        if m >= 1.0:
+            break
+        lim = m + gap
+        # bit k: slot k's exit is at the minimum (up to the tie margin)
+        at = (np.int64(t0 <= lim) | (np.int64(t1 <= lim) << 1) | (np.int64(t2 <= lim) << 2)
+              | (np.int64(t3 <= lim) << 3) | (np.int64(t4 <= lim) << 4)
+              | (np.int64(t5 <= lim) << 5) | (np.int64(t6 <= lim) << 6)
+              | (np.int64(t7 <= lim) << 7))
+        if at & (at - 1) != 0:
+            code = _TIE
+            break
+        # One facet at the exit point: step through it (unsigned indices: no
+        # negative-index fix-up on each load).
+        st = _TZ[at]
+        idx += si[np.uint64(S_STEP + st)]
+        a = np.uint64(S_INC + _SLOTS * st)
+        t0 += sf[a]
+        t1 += sf[a + np.uint64(1)]
+        t2 += sf[a + np.uint64(2)]
+        t3 += sf[a + np.uint64(3)]
+        t4 += sf[a + np.uint64(4)]
+        t5 += sf[a + np.uint64(5)]
+        t6 += sf[a + np.uint64(6)]
+        t7 += sf[a + np.uint64(7)]
+        lookups += 1
+        if not dense:
+            code = _STEPPED
+            break
+        if (grid[np.uint64(idx) >> np.uint64(3)] >> (idx & 7)) & 1 == 0:
+            code = _BLOCKED
+            break
+    sf[S_T], sf[S_T + 1], sf[S_T + 2], sf[S_T + 3] = t0, t1, t2, t3
+    sf[S_T + 4], sf[S_T + 5], sf[S_T + 6], sf[S_T + 7] = t4, t5, t6, t7
+    return code, idx, lookups, m
+
+
 @njit_cached(_nrt=False)
 def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover - compiled
     """Line of sight between the centres of cells p and q: every cell whose closed Voronoi
@@ -235,59 +292,34 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
         return True, lookups, True
     ncur = 0  # cells the segment runs along besides the chain cell (si[S_CUR:][:3 ncur])
     pm = np.int64(0)  # the chain cell's facets the segment runs in
-    # The exit times live in eight locals (at most half the facets face forward, and a
-    # 3D Voronoi cell has at most 14): registers, with no loop or load per facet, and
-    # branch-free minima (which facet comes next is not predictable: a mispredicted
-    # branch per facet doubled the step's time).
-    t0, t1, t2, t3 = sf[S_T], sf[S_T + 1], sf[S_T + 2], sf[S_T + 3]
-    t4, t5, t6, t7 = sf[S_T + 4], sf[S_T + 5], sf[S_T + 6], sf[S_T + 7]
     while True:
-        m = min(min(min(t0, t1), min(t2, t3)), min(min(t4, t5), min(t6, t7)))
-        if m >= 1.0:
-            break
-        lim = m + gap
-        # bit k: slot k's exit is at the minimum (up to the tie margin)
-        at = (np.int64(t0 <= lim) | (np.int64(t1 <= lim) << 1) | (np.int64(t2 <= lim) << 2)
-              | (np.int64(t3 <= lim) << 3) | (np.int64(t4 <= lim) << 4)
-              | (np.int64(t5 <= lim) << 5) | (np.int64(t6 <= lim) << 6)
-              | (np.int64(t7 <= lim) << 7))
-        if pm == 0 and at & (at - 1) == 0:
-            # One facet at the exit point: step through it. (Unsigned indices: no
-            # negative-index fix-up on each load.)
-            st = _TZ[at]
-            idx += si[np.uint64(S_STEP + st)]
-            a = np.uint64(S_INC + _SLOTS * st)
-            t0 += sf[a]
-            t1 += sf[a + np.uint64(1)]
-            t2 += sf[a + np.uint64(2)]
-            t3 += sf[a + np.uint64(3)]
-            t4 += sf[a + np.uint64(4)]
-            t5 += sf[a + np.uint64(5)]
-            t6 += sf[a + np.uint64(6)]
-            t7 += sf[a + np.uint64(7)]
-            ncur = 0
-            lookups += 1
-            # The dense lookup written out: a call would spill the eight exit times.
-            if dense:
-                if (grid[np.uint64(idx) >> np.uint64(3)] >> (idx & 7)) & 1 == 0:
+        if pm == 0:
+            code, idx, lookups, m = _run(grid, sf, si, idx, lookups, gap, dense)
+            if code == _END:
+                break
+            if code == _BLOCKED:
+                return False, lookups, True
+            if code == _STEPPED:  # the cell stepped into, looked up here (not dense)
+                c2 = idx % d2 + b2
+                c1 = (idx // d2) % d1 + b1
+                c0 = idx // s0 + b0
+                if lookups <= nrec:
+                    si[o_rec + 3 * lookups - 3] = c0
+                    si[o_rec + 3 * lookups - 2] = c1
+                    si[o_rec + 3 * lookups - 1] = c2
+                if not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi, c0, c1, c2):
                     return False, lookups, True
                 continue
-            c2 = idx % d2 + b2
-            c1 = (idx // d2) % d1 + b1
-            c0 = idx // s0 + b0
-            if lookups <= nrec:
-                si[o_rec + 3 * lookups - 3] = c0
-                si[o_rec + 3 * lookups - 2] = c1
-                si[o_rec + 3 * lookups - 1] = c2
-            if not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi, c0, c1, c2):
-                return False, lookups, True
-            continue
+        else:
+            m = _NEVER
+            for k in range(nfw):
+                m = min(m, sf[S_T + k])
+            if m >= 1.0:
+                break
         # An edge or a vertex, or a facet the segment runs in: the face table.
         u2 = idx % d2 + b2 - p2  # the chain cell's offset from p
         u1 = (idx // d2) % d1 + b1 - p1
         u0 = idx // s0 + b0 - p0
-        sf[S_T], sf[S_T + 1], sf[S_T + 2], sf[S_T + 3] = t0, t1, t2, t3
-        sf[S_T + 4], sf[S_T + 5], sf[S_T + 6], sf[S_T + 7] = t4, t5, t6, t7
         am = pm
         for k in range(nfw):
             r = si[S_FW + k]
@@ -353,6 +385,4 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
             w = o_wv + 3 * r
             sf[S_T + k] = ((fd[o_rhs + r] + fd[w] * u0 + fd[w + 1] * u1 + fd[w + 2] * u2)
                            * sf[S_IDQ + k])
-        t0, t1, t2, t3 = sf[S_T], sf[S_T + 1], sf[S_T + 2], sf[S_T + 3]
-        t4, t5, t6, t7 = sf[S_T + 4], sf[S_T + 5], sf[S_T + 6], sf[S_T + 7]
     return True, lookups, True
