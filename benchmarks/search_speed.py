@@ -8,6 +8,10 @@ Usage::
     python benchmarks/search_speed.py --all-warframe  # all 30,000 Warframe queries, mismatches
     python benchmarks/search_speed.py --da1 1000      # time 1,000 DA1 queries
 
+The per-lattice tables (sight walk per cell against the cubic integer walk, A* + smoothing
+and Lazy Theta* per lattice against cubic on the office map and geb079) are
+``benchmarks/lattice_sight.py``'s, printed here too (``--no-lattice-sight`` skips them).
+
 The C++ anchor (``benchmarks/cpp_anchor.py``) is compiled at run time with the system
 compiler and skipped with a note when there is none. Every ratio is measured in one run on
 the same queries (the machine may be shared: trust ratios, not absolute times).
@@ -419,6 +423,9 @@ def main(argv: list[str] | None = None) -> int:
                          "side (load on a shared machine)")
     ap.add_argument("--anyangle", type=int, default=20,
                     help="queries per world for Lazy Theta* and weighted-theta vs A* (0: skip)")
+    ap.add_argument("--no-lattice-sight", dest="lattice_sight", action="store_false",
+                    help="skip the per-lattice sight walk and planning tables "
+                         "(benchmarks/lattice_sight.py)")
     ap.add_argument("--save-lengths", type=Path, metavar="JSON",
                     help="write each query's Lazy Theta* path length here")
     ap.add_argument("--check-lengths", type=Path, metavar="JSON",
@@ -468,6 +475,12 @@ def main(argv: list[str] | None = None) -> int:
     if a.anyangle:
         anyangle_table(geb, a.anyangle, a.save_lengths, a.check_lengths, a.repeat)
         weighted_table(geb, a.anyangle, a.repeat)
+
+    if a.lattice_sight:  # the sibling script: sight walk per cell, planning per lattice
+        import lattice_sight
+
+        lattice_sight.main(["--repeat", str(a.repeat)]
+                           + ([] if a.geb079 else ["--maps", "office"]))
 
     if a.da1:
         world, scen = load_warframe("DA1")

@@ -3,7 +3,8 @@ exact segment walk (numba kernels and their typed structs).
 
 :mod:`~planner.occupancy.keys` (packing indices into int64 keys, key sets),
 :mod:`~planner.occupancy.grid` (:class:`Occupancy` and its lookups),
-:mod:`~planner.occupancy.walk` (:class:`Walk` and the exact segment walk).
+:mod:`~planner.occupancy.walk` (:class:`Walk` and the exact segment walk),
+:mod:`~planner.occupancy.facewalk` (sight lines between cell centres on every lattice).
 """
 
 from planner.occupancy.grid import Occupancy

@@ -18,13 +18,13 @@ from planner._numba import njit_cached
 from planner.errors import PlanError
 from planner.lattice import Lattice
 from planner.lattice import quantize as qk
+from planner.occupancy.facewalk import SEG_TOL, face_table  # SEG_TOL: boundary contact counts
 from planner.occupancy.grid import cell_free
 from planner.occupancy.keys import mix64, pack3
 
 __all__ = ["SEG_TOL", "Walk", "as_cells", "c_array", "motion_free", "segment_walk", "walk_of",
            "walk_on", "walk_scratch"]
 
-SEG_TOL = 1e-9  # relative slack on each Voronoi half-space: boundary contact counts
 _FWD_SLACK = 1e-6  # cosine below which a full offset counts as backward (walk_on)
 
 
@@ -36,6 +36,8 @@ class Walk(NamedTuple):
     rhs: np.ndarray  # (R,) float64 |v|^2 / 2
     full: np.ndarray  # (F, 3) int64 full-adjacency offsets
     wv: np.ndarray  # (R, 3) float64 rel @ g: c_u . v = wv . u for the cell at offset u
+    fd: np.ndarray  # float64 the sight walk's face table, packed (facewalk.FaceTable)
+    fi: np.ndarray  # int64 its integer part
 
 
 # -- kernels --------------------------------------------------------------------
@@ -242,8 +244,10 @@ def c_array(a, dtype) -> np.ndarray:
 def _walk_cached(gen: bytes, lattice: Lattice) -> Walk:
     g = c_array(lattice.generator, float)
     rel = c_array(lattice.relevant_vectors, float)
+    ft = face_table(lattice)
     return Walk(g, rel, c_array(0.5 * np.einsum("ij,ij->i", rel, rel), float),
-                c_array(lattice.neighbors("full"), np.int64), c_array(rel @ g, float))
+                c_array(lattice.neighbors("full"), np.int64), c_array(rel @ g, float),
+                *(c_array(a, a.dtype) for a in ft))
 
 
 def walk_of(lattice: Lattice) -> Walk:

@@ -6,7 +6,10 @@ segment touches is free (the same test as a motion check of :class:`planner.worl
 ValidityChecker`). On the cubic lattice those cells are enumerated directly, with no walk
 search: by nested clipping (:func:`cubic_sight`, the reference) and, faster, by integer
 stepping from cell to cell (:func:`cubic_walk`, used by the searches and shortcutting);
-tests check that both accept and reject exactly as the generic walk's cells say.
+on every other lattice by the face walk (:func:`planner.occupancy.facewalk.face_walk`,
+from Voronoi cell to cell through the facet the segment leaves by), the generic walk
+taking over only at a tie the face walk's table does not know. Tests check that each
+accepts and rejects exactly as the generic walk's cells say.
 """
 
 from __future__ import annotations
@@ -17,25 +20,31 @@ from typing import NamedTuple
 import numpy as np
 
 from planner._numba import njit_cached
+from planner.occupancy.facewalk import I_SM, face_scratch, face_walk
 from planner.occupancy.grid import cell_free, occ_free
 from planner.occupancy.walk import SEG_TOL, segment_walk, walk_on, walk_scratch
 
 
 class SightScratch(NamedTuple):
-    """Reusable scratch of the walk (see ``walk_scratch``) plus two cell buffers."""
+    """Reusable scratch of the walks: the generic walk's (see ``walk_scratch``), two cell
+    buffers and the face walk's."""
 
     vis: np.ndarray  # (S,) int64 visited keys
     vgen: np.ndarray  # (S,) int64 generation stamp per entry
     queue: np.ndarray  # (Q, 3) int64 BFS queue
     p: np.ndarray  # (3,) int64
     q: np.ndarray  # (3,) int64
+    sf: np.ndarray  # float64 the face walk's scratch (facewalk.face_scratch)
+    si: np.ndarray  # int64
 
 
 def new_scratch(span: float, walk) -> SightScratch:
-    """Scratch for sight lines up to ``span`` metres (longer ones fall back to fresh
-    arrays inside the kernel)."""
+    """Scratch for sight lines up to ``span`` metres (the generic walk, needed only where
+    the face walk meets a tie it does not know, falls back to fresh arrays for longer
+    ones)."""
     vis, vgen, queue = walk_scratch(span, math.sqrt(2.0 * walk.rhs.min()), len(walk.full))
-    return SightScratch(vis, vgen, queue, np.empty(3, np.int64), np.empty(3, np.int64))
+    sf, si = face_scratch(int(walk.fi[I_SM]))
+    return SightScratch(vis, vgen, queue, np.empty(3, np.int64), np.empty(3, np.int64), sf, si)
 
 
 @njit_cached(_nrt=False)
@@ -275,12 +284,9 @@ def cubic_edge(g):  # pragma: no cover - compiled
 
 
 @njit_cached(_nrt=True)  # it allocates: as _far_sight, for loops without the runtime
-def los(occ, walk, p, q, sc, gen):  # pragma: no cover - compiled
-    """Line of sight between the centres of cells p and q ((3,) int64 each) on scratch ``sc``
-    with a fresh generation ``gen``. Returns ``(free, lookups)``."""
+def _generic_los(occ, walk, p, q, sc, gen):  # pragma: no cover - compiled
+    """:func:`los` by the generic walk (the face walk's unknown ties)."""
     g = walk.g
-    if is_cubic(g):
-        return cubic_walk(occ, p[0], p[1], p[2], q[0], q[1], q[2])
     a = g @ p.astype(np.float64)
     b = g @ q.astype(np.float64)
     # np.bool_, not a literal True: the callers' other call sites pass a bool value, and a
@@ -292,12 +298,31 @@ def los(occ, walk, p, q, sc, gen):  # pragma: no cover - compiled
     return free, n
 
 
+# Without the runtime: one that counted references would pay an atomic increment and
+# decrement per array of the three structs on every sight line, more than a short walk.
+@njit_cached(_nrt=False)
+def los(occ, walk, p, q, sc, gen):  # pragma: no cover - compiled
+    """Line of sight between the centres of cells p and q ((3,) int64 each) on scratch ``sc``
+    with a fresh generation ``gen``: the cubic integer walk, else the face walk (else, at a
+    tie its table does not know, the generic walk). Returns ``(free, lookups)``."""
+    if is_cubic(walk.g):
+        return cubic_walk(occ, p[0], p[1], p[2], q[0], q[1], q[2])
+    free, n, ok = face_walk(occ, walk.fd, walk.fi, sc.sf, sc.si, p[0], p[1], p[2], q[0], q[1],
+                            q[2])
+    if ok:
+        return free, n
+    return _generic_los(occ, walk, p, q, sc, gen)
+
+
 @njit_cached(_nrt=False)
 def sight(occ, walk, sc, st, p0, p1, p2, q0, q1, q2):  # pragma: no cover - compiled
     """:func:`los` between cells p and q given by components, inside a search: the
     generation counter is the search state's ``stamp`` (:mod:`planner.search._state`)."""
     if is_cubic(walk.g):
         return cubic_walk(occ, p0, p1, p2, q0, q1, q2)
+    free, n, ok = face_walk(occ, walk.fd, walk.fi, sc.sf, sc.si, p0, p1, p2, q0, q1, q2)
+    if ok:
+        return free, n
     sc.p[0] = p0
     sc.p[1] = p1
     sc.p[2] = p2

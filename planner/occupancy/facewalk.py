@@ -1,0 +1,388 @@
+"""The sight walk of every lattice (numba): from Voronoi cell to Voronoi cell through the facet
+the segment leaves by, ties on edges and vertices resolved from the cell's face table.
+
+Between two cell centres the segment touches the closed Voronoi cells of a chain of cells
+it passes through, and besides them only cells whose boundary it meets: at an edge or a
+vertex it passes through, or along a facet it runs in. :func:`face_walk` keeps the exit
+time of the current cell through each facet facing forward (``t_r``, updated by a table
+``inc`` when it steps), and steps through the first facet when that facet is the only one
+at the exit point and the segment runs in no facet: the common case, a few additions per
+cell. Otherwise the exit point lies on a face (edge or vertex) of the cell named by the set
+of facets through it; the face table (:class:`FaceTable`, from the cell's geometry) lists
+the cells around that face, each with its facets through it. They all touch the segment
+there; the ones it goes on in are those none of whose facets there faces forward, and among
+them the one whose interior it enters (or, running along a facet, one of the two cells
+sharing it) is the next chain cell. The same cells as :func:`planner.occupancy.walk.
+segment_walk` (tests check both on random and tie-heavy segments); a tie the table does not
+know (the float tolerances failing on a degenerate segment) reports ``ok`` False and the
+caller walks the generic way.
+
+Tolerances: a facet is parallel to the segment when ``|d . v| <= 1e-12 |d| |v|``; at an
+exit point a facet is on the face when its slack is below ``1e-8 |v|^2 / 2`` (ties between
+cell centres are exact ties, computed to rounding; distinct crossings are far apart, as for
+the cubic integer walk); the fast step is taken only when the next exit is more than a
+hundred times that away.
+"""
+
+from __future__ import annotations
+
+import itertools
+from typing import NamedTuple
+
+import numpy as np
+
+from planner._numba import njit_cached
+from planner.lattice import Lattice
+from planner.occupancy.grid import cell_free
+
+__all__ = ["FaceTable", "face_scratch", "face_table", "face_walk", "recorded"]
+
+SEG_TOL = 1e-9  # relative slack on each Voronoi half-space of every walk: contact counts
+_PAR = 1e-12  # |cos| below which a facet is parallel to the segment
+_ON = 1e-8  # slack (relative to |v|^2 / 2) below which a facet passes through the exit point
+_GAP = 1e-6  # fast step only when the next exit is this much later (relative, as _ON)
+_SLOTS = 8  # exit-time slots: forward facets of a 3D Voronoi cell (at most 7)
+_NEVER = 1e300  # exit time of an empty slot
+
+# Layout of a lattice's packed table (one float64 array ``fd`` and one int64 array ``fi``:
+# few arguments, so a call of the walk costs little; R facets, NF faces, SM cells a face).
+# fd: relevant vectors (R, 3) m at 0, |v|^2 / 2 (R,) at 3R, rel @ G (R, 3) at 4R (so
+# c_u . v = (rel @ G) u for the cell at offset u), v_r . v_s (R, R) at 7R.
+# fi: the header below, then the relevant vectors as index offsets (R, 3) at I_RIDX, the
+# face id of each facet set (2**R,; -1: no face) at fi[I_FMASK], the number of cells
+# around each face (NF,) at fi[I_STARN], their offsets (NF, SM, 3) at fi[I_STAROFF], and
+# each one's facets through the face (NF, SM; bit r: facet r) at fi[I_STARMASK].
+I_R, I_NF, I_SM, I_REACH = 0, 1, 2, 3  # reach: |index - segment point| bound, 3 axes
+I_FMASK, I_STARN, I_STAROFF, I_STARMASK, I_RIDX = 6, 7, 8, 9, 10
+# Scratch (``sf`` float64, ``si`` int64, from face_scratch): exit time of forward slot k,
+# 1 / (d . v) of slot k, d . v_r of facet r, the change of slot k's time on a step through
+# slot i (8, 8); the facet of slot k, the flat index step through slot k's facet, the
+# cells the segment runs along (SM, 3), the number of cells to record and the record.
+S_T, S_IDQ, S_DQ, S_INC, S_F = 0, 8, 16, 32, 96
+S_FW, S_STEP, S_CUR = 0, 8, 16
+# Trailing zeros of 1..255: the slot of the one exit time at the minimum.
+_TZ = np.array([0] + [(b & -b).bit_length() - 1 for b in range(1, 256)], np.int64)
+
+
+class FaceTable(NamedTuple):
+    """A lattice's face table, packed (layout: the comments on ``I_*``)."""
+
+    fd: np.ndarray  # float64
+    fi: np.ndarray  # int64
+
+
+def _active(x: np.ndarray, rel: np.ndarray, rhs: np.ndarray, tol: float) -> int:
+    """Bit mask of the facets of the origin's cell through point ``x``."""
+    s = rhs - rel @ x
+    return int(sum(1 << r for r in np.flatnonzero(np.abs(s) <= tol * rhs)))
+
+
+def face_table(lattice: Lattice) -> FaceTable:
+    """The face table of a 3D lattice (a planar prism's too) from its Voronoi cell, packed
+    into one float64 and one int64 array (layout: the comments on ``I_*``)."""
+    g = np.asarray(lattice.generator, float)
+    cell = lattice.voronoi
+    rel = np.asarray(cell.relevant, float)
+    rhs = 0.5 * np.einsum("ij,ij->i", rel, rel)
+    ginv = np.linalg.inv(g)
+    verts = np.asarray(cell.vertices, float)
+    e0, e1 = (np.asarray(e, float) for e in cell.edges)
+    # Representative points: vertices, edge midpoints, facet centroids.
+    pts = list(verts) + list(0.5 * (e0 + e1))
+    vmask = [_active(v, rel, rhs, 1e-7) for v in verts]
+    for r in range(len(rel)):
+        on = [v for v, m in zip(verts, vmask, strict=True) if m >> r & 1]
+        pts.append(np.mean(on, axis=0))
+    # Candidate cells around a boundary point: every lattice point within twice the
+    # covering radius (the cells touching the origin's, and more).
+    span = int(np.ceil(2 * cell.covering_radius * np.abs(ginv).sum(axis=1).max())) + 1
+    cand = np.array(list(itertools.product(range(-span, span + 1), repeat=3)), np.int64)
+    cen = cand @ g.T
+    cand = cand[np.linalg.norm(cen, axis=1) <= 2 * cell.covering_radius * (1 + 1e-9)]
+    cen = cand @ g.T
+    faces: dict[int, list] = {}
+    for x in pts:
+        m = _active(x, rel, rhs, 1e-7)
+        if m == 0 or m in faces:
+            continue
+        d = np.linalg.norm(x - cen, axis=1)
+        near = np.flatnonzero(np.abs(d - np.linalg.norm(x)) <= 1e-7 * cell.covering_radius)
+        faces[m] = [(cand[k], _active(x - cen[k], rel, rhs, 1e-7)) for k in near]
+    sm = max(len(s) for s in faces.values())
+    nf = len(faces)
+    fmask = np.full(1 << len(rel), -1, np.int64)
+    star_n = np.zeros(nf, np.int64)
+    star_off = np.zeros((nf, sm, 3), np.int64)
+    star_mask = np.zeros((nf, sm), np.int64)
+    for f, (m, star) in enumerate(faces.items()):
+        fmask[m] = f
+        star_n[f] = len(star)
+        for j, (o, bm) in enumerate(star):
+            star_off[f, j] = o
+            star_mask[f, j] = bm
+    ridx = np.rint(rel @ ginv.T).astype(np.int64)
+    ext = np.abs(verts @ ginv.T).max(axis=0)
+    reach = np.ceil(ext - 1e-9).astype(np.int64)
+    nrel = len(rel)
+    if not 2 <= nrel <= 2 * _SLOTS - 2:
+        raise ValueError(f"a 3D Voronoi cell has 6 to 14 facets, got {nrel}")
+    fd = np.concatenate([rel.ravel(), rhs, (rel @ g).ravel(), (rel @ rel.T).ravel()])
+    head = np.zeros(I_RIDX, np.int64)
+    head[I_R], head[I_NF], head[I_SM] = nrel, nf, sm
+    head[I_REACH:I_REACH + 3] = reach
+    o = I_RIDX + 3 * nrel
+    head[I_FMASK] = o
+    head[I_STARN] = o = o + len(fmask)
+    head[I_STAROFF] = o = o + nf
+    head[I_STARMASK] = o + 3 * nf * sm
+    fi = np.concatenate([head, ridx.ravel(), fmask, star_n, star_off.ravel(), star_mask.ravel()])
+    return FaceTable(np.ascontiguousarray(fd, float), np.ascontiguousarray(fi, np.int64))
+
+
+def face_scratch(sm: int, record: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """Scratch ``(sf, si)`` for :func:`face_walk`: ``sm`` cells around a face, ``record``
+    cells to record in ``si`` (tests; :func:`recorded` reads them)."""
+    si = np.zeros(S_CUR + 3 * max(sm, 1) + 1 + 3 * record, np.int64)
+    si[S_CUR + 3 * max(sm, 1)] = record
+    return np.zeros(S_F), si
+
+
+@njit_cached
+def recorded(si, sm, n):  # pragma: no cover - compiled
+    """The first ``n`` cells :func:`face_walk` looked up, (n, 3), from a recording scratch."""
+    o = S_CUR + 3 * max(sm, 1) + 1
+    return si[o:o + 3 * n].reshape(-1, 3)
+
+
+_END, _BLOCKED, _TIE, _STEPPED = 0, 1, 2, 3  # how _run stops
+
+
+@njit_cached(_nrt=False)
+def _run(grid, sf, si, idx, lookups, gap, dense):  # pragma: no cover - compiled
+    """The walk's fast steps, from the exit times in ``sf``: while one facet alone is at the
+    exit point, step through it and (``dense``) test the cell's bit at flat index ``idx``.
+    Stops at the segment's end (``_END``), a blocked cell (``_BLOCKED``), a tie
+    (``_TIE``) or, not dense, after one step (``_STEPPED``: the caller looks the cell up).
+    Returns ``(code, idx, lookups, m)``, ``m`` the next exit time; the exit times back in
+    ``sf``. A function of its own, with few arguments and little state, so that the eight
+    exit times stay in registers (in the walk's body the compiler spilled the step's state
+    around them)."""
+    # Eight locals: at most half the facets face forward, and a 3D Voronoi cell has at
+    # most 14. Branch-free minima: which facet comes next is not predictable (a
+    # mispredicted branch per facet doubled the step's time).
+    t0, t1, t2, t3 = sf[S_T], sf[S_T + 1], sf[S_T + 2], sf[S_T + 3]
+    t4, t5, t6, t7 = sf[S_T + 4], sf[S_T + 5], sf[S_T + 6], sf[S_T + 7]
+    code = _END
+    while True:
+        m = min(min(min(t0, t1), min(t2, t3)), min(min(t4, t5), min(t6, t7)))
+        if m >= 1.0:
+            break
+        lim = m + gap
+        # bit k: slot k's exit is at the minimum (up to the tie margin)
+        at = (np.int64(t0 <= lim) | (np.int64(t1 <= lim) << 1) | (np.int64(t2 <= lim) << 2)
+              | (np.int64(t3 <= lim) << 3) | (np.int64(t4 <= lim) << 4)
+              | (np.int64(t5 <= lim) << 5) | (np.int64(t6 <= lim) << 6)
+              | (np.int64(t7 <= lim) << 7))
+        if at & (at - 1) != 0:
+            code = _TIE
+            break
+        # One facet at the exit point: step through it (unsigned indices: no
+        # negative-index fix-up on each load).
+        st = _TZ[at]
+        idx += si[np.uint64(S_STEP + st)]
+        a = np.uint64(S_INC + _SLOTS * st)
+        t0 += sf[a]
+        t1 += sf[a + np.uint64(1)]
+        t2 += sf[a + np.uint64(2)]
+        t3 += sf[a + np.uint64(3)]
+        t4 += sf[a + np.uint64(4)]
+        t5 += sf[a + np.uint64(5)]
+        t6 += sf[a + np.uint64(6)]
+        t7 += sf[a + np.uint64(7)]
+        lookups += 1
+        if not dense:
+            code = _STEPPED
+            break
+        if (grid[np.uint64(idx) >> np.uint64(3)] >> (idx & 7)) & 1 == 0:
+            code = _BLOCKED
+            break
+    sf[S_T], sf[S_T + 1], sf[S_T + 2], sf[S_T + 3] = t0, t1, t2, t3
+    sf[S_T + 4], sf[S_T + 5], sf[S_T + 6], sf[S_T + 7] = t4, t5, t6, t7
+    return code, idx, lookups, m
+
+
+@njit_cached(_nrt=False)
+def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover - compiled
+    """Line of sight between the centres of cells p and q: every cell whose closed Voronoi
+    cell the segment touches is looked up, in order along it, until a blocked one.
+    ``fd``, ``fi``: the lattice's :class:`FaceTable`; ``sf``, ``si``: :func:`face_scratch`.
+    Returns ``(free, lookups, ok)``; ``ok`` False: a tie the face table does not know,
+    nothing decided (walk the generic way)."""
+    mode, grid, lo, dims, table, tmask, gg, blo, bhi = occ
+    nrel = fi[I_R]
+    sm = fi[I_SM]
+    o_rhs = 3 * nrel
+    o_wv = 4 * nrel
+    o_vv = 7 * nrel
+    o_cells = fi[I_STAROFF]
+    o_masks = fi[I_STARMASK]
+    o_rec = S_CUR + 3 * max(sm, 1)
+    nrec = si[o_rec]
+    o_rec += 1
+    e0, e1, e2 = q0 - p0, q1 - p1, q2 - p2
+    x0 = gg[0, 0] * e0 + gg[0, 1] * e1 + gg[0, 2] * e2
+    x1 = gg[1, 0] * e0 + gg[1, 1] * e1 + gg[1, 2] * e2
+    x2 = gg[2, 0] * e0 + gg[2, 1] * e1 + gg[2, 2] * e2
+    dn2 = x0 * x0 + x1 * x1 + x2 * x2
+    # The walk tracks one flat index in a box holding every touched cell: the dense grid's
+    # box when it holds them (then a lookup is a bit test), else the segment's own box
+    # (cells from the index by division). One integer instead of three keeps the step's
+    # state in registers. Recording (tests) takes the second way.
+    b0 = min(p0, q0) - fi[I_REACH]
+    b1 = min(p1, q1) - fi[I_REACH + 1]
+    b2 = min(p2, q2) - fi[I_REACH + 2]
+    d1 = max(p1, q1) + fi[I_REACH + 1] + 1 - b1
+    d2 = max(p2, q2) + fi[I_REACH + 2] + 1 - b2
+    dense = (mode == 0 and nrec == 0 and b0 >= lo[0] and b1 >= lo[1] and b2 >= lo[2]
+             and max(p0, q0) + fi[I_REACH] < lo[0] + dims[0] and b1 + d1 <= lo[1] + dims[1]
+             and b2 + d2 <= lo[2] + dims[2])
+    if dense:
+        b0, b1, b2, d1, d2 = lo[0], lo[1], lo[2], dims[1], dims[2]
+    s1 = d2
+    s0 = d1 * d2
+    nfw = 0
+    fwm = np.int64(0)
+    parm = np.int64(0)
+    gap = 0.0
+    par2 = _PAR * _PAR * dn2
+    for r in range(nrel):
+        y = x0 * fd[3 * r] + x1 * fd[3 * r + 1] + x2 * fd[3 * r + 2]
+        h = fd[o_rhs + r]
+        sf[S_DQ + r] = y
+        if y * y <= par2 * 2.0 * h:
+            parm |= np.int64(1) << r
+        elif y > 0.0:
+            si[S_FW + nfw] = r
+            fwm |= np.int64(1) << r
+            iy = 1.0 / y
+            sf[S_IDQ + nfw] = iy
+            sf[S_T + nfw] = h * iy  # exact exit times (no tolerance): ties to rounding
+            gap = max(gap, _GAP * h * iy)
+            a = I_RIDX + 3 * r
+            si[S_STEP + nfw] = fi[a] * s0 + fi[a + 1] * s1 + fi[a + 2]
+            nfw += 1
+    for i in range(nfw):
+        a = o_vv + nrel * si[S_FW + i]
+        b = S_INC + _SLOTS * i
+        for k in range(nfw):
+            sf[b + k] = fd[a + si[S_FW + k]] * sf[S_IDQ + k]
+    # Empty slots: never the next exit. Their steps keep what an earlier walk left (finite
+    # numbers, zero at first), which moves 1e300 by nothing.
+    for k in range(nfw, _SLOTS):
+        sf[S_T + k] = _NEVER
+    idx = ((p0 - b0) * d1 + (p1 - b1)) * d2 + (p2 - b2)
+    if nrec > 0:
+        si[o_rec] = p0
+        si[o_rec + 1] = p1
+        si[o_rec + 2] = p2
+    lookups = 1
+    if not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi, p0, p1, p2):
+        return False, lookups, True
+    if nfw == 0:  # p == q
+        return True, lookups, True
+    ncur = 0  # cells the segment runs along besides the chain cell (si[S_CUR:][:3 ncur])
+    pm = np.int64(0)  # the chain cell's facets the segment runs in
+    while True:
+        if pm == 0:
+            code, idx, lookups, m = _run(grid, sf, si, idx, lookups, gap, dense)
+            if code == _END:
+                break
+            if code == _BLOCKED:
+                return False, lookups, True
+            if code == _STEPPED:  # the cell stepped into, looked up here (not dense)
+                c2 = idx % d2 + b2
+                c1 = (idx // d2) % d1 + b1
+                c0 = idx // s0 + b0
+                if lookups <= nrec:
+                    si[o_rec + 3 * lookups - 3] = c0
+                    si[o_rec + 3 * lookups - 2] = c1
+                    si[o_rec + 3 * lookups - 1] = c2
+                if not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi, c0, c1, c2):
+                    return False, lookups, True
+                continue
+        else:
+            m = _NEVER
+            for k in range(nfw):
+                m = min(m, sf[S_T + k])
+            if m >= 1.0:
+                break
+        # An edge or a vertex, or a facet the segment runs in: the face table.
+        u2 = idx % d2 + b2 - p2  # the chain cell's offset from p
+        u1 = (idx // d2) % d1 + b1 - p1
+        u0 = idx // s0 + b0 - p0
+        am = pm
+        for k in range(nfw):
+            r = si[S_FW + k]
+            if sf[S_DQ + r] * (sf[S_T + k] - m) <= _ON * fd[o_rhs + r]:
+                am |= np.int64(1) << r
+        f = fi[fi[I_FMASK] + am]
+        if f < 0:
+            return True, lookups, False
+        nxt = -1  # the next chain cell: the one entered, else one the segment runs along
+        inner = False
+        ns = fi[fi[I_STARN] + f]
+        for j in range(ns):
+            a = o_cells + 3 * (sm * f + j)
+            c0 = u0 + fi[a]
+            c1 = u1 + fi[a + 1]
+            c2 = u2 + fi[a + 2]
+            if fi[a] != 0 or fi[a + 1] != 0 or fi[a + 2] != 0:
+                seen = False
+                for i in range(ncur):
+                    b = S_CUR + 3 * i
+                    if si[b] == c0 and si[b + 1] == c1 and si[b + 2] == c2:
+                        seen = True
+                        break
+                if not seen:
+                    if lookups < nrec:
+                        si[o_rec + 3 * lookups] = p0 + c0
+                        si[o_rec + 3 * lookups + 1] = p1 + c1
+                        si[o_rec + 3 * lookups + 2] = p2 + c2
+                    lookups += 1
+                    if not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi,
+                                     p0 + c0, p1 + c1, p2 + c2):
+                        return False, lookups, True
+            bm = fi[o_masks + sm * f + j]
+            if bm & fwm:
+                continue  # the segment leaves it here
+            if bm & parm == 0:
+                nxt = j  # enters its interior: no other cell goes on
+                inner = True
+            elif not inner:
+                nxt = j
+        if nxt < 0:
+            return True, lookups, False
+        # The cells it runs along from here (their lookups done): the dedup list.
+        ncur = 0
+        if not inner:
+            for j in range(ns):
+                bm = fi[o_masks + sm * f + j]
+                if bm & fwm == 0 and bm & parm != 0:
+                    a = o_cells + 3 * (sm * f + j)
+                    b = S_CUR + 3 * ncur
+                    si[b] = u0 + fi[a]
+                    si[b + 1] = u1 + fi[a + 1]
+                    si[b + 2] = u2 + fi[a + 2]
+                    ncur += 1
+        pm = fi[o_masks + sm * f + nxt] & parm
+        a = o_cells + 3 * (sm * f + nxt)
+        u0 += fi[a]
+        u1 += fi[a + 1]
+        u2 += fi[a + 2]
+        idx = ((p0 + u0 - b0) * d1 + (p1 + u1 - b1)) * d2 + (p2 + u2 - b2)
+        for k in range(nfw):
+            r = si[S_FW + k]
+            w = o_wv + 3 * r
+            sf[S_T + k] = ((fd[o_rhs + r] + fd[w] * u0 + fd[w + 1] * u1 + fd[w + 2] * u2)
+                           * sf[S_IDQ + k])
+    return True, lookups, True
