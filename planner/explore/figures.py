@@ -20,6 +20,7 @@ from planner.fsutil import atomic_path
 __all__ = ["summary_png", "animate_gif", "frame_replans"]
 
 _SLICE = 0.5  # m either side of the median robot height
+_LABEL = {"astar": "A* when the path is hit", "dstar": "D* Lite (repair + search)"}
 
 
 def _pyplot():
@@ -38,7 +39,7 @@ def _band(res) -> np.ndarray:
 
 def summary_png(res, path: str | Path) -> Path:
     """Top view with the true and the seen obstacles and the trajectory; per-replan cell
-    checks and times of D* Lite and A*. Written atomically; returns the path."""
+    checks and times of the replanner and A*. Written atomically; returns the path."""
     plt = _pyplot()
     fig, (ax, ac, at) = plt.subplots(1, 3, figsize=(16, 5),
                                      gridspec_kw={"width_ratios": [1.6, 1, 1]})
@@ -57,10 +58,10 @@ def summary_png(res, path: str | Path) -> Path:
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(0.0, -0.08), ncol=3,
               frameon=False)
     i = np.arange(res.replans)
-    for a, (d, s, what) in ((ac, (res.dstar_checks, res.astar_checks, "cell checks")),
-                            (at, (res.dstar_seconds, res.astar_seconds, "seconds"))):
+    for a, (d, s, what) in ((ac, (res.replan_checks, res.astar_checks, "cell checks")),
+                            (at, (res.replan_seconds, res.astar_seconds, "seconds"))):
         a.semilogy(i, s, ".", c="0.5", label="A* from scratch")
-        a.semilogy(i, d, ".", c="tab:red", label="D* Lite (repair + search)")
+        a.semilogy(i, d, ".", c="tab:red", label=_LABEL.get(res.replanner, res.replanner))
         a.set_xlabel("replan")
         a.set_title(f"{what} per replan", fontsize=9)
         a.legend(fontsize=7)
