@@ -48,7 +48,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from planner._entry import entry_point
+from planner._entry import entry_point, raw_entry_point, signal_cause
 from planner._numba import njit_cached
 from planner.errors import PlanError
 from planner.occupancy.walk import as_cells
@@ -56,6 +56,7 @@ from planner.search.dstar.rest import mark_path, move_of, on_rest
 from planner.search.heuristic import H_GAUGE
 from planner.search.moves import carries_guarantee, move_set
 from planner.search.result import SearchResult
+from planner.search.run import search
 from planner.world.world import World
 
 __all__ = ["AStarReplanner", "RestMap"]
@@ -80,10 +81,11 @@ def new_rest_map(lo: np.ndarray, dims: np.ndarray) -> RestMap:
 
 
 @njit_cached
-def rest_index(ms, rm, path, step):  # pragma: no cover - compiled
+def rest_index(ms, rm, path, rest):  # pragma: no cover - compiled
     """Sorted keys ``box index * K + i`` of the cells step ``i`` of ``path`` ((K, 3) int64)
     rests on (cell i, and move i's safe-rule cells; cells outside the box left out);
-    ``step[i]`` (K,) is set to the cost of the move into cell i (m; 0 for the first)."""
+    ``rest[i]`` (K,) is set to the cost of the path from cell i on (m), summed from the
+    goal back."""
     k = path.shape[0]
     nmax = 0
     for m in range(ms.moves.shape[0]):
@@ -91,8 +93,6 @@ def rest_index(ms, rm, path, step):  # pragma: no cover - compiled
     keys = np.empty(k * (nmax + 1), np.int64)
     n = 0
     d0, d1, d2 = rm.dims[0], rm.dims[1], rm.dims[2]
-    if k:
-        step[0] = 0.0
     for i in range(k):
         p0, p1, p2 = path[i, 0], path[i, 1], path[i, 2]
         a, b, c = p0 - rm.lo[0], p1 - rm.lo[1], p2 - rm.lo[2]
@@ -102,7 +102,7 @@ def rest_index(ms, rm, path, step):  # pragma: no cover - compiled
         if i + 1 == k:
             break
         m = move_of(ms, path[i + 1, 0] - p0, path[i + 1, 1] - p1, path[i + 1, 2] - p2)
-        step[i + 1] = ms.cost[m] if m >= 0 else np.nan
+        rest[i] = ms.cost[m] if m >= 0 else np.nan
         if m < 0:
             continue
         for e in ms.idx[ms.ptr[m]:ms.ptr[m + 1]]:
@@ -111,19 +111,23 @@ def rest_index(ms, rm, path, step):  # pragma: no cover - compiled
             if 0 <= a < d0 and 0 <= b < d1 and 0 <= c < d2:
                 keys[n] = ((a * d1 + b) * d2 + c) * k + i
                 n += 1
+    if k:
+        rest[k - 1] = 0.0
+    for i in range(k - 2, -1, -1):
+        rest[i] += rest[i + 1]
     return np.sort(keys[:n])
 
 
 @njit_cached
-def replace_rest(ms, rm, old, new, step):  # pragma: no cover - compiled
+def replace_rest(ms, rm, old, new, rest):  # pragma: no cover - compiled
     """Clear the rest bits of the path ``old`` ((K0, 3) int64, may be empty), set those of
-    ``new`` ((K, 3)); returns ``new``'s :func:`rest_index` (``step`` (K,) filled). One
+    ``new`` ((K, 3)); returns ``new``'s :func:`rest_index` (``rest`` (K,) filled). One
     compiled call per new path."""
     if old.shape[0]:
         mark_path(ms, rm, old, old.shape[0], False)
     if new.shape[0]:
         mark_path(ms, rm, new, new.shape[0], True)
-    return rest_index(ms, rm, new, step)
+    return rest_index(ms, rm, new, rest)
 
 
 @njit_cached(_nrt=False)
@@ -141,24 +145,16 @@ def _bisect(keys, x):  # pragma: no cover - compiled
 
 @njit_cached(_nrt=False)
 def rest_hit(rm, keys, k, at, cells):  # pragma: no cover - compiled
-    """The first and last of the path's steps ``at`` .. ``k - 1`` that rest on a cell of
-    ``cells`` ((C, 3) int64), (-1, -1) when none does. Each cell's bits in ``rm`` are
-    read first (most cells end there), then ``keys`` (:func:`rest_index`) by bisection."""
-    first, last = np.int64(-1), np.int64(-1)
+    """Whether a cell of ``cells`` ((C, 3) int64) is one the path's steps ``at`` .. ``k - 1``
+    rest on. Each cell's bits in ``rm`` are read first (most cells end there), then
+    ``keys`` (:func:`rest_index`) by bisection."""
     for j in range(cells.shape[0]):
         b = on_rest(rm, cells[j, 0], cells[j, 1], cells[j, 2])
-        if b < 0:
-            continue
-        i = _bisect(keys, b * k + at)  # this cell's first step from ``at`` on
-        if i == keys.shape[0] or keys[i] >= (b + 1) * k:
-            continue  # only walked steps rest on it
-        lo = keys[i] - b * k
-        hi = keys[_bisect(keys, (b + 1) * k) - 1] - b * k
-        if first < 0 or lo < first:
-            first = lo
-        if hi > last:
-            last = hi
-    return first, last
+        if b >= 0:
+            i = _bisect(keys, b * k + at)  # this cell's first step from ``at`` on
+            if i < keys.shape[0] and keys[i] < (b + 1) * k:
+                return True
+    return False
 
 
 class AStarReplanner:
@@ -183,11 +179,7 @@ class AStarReplanner:
     ----------
     start, goal : ndarray (3,) int64
     searches : int
-        Searches made (a plan that keeps its path makes none; one that tried a detour
-        first and then searched from the start, two).
-    repairs : int
-        Plans that spliced in a detour (:meth:`_repair`) instead of searching from the
-        start.
+        Plans that searched (the others kept the path).
     """
 
     def __init__(self, world: World, start, goal, neighbors: str = "full",
@@ -205,15 +197,14 @@ class AStarReplanner:
         self._rm = new_rest_map(occ.lo, occ.dims) if occ.mode == 0 else None
         self._path: np.ndarray | None = None  # (K, 3) the current path
         self._keys = np.zeros(0, np.int64)  # its rest index
-        self._step = np.zeros(0)  # (K,) cost of the move into each cell (m)
+        self._rest = np.zeros(0)  # (K,) cost of the path from each of its cells on (m)
         self._at = 0  # the start's row in it, -1 when the start left it
-        self._pending: list[tuple[np.ndarray, bool | np.ndarray]] = []
+        self._pending: list[np.ndarray] = []  # blocked cells since the last plan
+        self._freed = False  # a cell was freed (or looked up) since then: search
         self._seconds = 0.0  # engine time of update() lookups since the last plan
         self._lookups = 0
-        self._detour = (0, 0)  # lookups, expansions of a detour search that did not pay
-        self._hit_call = self._rest_call = None  # compiled entry points (_entry)
+        self._hit_call = self._rest_call = None  # compiled entry points (planner._entry)
         self.searches = 0
-        self.repairs = 0
 
     def move_start(self, cell) -> None:
         """The robot moved to ``cell`` ((3,) int): on the path it keeps it."""
@@ -221,9 +212,9 @@ class AStarReplanner:
         self.start[:] = c
         p, at = self._path, self._at
         if p is not None and at >= 0:
-            if at + 1 < len(p) and np.array_equal(p[at + 1], c):
+            if at + 1 < len(p) and (p[at + 1] == c).all():
                 self._at = at + 1
-            elif not np.array_equal(p[at], c):
+            elif not (p[at] == c).all():
                 hit = np.flatnonzero((p == c).all(axis=1))
                 self._at = int(hit[0]) if len(hit) else -1
 
@@ -231,18 +222,25 @@ class AStarReplanner:
         """Take the cells ``changed_cells`` ((K, 3) int) that flipped between free and
         blocked in the world (already mutated); the next :meth:`plan` decides whether to
         search. ``blocked`` says what they all became; None looks each one up."""
-        if not len(changed_cells):
+        c = changed_cells
+        # the compiled check is called without type checks: C-contiguous, writeable int64
+        if not (type(c) is np.ndarray and c.dtype == np.int64 and c.ndim == 2
+                and c.shape[1] == 3 and c.flags.c_contiguous and c.flags.writeable):
+            c = np.require(as_cells(c) if len(c) else _NONE, np.int64, ["C", "W"])
+        if not len(c):
             return
-        # C-contiguous and writeable: the compiled check is called without type checks
-        c = np.require(as_cells(changed_cells), np.int64, ["C", "W"])
         if blocked is None:
             t0 = time.perf_counter()
             state = ~self.world.checker.cells_free(c)
             self._seconds += time.perf_counter() - t0
             self._lookups += len(c)
-        else:
-            state = bool(blocked)
-        self._pending.append((c, state))
+            if not state.all():
+                self._freed = True
+            c = np.ascontiguousarray(c[state])
+        elif not blocked:
+            self._freed = True
+            return
+        self._pending.append(c)
 
     def plan(self) -> SearchResult:
         """Shortest path from the current start to the goal on the world as it is now.
@@ -251,65 +249,30 @@ class AStarReplanner:
         -------
         SearchResult
             A kept path makes no cell check and no expansion (an :meth:`update` told
-            nothing counts its lookups); a search's are A*'s (both searches' when a
-            detour was tried first, :meth:`_repair`). ``seconds``: the engine's time, the
-            check and the rest index included (as A*'s, not the Python around it).
+            nothing counts its lookups); a search's are A*'s. ``seconds``: the engine's
+            time, the check and the rest index included (as A*'s, not the Python around
+            it).
         """
         pend, self._pending = self._pending, []
-        if (self._path is not None and self._at >= 0 and self._rm is not None
-                and all(b is True or (not isinstance(b, bool) and b.all()) for _, b in pend)):
-            cells = (pend[0][0] if len(pend) == 1 else np.concatenate([c for c, _ in pend])
-                     if pend else _NONE)
+        freed, self._freed = self._freed, False
+        at = self._at
+        if self._path is not None and at >= 0 and self._rm is not None and not freed:
+            cells = pend[0] if len(pend) == 1 else np.concatenate(pend) if pend else _NONE
             t0 = time.perf_counter()
             if self._hit_call is None:  # its argument types never change
-                self._hit_call = entry_point(rest_hit, (self._rm, self._keys, 1, 0, cells))
-            first, last = self._hit_call(self._rm, self._keys, len(self._path), self._at,
-                                         cells) if len(cells) else (-1, -1)
+                self._hit_call = raw_entry_point(rest_hit, (self._rm, self._keys, 1, 0, cells))
+            try:  # the raw entry point: a Python call less than entry_point's wrapper
+                hit = self._hit_call(self._rm, self._keys, len(self._path), at, cells)
+            except SystemError as exc:
+                raise signal_cause(exc) from None
             self._seconds += time.perf_counter() - t0
-            at = self._at
-            if first < 0:
-                return self._result(True, self._path[at:].copy(),
-                                    float(self._step[at + 1:].sum()), 0, 0, 0, "found", "")
-            got = self._repair(first, last)
-            if got is not None:
-                return got
+            if not hit:
+                return self._result(True, self._path[at:].copy(), float(self._rest[at]), 0, 0,
+                                    0, "found", "")
         return self._search()
 
-    def _repair(self, first: int, last: int) -> SearchResult | None:
-        """After only blocked cells hit the path's steps ``first`` .. ``last``: A* between
-        the path's cells :data:`MARGIN` steps either side of them. A detour that costs
-        what the stretch it replaces did keeps the whole path as short as before, so it
-        is still a shortest one (costs only rose); then it is spliced in. None when the
-        detour costs more (or an end is blocked): the caller searches from the start."""
-        from planner.search.run import search  # lazy: run imports the search package
-
-        p, at = self._path, self._at
-        a, b = max(at, first - MARGIN), min(len(p) - 1, last + 1 + MARGIN)
-        if a == at and b == len(p) - 1:
-            return None  # the stretch is the whole rest: a search from the start
-        self.searches += 1
-        try:
-            r = search(self.world, p[a], p[b], method="astar", neighbors=self.neighbors,
-                       corner_cutting=self.corner_cutting)
-        except PlanError:  # an end is blocked
-            return None
-        self._seconds += r.seconds
-        self._detour = (r.cell_checks, r.expansions)
-        old = float(self._step[a + 1:b + 1].sum())
-        if not r.found or r.cost > old + 1e-12 * max(1.0, old):
-            return None
-        self.repairs += 1
-        self._set_path(np.concatenate([p[at:a], r.cells, p[b + 1:]]))
-        self._detour = (0, 0)
-        return self._result(True, self._path.copy(), float(self._step[1:].sum()),
-                            r.cell_checks, r.expansions, r.generated, "found", "")
-
     def _search(self) -> SearchResult:
-        from planner.search.run import search  # lazy: run imports the search package
-
         self.searches += 1
-        look, exp = self._detour
-        self._detour = (0, 0)
         try:
             r = search(self.world, self.start, self.goal, method="astar",
                        neighbors=self.neighbors, corner_cutting=self.corner_cutting)
@@ -320,45 +283,43 @@ class AStarReplanner:
             self.world.cell_checks += 2
             self._set_path(None)
             if not free[0]:
-                return self._result(False, None, math.inf, look + 2, exp, 0, "blocked",
+                return self._result(False, None, math.inf, 2, 0, 0, "blocked",
                                     "start cell is blocked")
-            return self._result(False, None, math.inf, look + 2, exp, 0, "unreachable",
+            return self._result(False, None, math.inf, 2, 0, 0, "unreachable",
                                 "goal unreachable: its cell is blocked")
         self._seconds += r.seconds  # its lookups are in world.cell_checks already
         self._set_path(r.cells if r.found else None)
-        return self._result(r.found, r.cells, r.cost, look + r.cell_checks, exp + r.expansions,
+        return self._result(r.found, r.cells, r.cost, r.cell_checks, r.expansions,
                             r.generated, r.status, r.reason)
 
     def _set_path(self, cells: np.ndarray | None) -> None:
         """Replace the current path (and its rest bits and rest index) by ``cells``."""
         new = _NONE if cells is None else np.require(cells, np.int64, ["C", "W"])
-        self._step = np.empty(len(new))
+        self._rest = np.empty(len(new))
         if self._rm is not None:
             old = _NONE if self._path is None else self._path
             t0 = time.perf_counter()
             if self._rest_call is None:  # its argument types never change
                 self._rest_call = entry_point(replace_rest, (self._ms, self._rm, old, new,
-                                                             self._step))
-            self._keys = self._rest_call(self._ms, self._rm, old, new, self._step)
+                                                             self._rest))
+            self._keys = self._rest_call(self._ms, self._rm, old, new, self._rest)
             self._seconds += time.perf_counter() - t0
-        elif len(new):
-            self._step[0] = 0.0
-            self._step[1:] = np.linalg.norm(np.diff(self.world.lattice.to_world(new), axis=0),
-                                            axis=1)
+        elif len(new):  # no bit maps: the costs alone (every change searches again)
+            step = np.linalg.norm(np.diff(self.world.lattice.to_world(new), axis=0), axis=1)
+            self._rest[:] = np.append(np.cumsum(step[::-1])[::-1], 0.0)
         self._path, self._at = (None if cells is None else new), 0
 
     def _result(self, found, cells, cost, checks, expansions, generated, status, why
                 ) -> SearchResult:
         """The plan's result, with the lookups of :meth:`update` since the last one (added
         to ``world.cell_checks`` here; a search's own are added by it)."""
-        self.world.cell_checks += self._lookups
-        checks += self._lookups
-        secs, self._seconds, self._lookups = self._seconds, 0.0, 0
-        return SearchResult(found, cells if found else np.zeros((0, 3), np.int64), cost,
-                            checks, expansions, generated, secs, 0, why, status=status,
-                            guarantee=self.guarantee)
+        if self._lookups:
+            self.world.cell_checks += self._lookups
+            checks += self._lookups
+            self._lookups = 0
+        secs, self._seconds = self._seconds, 0.0
+        return SearchResult(found, cells if found else _NONE.copy(), cost, checks, expansions,
+                            generated, secs, 0, why, status=status, guarantee=self.guarantee)
 
 
 _NONE = np.zeros((0, 3), np.int64)
-#: path steps either side of the hit ones that a detour may leave (:meth:`_repair`)
-MARGIN = 4
