@@ -108,7 +108,7 @@ def main(argv: list[str] | None = None) -> int:
           f"deg, {a.neighbors} moves; replanner {a.replanner}; ratios = replanner / A* from "
           f"scratch at every replan (same map states, same process)")
     print(head)
-    bad, whole = 0, []
+    bad, whole, per_map = 0, [], {}
     for label, src, (start, goal), kw in runs(a.maps, a.query, a.geb079):
         for lat in a.lattices:
             t0 = time.perf_counter()
@@ -121,6 +121,9 @@ def main(argv: list[str] | None = None) -> int:
             rep = (r.replan_seconds[k] / r.astar_seconds[k])[r.searched[k]]
             rep_t = float(np.median(rep)) if len(rep) else float("nan")
             whole.append(q["total_cpu_ratio"])
+            per_map.setdefault(label, []).append((q["total_cpu_ratio"], q["total_time_ratio"],
+                                                  int(r.searched.sum()), r.replans,
+                                                  r.mismatches))
             print(f"{label:<12} {lat:<7} {r.status:<8} {len(r.trajectory) - 1:>5} "
                   f"{r.replans:>7} {int(r.searched.sum()):>4} "
                   f"{q['median_time_ratio']:>6.3f} {q['median_wall_ratio']:>8.3f} "
@@ -135,6 +138,12 @@ def main(argv: list[str] | None = None) -> int:
             bad += r.mismatches
             if a.plots:
                 r.plot(a.plots / f"explore_{label.replace(' ', '_')}_{lat}.png")
+    for label, got in per_map.items():  # one line per map and query, as the README says it
+        cpu, eng, srch, reps, mism = zip(*got, strict=True)
+        print(f"{label}, {a.replanner}, {len(got)} lattices: whole run {min(cpu):.2f}-"
+              f"{max(cpu):.2f} of A* at every replan (CPU; engine time {min(eng):.2f}-"
+              f"{max(eng):.2f}), {min(srch)}-{max(srch)} of {min(reps)}-{max(reps)} replans "
+              f"searched, {sum(mism)} mismatches")
     if whole:
         print(f"whole-run ratio over {len(whole)} runs: {min(whole):.3f} .. {max(whole):.3f} "
               f"(goal <= 0.5); mismatches: {bad}")
