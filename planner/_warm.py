@@ -63,7 +63,7 @@ def _warm_explore(office: str) -> None:
     """Each replanner of ``planner explore`` (:data:`planner.explore.run.REPLANNERS`), on a
     short run."""
     from planner.explore import explore  # lazy: numba, scipy
-    from planner.explore.run import REPLANNERS
+    from planner.explore.run import REPLANNERS  # lazy: with explore
 
     for name in REPLANNERS:
         explore(office, (2.5, 2.5, 1.2), (4.0, 2.5, 1.2), lattice="fcc", radius=0.25,

@@ -274,6 +274,10 @@ def explore(
     sensor = Sensor(pts, obst.box_sizes if boxes else None, lat, walk_of(lat), dirs,
                      _sensor_reach(sensor_range, truth, pts, lat))
     _warm_up(lat, neighbors, planner_class)
+    # The first search on a world touches the pages of its pooled A* scratch (the dense
+    # slot array, :mod:`planner.search.astar._pool`), charged to whichever search runs
+    # first: both the replanner's and A*'s would pay it once. Touched here, off the clocks.
+    search(known, s, gcell, method="astar", neighbors=neighbors)
     dl = planner_class(known, s, gcell, neighbors=neighbors)
     rec = {k: [] for k in ("changed", "ds", "dc", "de", "dcost", "as", "ac", "ae", "acost",
                            "step", "dw", "aw", "dcpu", "acpu")}
