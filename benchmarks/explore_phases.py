@@ -109,13 +109,15 @@ def phases(name: str, lattice: str, query: int) -> tuple[np.ndarray, np.ndarray,
         return run, arg
 
     q = load_map_info(name)["queries"][query]
-    ex.explore(map_path(name), q["start"], q["goal"], lattice=lattice)  # compile
+    ex.explore(map_path(name), q["start"], q["goal"], lattice=lattice,
+               replanner="dstar")  # compile
     DStarLite._call = phased_call
     try:
-        r = ex.explore(map_path(name), q["start"], q["goal"], lattice=lattice)
+        r = ex.explore(map_path(name), q["start"], q["goal"], lattice=lattice,
+                       replanner="dstar")
     finally:
         DStarLite._call = own_call
-    rep = r.dstar_checks[1:] > 0  # the replans that repaired (a kept one checks nothing)
+    rep = r.replan_checks[1:] > 0  # the replans that repaired (a kept one checks nothing)
     return np.array(rows), r.astar_seconds[1:][rep], r.mismatches
 
 

@@ -60,11 +60,14 @@ def warm() -> float:
 
 
 def _warm_explore(office: str) -> None:
-    """D* Lite replanning (``planner explore``), on a short run."""
+    """Each replanner of ``planner explore`` (:data:`planner.explore.run.REPLANNERS`), on a
+    short run."""
     from planner.explore import explore  # lazy: numba, scipy
+    from planner.explore.run import REPLANNERS  # lazy: with explore
 
-    explore(office, (2.5, 2.5, 1.2), (4.0, 2.5, 1.2), lattice="fcc", radius=0.25,
-            cell_volume=0.05, max_steps=200)
+    for name in REPLANNERS:
+        explore(office, (2.5, 2.5, 1.2), (4.0, 2.5, 1.2), lattice="fcc", radius=0.25,
+                cell_volume=0.05, max_steps=200, replanner=name)
 
 
 def cache_stats() -> tuple[int, int, list[str]]:

@@ -222,13 +222,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", required=True, help="output .html")
 
     p = sub.add_parser("explore", help="explore an unknown map with a simulated range sensor, "
-                                       "replanning with D* Lite (checked against A*)")
+                                       "replanning as it senses (checked against A*)")
     _add_world_args(p, lattice=False, unknown=False)
     p.add_argument("--lattice", default=None, type=T.explore_lattices,
                    help="named lattice, comma-separated names, or 'all' (default: fcc)")
     p.add_argument("--start", type=T.vec3, required=True, help="x,y,z (m); negatives allowed")
     p.add_argument("--goal", type=T.vec3, required=True, help="x,y,z (m); negatives allowed")
     p.add_argument("--neighbors", default="full", help="full, face, face+k or full+k")
+    p.add_argument("--replanner", default="astar", choices=("astar", "dstar"),
+                   help="astar: keep the path until a newly blocked cell touches it, then "
+                        "A* (default); dstar: D* Lite repairs")
     p.add_argument("--sensor-range", type=T.positive, default=4.0, help="metres")
     p.add_argument("--fov", type=T.fov, default=(360.0, 30.0),
                    help="horizontal,vertical field of view in degrees (vertical is +-)")

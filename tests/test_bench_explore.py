@@ -53,6 +53,7 @@ def test_explore_rows_on_every_lattice_and_rotation(tmp_path):
         assert r["mismatches"] == 0  # every repair costs what A* from scratch finds
         assert isinstance(r["contacts"], int)  # a sparse sensor may miss a thin obstacle
         assert r["replans"] >= 1 and r["moves"] >= 0
+        assert r["replanner"] == "astar" and 1 <= r["searched"] <= r["replans"]
         assert r["length"] is None  # a travelled distance is not a planned path
         assert (r["distance"] > 0) == (r["moves"] > 0)
         if r["replans"] > 1:

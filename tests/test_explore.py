@@ -23,11 +23,13 @@ def _wall(door: bool, step: float = 0.05) -> np.ndarray:
     return np.column_stack([np.full_like(y, 5.0), y, z])
 
 
+@pytest.mark.parametrize("replanner", ["astar", "dstar"])
 @pytest.mark.parametrize("lattice", ["cubic", "fcc"])
-def test_robot_finds_the_door_and_replans_like_astar(lattice):
+def test_robot_finds_the_door_and_replans_like_astar(lattice, replanner):
     r = explore(_wall(door=True), [1, 1, 1], [9, 1, 1], lattice=lattice, radius=0.2,
                 cell_volume=0.1**3, bounds=BOUNDS, sensor_range=3.0, fov=(360, 20),
-                resolution=5.0)
+                resolution=5.0, replanner=replanner)
+    assert r.replanner == replanner and 1 <= r.searched.sum() < r.replans
     assert r.status == "reached"
     assert r.mismatches == 0 and r.contacts == 0
     assert r.replans >= 3  # the first plan, then the wall coming into view
@@ -36,11 +38,12 @@ def test_robot_finds_the_door_and_replans_like_astar(lattice):
     near = r.trajectory[np.abs(r.trajectory[:, 0] - 5.0) < 0.15]
     assert len(near) and np.all((near[:, 1] > 4.0) & (near[:, 1] < 5.5))
     assert r.distance > 2 * np.hypot(4.0, 3.0)  # via the door: x = 5, y > 4
-    assert np.all(np.isfinite(r.dstar_cost)) and np.allclose(r.dstar_cost, r.astar_cost,
+    assert np.all(np.isfinite(r.replan_cost)) and np.allclose(r.replan_cost, r.astar_cost,
                                                              atol=1e-9)
-    assert r.dstar_checks[1:].sum() < r.astar_checks[1:].sum()
+    assert r.replan_checks[1:].sum() < r.astar_checks[1:].sum()
     s = r.summary()
     assert s["replans"] == r.replans and s["points_seen"] == int(r.seen.sum()) > 0
+    assert s["replanner"] == replanner and s["searched"] == int(r.searched.sum())
 
 
 def test_closed_wall_is_proved_unreachable():
@@ -49,7 +52,7 @@ def test_closed_wall_is_proved_unreachable():
                 resolution=5.0)
     assert r.status == "unreachable"
     assert r.mismatches == 0 and r.contacts == 0
-    assert np.isinf(r.dstar_cost[-1]) and np.isinf(r.astar_cost[-1])
+    assert np.isinf(r.replan_cost[-1]) and np.isinf(r.astar_cost[-1])
 
 
 def test_step_budget_stops_the_robot_and_start_at_goal_is_reached():
@@ -90,6 +93,10 @@ def test_bad_sensor_settings_are_one_clear_error():
     with pytest.raises(PlanError, match="goal"):
         explore(_wall(True), [1, 1, 1], [5, 1, 1], radius=0.2, cell_volume=1e-3,
                 bounds=BOUNDS)
+    with pytest.raises(PlanError, match="unknown replanner 'dstarlite'; expected one of "
+                                        "astar, dstar"):
+        explore(_wall(True), [1, 1, 1], [9, 1, 1], radius=0.2, cell_volume=1e-3,
+                bounds=BOUNDS, replanner="dstarlite")
 
 
 def test_office_exploration_animates_one_frame_per_replan(tmp_path):
@@ -143,7 +150,10 @@ def test_cli_reads_the_map_in_the_format_given_and_has_no_unknown_option(tmp_pat
     assert main(args) == 2
     capsys.readouterr()
     assert main([*args, "--format", "ply", "--json"]) == 0
-    assert '"status": "reached"' in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert '"status": "reached"' in out and '"replanner": "astar"' in out
+    assert main([*args, "--format", "ply", "--json", "--replanner", "dstar"]) == 0
+    assert '"replanner": "dstar"' in capsys.readouterr().out
     with pytest.raises(SystemExit) as stop:
         main([*args, "--format", "ply", "--unknown", "free"])
     assert stop.value.code == 2 and "--unknown" in capsys.readouterr().err

@@ -1,5 +1,6 @@
-"""Incremental search (D* Lite): after every batch of changed cells and start moves, the
-repaired path costs exactly what a from-scratch A* finds on the updated world."""
+"""Replanning (D* Lite, and A* re-run only when the changes touch the path): after every
+batch of changed cells and start moves, the replanned path costs exactly what a
+from-scratch A* finds on the updated world."""
 
 from __future__ import annotations
 
@@ -14,7 +15,14 @@ from planner.lattice import NAMED_LATTICES, Lattice
 from planner.search import move_stencils, search
 from planner.search.dstar import lite as incremental
 from planner.search.dstar.lite import DStarLite
+from planner.search.replanner import AStarReplanner
 from planner.world import World
+
+#: (replanner, renumbered): D* Lite with and without renumbering its nodes (it renumbers
+#: whenever their count doubles), and A* re-run when the path is hit
+PLANNERS = [pytest.param(DStarLite, False, id="dstar"),
+            pytest.param(DStarLite, True, id="dstar-renumbered"),
+            pytest.param(AStarReplanner, False, id="astar")]
 
 
 def _free_cells(world: World) -> np.ndarray:
@@ -48,11 +56,11 @@ def _assert_valid(world, cells, neighbors):
     return total
 
 
-@pytest.mark.parametrize("renumbered", [False, True])
+@pytest.mark.parametrize("planner, renumbered", PLANNERS)
 @pytest.mark.parametrize("neighbors", ["face", "full"])
 @pytest.mark.parametrize("name", NAMED_LATTICES)
-def test_dstar_lite_matches_astar_after_every_batch(name, neighbors, renumbered, monkeypatch,
-                                                    seed=0):
+def test_replanner_matches_astar_after_every_batch(name, neighbors, planner, renumbered,
+                                                   monkeypatch, seed=0):
     if renumbered:  # the planner renumbers its nodes whenever their count doubles
         monkeypatch.setattr(incremental, "_COMPACT_MIN", 1)
     rng = np.random.default_rng([zlib.crc32(f"{name}/{neighbors}".encode()), seed])
@@ -64,7 +72,7 @@ def test_dstar_lite_matches_astar_after_every_batch(name, neighbors, renumbered,
     d = np.linalg.norm(lat.to_world(free)[:, None] - lat.to_world(free)[None], axis=2)
     i, j = np.unravel_index(np.argmax(d), d.shape)
     start, goal = free[i], free[j]
-    dl = DStarLite(world, start, goal, neighbors=neighbors)
+    dl = planner(world, start, goal, neighbors=neighbors)
     checked = 0
     for batch in range(8):
         r = dl.plan()
@@ -95,11 +103,11 @@ def test_dstar_lite_matches_astar_after_every_batch(name, neighbors, renumbered,
     assert checked >= 3  # most batches have a path to compare
 
 
-@pytest.mark.parametrize("renumbered", [False, True])
+@pytest.mark.parametrize("planner, renumbered", PLANNERS)
 @pytest.mark.parametrize("neighbors", ["face", "full"])
 @pytest.mark.parametrize("name", NAMED_LATTICES)
 def test_walking_robot_with_small_changes_near_and_far_keeps_an_optimal_path(
-        name, neighbors, renumbered, monkeypatch):
+        name, neighbors, planner, renumbered, monkeypatch):
     if renumbered:
         monkeypatch.setattr(incremental, "_COMPACT_MIN", 1)
     # A robot steps along its plan while a few cells flip per step, on the path, next to
@@ -113,7 +121,7 @@ def test_walking_robot_with_small_changes_near_and_far_keeps_an_optimal_path(
     free = _free_cells(world)
     x = lat.to_world(free)[:, 0]
     start, goal = free[np.argmin(x)], free[np.argmax(x)]
-    dl = DStarLite(world, start, goal, neighbors=neighbors)
+    dl = planner(world, start, goal, neighbors=neighbors)
     compared = 0
     for step in range(30):
         r = dl.plan()

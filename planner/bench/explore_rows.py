@@ -11,12 +11,15 @@ neighbour set, with the sensor of the suite's optional ``[explore]`` table::
     max_steps = 5000          # moves before giving up (status "budget")
 
 A row holds the run's outcome (``status``; ``found`` when the goal was reached), the
-distance travelled (m), moves, replans, mismatches (D* Lite costs that differ from A* from
-scratch on the same map state: must be 0) and contacts, and per replan (after the first
-plan, which has nothing to reuse) the medians of the incremental and from-scratch cell
-checks and times and of their ratios. ``cell_checks``, ``expansions`` and ``seconds`` are
-the incremental search's totals over the run. ``length`` stays None: a travelled distance
-is not a planned path, so exploration rows never enter the path-length ratios.
+distance travelled (m), moves, replans, the explorer's replanner (``replanner``, the
+default of :func:`planner.explore.explore`) and the replans that searched (``searched``;
+the others kept their path), mismatches (replanned costs that differ from A* from scratch
+on the same map state: must be 0) and contacts, and per replan (after the first plan,
+which has nothing to reuse) the medians of the replanner's and from-scratch cell checks
+and times and of their ratios. ``cell_checks``, ``expansions`` and ``seconds`` are the
+replanner's totals over the run (``total_time_ratio``: against A* at every replan).
+``length`` stays None: a travelled distance is not a planned path, so exploration rows
+never enter the path-length ratios.
 
 Rotations: as every row of a rotated suite, the robot explores the map in its own frame
 on the lattice turned by R^T (:func:`planner.bench.worlds.rotated_lattice`), which is the
@@ -116,14 +119,15 @@ def _figures(r) -> dict:
     return {"found": r.status == "reached", "status": r.status,
             "reason": "" if r.status == "reached" else r.status,
             "distance": r.distance, "moves": len(r.trajectory) - 1, "replans": r.replans,
+            "replanner": r.replanner, "searched": int(r.searched.sum()),
             "mismatches": r.mismatches, "contacts": r.contacts,
-            "cell_checks": int(r.dstar_checks.sum()),
-            "expansions": int(r.dstar_expansions.sum()),
-            "seconds": float(r.dstar_seconds.sum()),
+            "cell_checks": int(r.replan_checks.sum()),
+            "expansions": int(r.replan_expansions.sum()),
+            "seconds": float(r.replan_seconds.sum()),
             "astar_cell_checks": int(r.astar_checks.sum()),
             "astar_seconds": float(r.astar_seconds.sum()),
-            "replan_checks_median": med(r.dstar_checks),
+            "replan_checks_median": med(r.replan_checks),
             "replan_astar_checks_median": med(r.astar_checks),
-            "replan_seconds_median": med(r.dstar_seconds),
+            "replan_seconds_median": med(r.replan_seconds),
             "replan_astar_seconds_median": med(r.astar_seconds),
             **{k2: (v if math.isfinite(v) else None) for k2, v in q.items()}}

@@ -12,7 +12,8 @@ from planner.errors import PlannerError
 
 def explore(a: argparse.Namespace) -> int:
     """Explore on each named lattice; print one summary row per lattice. Exit 1 if a robot
-    did not reach its goal, 2 if D* Lite disagreed with A* or the robot touched the map."""
+    did not reach its goal, 2 if the replanner disagreed with A* or the robot touched the
+    map."""
     import json
 
     from planner.explore import explore as run  # lazy: numba, scipy
@@ -28,7 +29,7 @@ def explore(a: argparse.Namespace) -> int:
         res = run(source, a.start, a.goal, lattice=name, radius=a.radius,
                   cell_volume=a.cell_volume, bounds=a.bounds, sensor_range=a.sensor_range,
                   fov=a.fov, resolution=a.resolution, neighbors=a.neighbors,
-                  max_steps=a.max_steps, progress=not a.json)
+                  max_steps=a.max_steps, progress=not a.json, replanner=a.replanner)
         rows.append(res.summary())
         bad += res.mismatches + res.contacts
         several = len(lattices) > 1
@@ -39,7 +40,7 @@ def explore(a: argparse.Namespace) -> int:
         if a.view:
             _view(per_lattice(a.view, name, several), a, res, source)
     print(json.dumps(rows) if a.json else format_table(rows))
-    if bad:  # D* Lite disagreed with A* from scratch, or the robot touched the true map
+    if bad:  # the replanner disagreed with A* from scratch, or the robot touched the true map
         raise PlannerError(f"{bad} mismatches/contacts: see the table")
     return 0 if all(r["status"] == "reached" for r in rows) else 1
 

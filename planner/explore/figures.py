@@ -23,6 +23,7 @@ from planner.fsutil import atomic_path
 __all__ = ["animate_gif", "floor_of", "frame_replans", "split_at_slice", "summary_png"]
 
 _SLICE = 0.5  # m either side of the median robot height
+_LABEL = {"astar": "A* when the path is hit", "dstar": "D* Lite (repair + search)"}
 
 
 def _pyplot():
@@ -41,7 +42,7 @@ def _band(res) -> np.ndarray:
 
 def summary_png(res, path: str | Path) -> Path:
     """Top view with the true and the seen obstacles and the trajectory; per-replan cell
-    checks and times of D* Lite and A*. Written atomically; returns the path."""
+    checks and times of the replanner and A*. Written atomically; returns the path."""
     plt = _pyplot()
     fig, (ax, ac, at) = plt.subplots(1, 3, figsize=(16, 5),
                                      gridspec_kw={"width_ratios": [1.6, 1, 1]})
@@ -59,10 +60,10 @@ def summary_png(res, path: str | Path) -> Path:
                  f"{res.mismatches} mismatches, {res.contacts} contacts", fontsize=9)
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(0.0, -0.08), ncol=3,
               frameon=False)
-    for a, (d, s, what) in ((ac, (res.dstar_checks, res.astar_checks, "cell checks")),
-                            (at, (res.dstar_seconds, res.astar_seconds, "seconds"))):
+    for a, (d, s, what) in ((ac, (res.replan_checks, res.astar_checks, "cell checks")),
+                            (at, (res.replan_seconds, res.astar_seconds, "seconds"))):
         _log_dots(a, [(s, "0.5", "A* from scratch"),
-                      (d, "tab:red", "D* Lite (repair + search)")], what)
+                      (d, "tab:red", _LABEL.get(res.replanner, res.replanner))], what)
     fig.tight_layout()
     out = Path(path)
     with atomic_path(out) as tmp:

@@ -1,9 +1,12 @@
 """Exploration simulation: a robot plans through a map it does not know, senses, and replans.
 
 The robot (radius ``r``) starts at a cell of an empty *known* world (unknown space treated as
-free, the classic assumption) and walks its current D* Lite path one lattice move at a time.
+free, the classic assumption) and walks its current path one lattice move at a time.
 After every move it senses, blocks the newly seen obstacles in the known world and, when
-anything changed, repairs the plan with :class:`planner.search.dstar.lite.DStarLite`. Each
+anything changed, replans with the replanner named by ``replanner`` (:data:`REPLANNERS`):
+``"astar"`` (the default) keeps the path unless a newly blocked cell touches its rest and
+then runs A* from the robot's cell (:class:`planner.search.replanner.AStarReplanner`);
+``"dstar"`` repairs with D* Lite (:class:`planner.search.dstar.lite.DStarLite`). Each
 replan is also solved from scratch with A* on the same map state in the same process, and
 the two costs must agree (counted as ``mismatches``).
 
@@ -47,7 +50,10 @@ from planner.world.build import (
     sidecar,
 )
 
-__all__ = ["ExploreResult", "explore", "ray_directions", "cast_rays"]
+__all__ = ["ExploreResult", "REPLANNERS", "explore", "ray_directions", "cast_rays"]
+
+#: the replanners :func:`explore` takes by name (module docstring), the default first
+REPLANNERS = ("astar", "dstar")
 
 
 @dataclass
@@ -64,14 +70,18 @@ class ExploreResult:
         Length travelled between cell centres (m).
     trajectory : ndarray (T, 3)
         Cell centres visited, start first (m).
-    changed, dstar_checks, astar_checks, dstar_expansions, astar_expansions : ndarray (R,)
+    replanner : str
+        The replanner that ran (a key of :data:`REPLANNERS`).
+    changed, replan_checks, astar_checks, replan_expansions, astar_expansions : ndarray (R,)
         Per replan: cells whose state changed, occupancy lookups, expansions.
-    dstar_seconds, astar_seconds, dstar_cost, astar_cost : ndarray (R,) float
-        Per replan: each search's own time (:attr:`planner.search.SearchResult.seconds`:
-        its compiled calls, without the Python that checks arguments and builds
-        results; for D* Lite the changes' repair, the search and the path) (s); path
-        costs (m, inf when unreachable). The two run in turn right after the map update,
-        D* Lite first on even replans: the first of the two finds caches cold.
+    replan_seconds, astar_seconds, replan_cost, astar_cost : ndarray (R,) float
+        Per replan: the replanner's and A*'s own time
+        (:attr:`planner.search.SearchResult.seconds`: their compiled calls, without the
+        Python that checks arguments and builds results; for D* Lite the changes' repair,
+        the search and the path; for ``"astar"`` the path check and, when it searched,
+        the search) (s); path costs (m, inf when unreachable). The two run in turn right
+        after the map update, the replanner first on even replans: the first of the two
+        finds caches cold. :attr:`searched` says which replans searched.
     mismatches : int
         Replans whose two costs differ by more than 1e-9 m (or only one is unreachable).
     contacts : int
@@ -83,10 +93,10 @@ class ExploreResult:
     distance: float
     trajectory: np.ndarray
     changed: np.ndarray
-    dstar_seconds: np.ndarray
-    dstar_checks: np.ndarray
-    dstar_expansions: np.ndarray
-    dstar_cost: np.ndarray
+    replan_seconds: np.ndarray
+    replan_checks: np.ndarray
+    replan_expansions: np.ndarray
+    replan_cost: np.ndarray
     astar_seconds: np.ndarray
     astar_checks: np.ndarray
     astar_expansions: np.ndarray
@@ -110,44 +120,63 @@ class ExploreResult:
                                   repr=False)
     ring_ranges: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)), repr=False)
     ring_azimuths: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
-    # Per replan, the wall time of the calls a user makes (s): D* Lite's ``update`` and
-    # ``plan``, A*'s ``search`` (argument and endpoint checks, result, Python included).
-    dstar_wall_seconds: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
+    # Per replan, the wall time of the calls a user makes (s): the replanner's ``update``
+    # and ``plan``, A*'s ``search`` (argument and endpoint checks, result, Python included).
+    replan_wall_seconds: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
     astar_wall_seconds: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
+    # The same calls' CPU time (s, the thread's: a run on a shared machine is not charged
+    # for the time the thread waited; what the whole-run ratio is read from)
+    replan_cpu_seconds: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
+    astar_cpu_seconds: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
+    replanner: str = "astar"
 
     @property
     def replans(self) -> int:
         return len(self.changed)
 
+    @property
+    def searched(self) -> np.ndarray:
+        """(R,) bool: the replans that searched (a kept path makes no cell check)."""
+        return self.replan_checks > 0
+
     def ratios(self) -> dict:
         """Medians over the replans after the first (the first plan has nothing to reuse)
-        of incremental / from-scratch time and cell checks, and the totals' ratios."""
+        of replanner / from-scratch time and cell checks, and the totals' ratios: the
+        whole run's replanning against A* from scratch at every replan on the same map
+        states, first plan included (``total_time_ratio``: engine time;
+        ``total_cpu_ratio``: the thread's CPU time of the calls a user makes)."""
         k = slice(1, None) if self.replans > 1 else slice(None)
         with np.errstate(divide="ignore", invalid="ignore"):
-            rt = self.dstar_seconds[k] / self.astar_seconds[k]
-            rc = self.dstar_checks[k] / self.astar_checks[k]
-            rw = self.dstar_wall_seconds[k] / self.astar_wall_seconds[k]
+            rt = self.replan_seconds[k] / self.astar_seconds[k]
+            rc = self.replan_checks[k] / self.astar_checks[k]
+            rw = self.replan_wall_seconds[k] / self.astar_wall_seconds[k]
         return {"median_time_ratio": float(np.median(rt)) if len(rt) else math.nan,
                 "median_wall_ratio": float(np.median(rw)) if len(rw) else math.nan,
                 "median_checks_ratio": float(np.median(rc)) if len(rc) else math.nan,
-                "total_time_ratio": _div(self.dstar_seconds.sum(), self.astar_seconds.sum()),
-                "total_checks_ratio": _div(self.dstar_checks.sum(), self.astar_checks.sum())}
+                "total_time_ratio": _div(self.replan_seconds.sum(), self.astar_seconds.sum()),
+                "total_wall_ratio": _div(self.replan_wall_seconds.sum(),
+                                         self.astar_wall_seconds.sum()),
+                "total_cpu_ratio": _div(self.replan_cpu_seconds.sum(),
+                                        self.astar_cpu_seconds.sum()),
+                "total_checks_ratio": _div(self.replan_checks.sum(), self.astar_checks.sum())}
 
     def summary(self) -> dict:
         """Plain numbers for printing or JSON."""
         return {"lattice": self.lattice, "status": self.status,
                 "distance_m": round(self.distance, 3), "moves": len(self.trajectory) - 1,
-                "replans": self.replans, "mismatches": self.mismatches,
+                "replanner": self.replanner, "replans": self.replans,
+                "searched": int(self.searched.sum()), "mismatches": self.mismatches,
                 "contacts": self.contacts, "points_seen": int(self.seen.sum()),
-                "dstar_checks": int(self.dstar_checks.sum()),
+                "replan_checks": int(self.replan_checks.sum()),
                 "astar_checks": int(self.astar_checks.sum()),
-                "dstar_seconds": round(float(self.dstar_seconds.sum()), 4),
+                "replan_seconds": round(float(self.replan_seconds.sum()), 4),
                 "astar_seconds": round(float(self.astar_seconds.sum()), 4),
                 **{k: round(v, 4) for k, v in self.ratios().items()}}
 
     def plot(self, path: str | Path) -> Path:
         """Summary figure (PNG): top view with the true and the seen obstacles and the
-        trajectory; per-replan cell checks and times of D* Lite and A*. Written atomically.
+        trajectory; per-replan cell checks and times of the replanner and A*. Written
+        atomically.
         """
         return summary_png(self, path)
 
@@ -177,6 +206,7 @@ def explore(
     neighbors: str = "full",
     max_steps: int = 100_000,
     progress: bool = False,
+    replanner: str = "astar",
 ) -> ExploreResult:
     """Explore from ``start`` to ``goal`` (points, m) in a map the robot does not know.
 
@@ -206,13 +236,20 @@ def explore(
         Show on stderr the moves made of those made plus those left on the current plan,
         with an ETA (:class:`planner.progress.Progress`; the estimate grows when a replan
         finds a longer way).
+    replanner : {"astar", "dstar"}
+        :data:`REPLANNERS` (module docstring). ``"astar"``: over whole runs on the bundled
+        office and on geb079 it costs a fraction of A* at every replan, D* Lite more
+        (``benchmarks/explore_speed.py``).
 
     Returns
     -------
     ExploreResult
     """
     from planner.search import search  # lazy: numba
-    from planner.search.dstar.lite import DStarLite  # lazy: numba
+    if replanner not in REPLANNERS:
+        raise PlanError(f"unknown replanner {replanner!r}; expected one of "
+                        f"{', '.join(REPLANNERS)}")
+    planner_class = _replanner_class(replanner)
     if isinstance(source, str | Path):  # a bundled map by name ("office"), as build_world
         source = resolve(source)
     side = sidecar(source)
@@ -248,10 +285,14 @@ def explore(
                   source=f"explored {obst.source}")
     sensor = Sensor(pts, obst.box_sizes if boxes else None, lat, walk_of(lat), dirs,
                      _sensor_reach(sensor_range, truth, pts, lat))
-    _warm_up(lat, neighbors, DStarLite)
-    dl = DStarLite(known, s, gcell, neighbors=neighbors)
+    _warm_up(lat, neighbors, planner_class)
+    # The first search on a world touches the pages of its pooled A* scratch (the dense
+    # slot array, :mod:`planner.search.astar._pool`), charged to whichever search runs
+    # first: both the replanner's and A*'s would pay it once. Touched here, off the clocks.
+    search(known, s, gcell, method="astar", neighbors=neighbors)
+    dl = planner_class(known, s, gcell, neighbors=neighbors)
     rec = {k: [] for k in ("changed", "ds", "dc", "de", "dcost", "as", "ac", "ae", "acost",
-                           "step", "dw", "aw")}
+                           "step", "dw", "aw", "dcpu", "acpu")}
     paths = []
     cur = s.copy()
     traj = [cur.copy()]
@@ -280,10 +321,11 @@ def explore(
                 a_first = len(rec["ds"]) % 2 == 1
                 if a_first:
                     a = _scratch_astar(search, known, cur, gcell, neighbors)
-                t0 = time.perf_counter()
+                c0, t0 = time.thread_time(), time.perf_counter()
                 dl.update(changed, blocked=True)
                 r = dl.plan()
                 rec["dw"].append(time.perf_counter() - t0)
+                rec["dcpu"].append(time.thread_time() - c0)
                 d_secs = r.seconds
                 if not a_first:
                     a = _scratch_astar(search, known, cur, gcell, neighbors)
@@ -294,9 +336,9 @@ def explore(
                 rec["dc"].append(r.cell_checks)
                 rec["de"].append(r.expansions)
                 rec["dcost"].append(r.cost)
-                for k, v in zip(("as", "aw", "ac", "ae", "acost"), a, strict=True):
+                for k, v in zip(("as", "aw", "acpu", "ac", "ae", "acost"), a, strict=True):
                     rec[k].append(v)
-                if not _same(r.cost, a[4]):
+                if not _same(r.cost, a[5]):
                     mismatches += 1
                 if r.status == "blocked":
                     status = "stuck"
@@ -326,23 +368,33 @@ def explore(
     return ExploreResult(
         lattice=lat.name or "custom", status=status, distance=distance,
         trajectory=lat.to_world(np.array(traj)), changed=arr["changed"].astype(np.int64),
-        dstar_seconds=arr["ds"].astype(float), dstar_checks=arr["dc"].astype(np.int64),
-        dstar_expansions=arr["de"].astype(np.int64), dstar_cost=arr["dcost"].astype(float),
+        replan_seconds=arr["ds"].astype(float), replan_checks=arr["dc"].astype(np.int64),
+        replan_expansions=arr["de"].astype(np.int64), replan_cost=arr["dcost"].astype(float),
         astar_seconds=arr["as"].astype(float), astar_checks=arr["ac"].astype(np.int64),
         astar_expansions=arr["ae"].astype(np.int64), astar_cost=arr["acost"].astype(float),
         mismatches=mismatches, contacts=contacts, start=start_p, goal=goal_p, points=pts,
         seen=sensor.seen, rays=len(dirs) * len(traj), sense_seconds=sense_secs,
         radius=float(truth.radius), replan_step=arr["step"].astype(np.int64), paths=paths,
         seen_step=sensor.seen_step, ring_azimuths=sensor.ring_azimuths,
-        dstar_wall_seconds=arr["dw"].astype(float), astar_wall_seconds=arr["aw"].astype(float),
+        replan_wall_seconds=arr["dw"].astype(float), astar_wall_seconds=arr["aw"].astype(float),
+        replan_cpu_seconds=arr["dcpu"].astype(float), astar_cpu_seconds=arr["acpu"].astype(float),
+        replanner=replanner,
         ring_ranges=np.array(sensor.ring_ranges).reshape(len(sensor.ring_ranges),
                                                          len(sensor.ring)))
 
 
+def _replanner_class(name: str):
+    """The class of the replanner named ``name`` (:data:`REPLANNERS`)."""
+    from planner.search.dstar.lite import DStarLite  # lazy: numba
+    from planner.search.replanner import AStarReplanner  # lazy: numba
+
+    return {"astar": AStarReplanner, "dstar": DStarLite}[name]
+
+
 def _warm_up(lat: Lattice, neighbors: str, dstar) -> None:
-    """Compile (or load) the D* Lite kernels on a tiny world of the same lattice, so that no
-    replan's time includes JIT compilation (:func:`planner.search.search` warms up A*
-    itself before its clock starts)."""
+    """Compile (or load) the replanner's kernels on a tiny world of the same lattice, so
+    that no replan's time includes JIT compilation (:func:`planner.search.search` warms up
+    A* itself before its clock starts)."""
     r = lat.covering_radius
     tiny = World(lat, np.zeros((0, 3), np.int64), [[-4 * r] * 3, [4 * r] * 3])
     a = lat.quantize(np.zeros((1, 3)))[0]
@@ -355,18 +407,20 @@ def _warm_up(lat: Lattice, neighbors: str, dstar) -> None:
 
 
 def _scratch_astar(search, world, cur, goal, neighbors
-                   ) -> tuple[float, float, int, int, float]:
-    """(seconds, wall seconds, cell checks, expansions, cost) of A* from scratch: the
-    engine's own timing of the search (``SearchResult.seconds``) and the wall time of the
-    ``search`` call; a blocked end is unreachable (one lookup each, as A*'s endpoint check;
-    both times are the wall time of that refusal)."""
-    t0 = time.perf_counter()
+                   ) -> tuple[float, float, float, int, int, float]:
+    """(seconds, wall seconds, CPU seconds, cell checks, expansions, cost) of A* from
+    scratch: the engine's own timing of the search (``SearchResult.seconds``), the wall
+    and the thread's CPU time of the ``search`` call; a blocked end is unreachable (one
+    lookup each, as A*'s endpoint check; the engine's time is the wall time of that
+    refusal)."""
+    c0, t0 = time.thread_time(), time.perf_counter()
     try:
         r = search(world, cur, goal, method="astar", neighbors=neighbors)
     except PlanError:
         wall = time.perf_counter() - t0
-        return wall, wall, 2, 0, math.inf
-    return r.seconds, time.perf_counter() - t0, r.cell_checks, r.expansions, r.cost
+        return wall, wall, time.thread_time() - c0, 2, 0, math.inf
+    wall = time.perf_counter() - t0
+    return r.seconds, wall, time.thread_time() - c0, r.cell_checks, r.expansions, r.cost
 
 
 def _same(a: float, b: float) -> bool:

@@ -3,13 +3,15 @@
 :func:`search` / :func:`search_many` (:mod:`~planner.search.run`), :class:`SearchResult` and
 its statuses (:mod:`~planner.search.result`), the move sets and the heuristic
 (:mod:`~planner.search.moves`), the A* family's kernel (:mod:`~planner.search.astar`), D* Lite
-(:mod:`~planner.search.dstar`, :class:`DStarLite`), the heap (:mod:`~planner.search._heap`),
-line of sight (:mod:`~planner.search._los`) and the networkx reference
-(:mod:`~planner.search.reference`).
+(:mod:`~planner.search.dstar`, :class:`DStarLite`), replanning by A* when a change touches
+the path (:mod:`~planner.search.replanner`, :class:`AStarReplanner`), the heap
+(:mod:`~planner.search._heap`), line of sight (:mod:`~planner.search._los`) and the
+networkx reference (:mod:`~planner.search.reference`).
 """
 
 from planner.search.dstar.lite import DStarLite
 from planner.search.moves import carries_guarantee, move_heuristic, move_stencils
+from planner.search.replanner import AStarReplanner
 from planner.search.result import STATUSES, SearchResult
 from planner.search.run import (
     METHODS,
@@ -21,6 +23,6 @@ from planner.search.run import (
     warm_up,
 )
 
-__all__ = ["DStarLite", "METHODS", "STATUSES", "SearchResult", "carries_guarantee",
-           "default_max_expansions", "default_memory_budget", "move_heuristic", "move_stencils",
-           "search", "search_many", "shortcut", "warm_up"]
+__all__ = ["AStarReplanner", "DStarLite", "METHODS", "STATUSES", "SearchResult",
+           "carries_guarantee", "default_max_expansions", "default_memory_budget",
+           "move_heuristic", "move_stencils", "search", "search_many", "shortcut", "warm_up"]

@@ -53,19 +53,40 @@ def mark_path(ms, bx, path, k, value):  # pragma: no cover - compiled
     """Set (``value``) or clear the rest bits of the path ``path[:k]`` ((>= k, 3) int64):
     each cell, and each move's safe-rule cells. A path is cleared whole, before the next
     one is set (:func:`_bit`)."""
-    nm = ms.moves.shape[0]
     for i in range(k):
         p0, p1, p2 = path[i, 0], path[i, 1], path[i, 2]
         _bit(bx, p0, p1, p2, value)
         if i + 1 == k:
             break
-        d0, d1, d2 = path[i + 1, 0] - p0, path[i + 1, 1] - p1, path[i + 1, 2] - p2
-        for m in range(nm):
-            if ms.moves[m, 0] == d0 and ms.moves[m, 1] == d1 and ms.moves[m, 2] == d2:
-                for e in ms.idx[ms.ptr[m]:ms.ptr[m + 1]]:
-                    _bit(bx, p0 + ms.union[e, 0], p1 + ms.union[e, 1], p2 + ms.union[e, 2],
-                         value)
-                break
+        m = move_of(ms, path[i + 1, 0] - p0, path[i + 1, 1] - p1, path[i + 1, 2] - p2)
+        if m >= 0:
+            for e in ms.idx[ms.ptr[m]:ms.ptr[m + 1]]:
+                _bit(bx, p0 + ms.union[e, 0], p1 + ms.union[e, 1], p2 + ms.union[e, 2], value)
+
+
+@njit_cached(_nrt=False)
+def move_of(ms, d0, d1, d2):  # pragma: no cover - compiled
+    """The move of ``ms`` with offset (d0, d1, d2), -1 when none: a path step's move,
+    whose safe-rule cells are ``ms.union[ms.idx[ms.ptr[m]:ms.ptr[m + 1]]]``."""
+    for m in range(ms.moves.shape[0]):
+        if ms.moves[m, 0] == d0 and ms.moves[m, 1] == d1 and ms.moves[m, 2] == d2:
+            return m
+    return -1
+
+
+@njit_cached(_nrt=False)
+def on_rest(bx, v0, v1, v2):  # pragma: no cover - compiled
+    """The box index of cell (v0, v1, v2) when its rest bit is set, else -1. Reads its
+    block's bit first and its own only when that is set (module docstring)."""
+    a, b, c = v0 - bx.lo[0], v1 - bx.lo[1], v2 - bx.lo[2]
+    d0, d1, d2 = bx.dims[0], bx.dims[1], bx.dims[2]
+    if 0 <= a < d0 and 0 <= b < d1 and 0 <= c < d2:
+        q = ((a >> 2) * ((d1 + 3) >> 2) + (b >> 2)) * ((d2 + 3) >> 2) + (c >> 2)
+        if (bx.rest_blocks[q >> 3] >> (q & 7)) & 1:
+            k = (a * d1 + b) * d2 + c
+            if (bx.rest[k >> 3] >> (k & 7)) & 1:
+                return k
+    return -1
 
 
 @njit_cached(_nrt=False)
@@ -81,18 +102,9 @@ def keep_path(bx, counts, fs, start, path, step, cells):  # pragma: no cover
     st = counts[0]
     if st.path_valid != 1:
         return False
-    lo0, lo1, lo2 = bx.lo[0], bx.lo[1], bx.lo[2]
-    d0, d1, d2 = bx.dims[0], bx.dims[1], bx.dims[2]
-    rest, blocks = bx.rest, bx.rest_blocks
-    e1, e2 = (d1 + 3) >> 2, (d2 + 3) >> 2
     for i in range(cells.shape[0]):
-        a, b, c = cells[i, 0] - lo0, cells[i, 1] - lo1, cells[i, 2] - lo2
-        if 0 <= a < d0 and 0 <= b < d1 and 0 <= c < d2:
-            q = ((a >> 2) * e1 + (b >> 2)) * e2 + (c >> 2)  # its block first (module docstring)
-            if (blocks[q >> 3] >> (q & 7)) & 1:
-                k = (a * d1 + b) * d2 + c
-                if (rest[k >> 3] >> (k & 7)) & 1:
-                    return False
+        if on_rest(bx, cells[i, 0], cells[i, 1], cells[i, 2]) >= 0:
+            return False
     k = st.path_len
     for j in range(st.path_at, k):
         if path[j, 0] == start[0] and path[j, 1] == start[1] and path[j, 2] == start[2]:
