@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import math
 import os
+import re
 
 import numpy as np
 
@@ -168,3 +169,57 @@ def generator(text: str):
 def pose6(text: str) -> np.ndarray:
     """A pose x,y,z (m),roll,pitch,yaw (degrees), shape (6,)."""
     return numbers(text, 6, "six numbers x,y,z,roll,pitch,yaw")
+
+
+# -- the command line before argparse reads it ----------------------------------------
+# options whose values may start with "-" (negative coordinates)
+_VECTOR_OPTIONS = ("--start", "--goal", "--bounds", "--generator", "--init")
+# options of every command, accepted before or after the command name
+_GLOBAL_OPTIONS = ("--memory-budget", "--max-expansions")
+_NUMBERISH = re.compile(r"^-[0-9.]")
+
+
+def _join_negative_values(argv: list[str]) -> list[str]:
+    """``--start -2.96,-0.05,1`` -> ``--start=-2.96,-0.05,1`` (argparse would read the value
+    as an option)."""
+    out, i = [], 0
+    while i < len(argv):
+        a = argv[i]
+        if a in _VECTOR_OPTIONS and i + 1 < len(argv) and _NUMBERISH.match(argv[i + 1]):
+            out.append(f"{a}={argv[i + 1]}")
+            i += 2
+            continue
+        out.append(a)
+        i += 1
+    return out
+
+
+def _hoist_global_options(argv: list[str]) -> list[str]:
+    """Move :data:`_GLOBAL_OPTIONS` (with their values) in front of the command name, so
+    ``planner plan map --memory-budget 2G`` works as ``planner --memory-budget 2G plan``."""
+    head, rest, i = [], [], 0
+    while i < len(argv):
+        a = argv[i]
+        if a == "--":
+            rest += argv[i:]
+            break
+        if a.split("=", 1)[0] in _GLOBAL_OPTIONS:
+            take = 1 if "=" in a or i + 1 == len(argv) else 2
+            head += argv[i:i + take]
+            i += take
+            continue
+        rest.append(a)
+        i += 1
+    return head + rest
+
+
+def names_2d_map(arg: str) -> bool:
+    """``arg`` names a 2D map (a map_server YAML or the bundled floorplan): the parser's
+    messages about points then ask for x,y."""
+    return arg == "floorplan" or arg.lower().endswith((".yaml", ".yml"))
+
+
+def command_line(argv: list[str]) -> list[str]:
+    """``argv`` as argparse should read it: negative vector values joined to their option,
+    the global options moved in front of the command name."""
+    return _hoist_global_options(_join_negative_values(argv))

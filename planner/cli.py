@@ -9,7 +9,6 @@ from __future__ import annotations
 import argparse
 import contextlib
 import os
-import re
 import sys
 import warnings
 from pathlib import Path
@@ -26,11 +25,6 @@ from planner.lattice import NAMED_LATTICES
 from planner.lattice.paper import NAMED_LATTICES_2D
 
 METHODS = "astar, dijkstra, theta, lazy-theta, weighted-theta, ompl:<planner>"
-# options whose values may start with "-" (negative coordinates)
-_VECTOR_OPTIONS = ("--start", "--goal", "--bounds", "--generator", "--init")
-# options of every command, accepted before or after the command name
-_GLOBAL_OPTIONS = ("--memory-budget", "--max-expansions")
-_NUMBERISH = re.compile(r"^-[0-9.]")
 
 
 class _HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
@@ -311,40 +305,6 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _join_negative_values(argv: list[str]) -> list[str]:
-    """``--start -2.96,-0.05,1`` -> ``--start=-2.96,-0.05,1`` (argparse would read the value
-    as an option)."""
-    out, i = [], 0
-    while i < len(argv):
-        a = argv[i]
-        if a in _VECTOR_OPTIONS and i + 1 < len(argv) and _NUMBERISH.match(argv[i + 1]):
-            out.append(f"{a}={argv[i + 1]}")
-            i += 2
-            continue
-        out.append(a)
-        i += 1
-    return out
-
-
-def _hoist_global_options(argv: list[str]) -> list[str]:
-    """Move :data:`_GLOBAL_OPTIONS` (with their values) in front of the command name, so
-    ``planner plan map --memory-budget 2G`` works as ``planner --memory-budget 2G plan``."""
-    head, rest, i = [], [], 0
-    while i < len(argv):
-        a = argv[i]
-        if a == "--":
-            rest += argv[i:]
-            break
-        if a.split("=", 1)[0] in _GLOBAL_OPTIONS:
-            take = 1 if "=" in a or i + 1 == len(argv) else 2
-            head += argv[i:i + take]
-            i += take
-            continue
-        rest.append(a)
-        i += 1
-    return head + rest
-
-
 # -- dispatch: command -> "module:function" (imported only when the command runs) ---------
 _COMMANDS = {"lattices": "tables:lattices", "stats": "tables:stats", "plan": "plan:plan",
              "compare": "plan:compare", "world": "world:world", "view": "world:view",
@@ -396,12 +356,6 @@ def _stopped(exc: BaseException, standalone: bool) -> int:
     return 143 if term else 130
 
 
-def _names_2d_map(arg: str) -> bool:
-    """``arg`` names a 2D map (a map_server YAML or the bundled floorplan): the parser's
-    messages about points then ask for x,y."""
-    return arg == "floorplan" or arg.lower().endswith((".yaml", ".yml"))
-
-
 def main(argv: list[str] | None = None) -> int:
     """The ``planner`` program (``argv`` None: ``sys.argv[1:]``, and an interrupted run
     ends the process at once with 130 / 143; with ``argv`` given it returns the status)."""
@@ -410,9 +364,9 @@ def main(argv: list[str] | None = None) -> int:
         install_sigint()
         install_sigterm()
     argv = sys.argv[1:] if argv is None else list(argv)
-    T.MAP_DIM = 2 if any(_names_2d_map(x) for x in argv) else None
+    T.MAP_DIM = 2 if any(T.names_2d_map(x) for x in argv) else None
     try:  # parsing imports the readers (a map name is resolved): a signal may come here
-        a = build_parser().parse_args(_hoist_global_options(_join_negative_values(argv)))
+        a = build_parser().parse_args(T.command_line(argv))
     except KeyboardInterrupt as exc:
         return _stopped(exc, standalone)
     if a.memory_budget is not None:  # the one budget model reads it (and so do workers)
