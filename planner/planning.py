@@ -152,7 +152,7 @@ def plan(
     PlanResult
     """
     pts = map_or_points.end_coords(start, goal) if isinstance(map_or_points, World) else None
-    if pts is None:  # (3,) float64 points inside a world's bounds need no other check
+    if pts is None:  # points (arrays, tuples, lists of 3 reals) inside the bounds: checked
         as_point(start, "start", 2)  # malformed input fails before any map is built
         as_point(goal, "goal", 2)
     if not isinstance(method, str):
@@ -177,7 +177,7 @@ def plan(
                             corner_cutting=corner_cutting, max_expansions=max_expansions,
                             memory_budget=memory_budget)
     if res is not None:
-        s, g = start, goal  # checked: (3,) float64 points
+        s, g = pts[:3], pts[3:]  # checked: the points' coordinates as Python floats
     else:
         s, s_cell, g, g_cell = world.endpoints(start, goal)  # local points
         if method.startswith("ompl:"):
@@ -263,15 +263,17 @@ def joined(world, path: np.ndarray) -> np.ndarray:
     ndarray, shape (K', 3), K' <= K + 2
         Starts exactly at ``path[0]`` and ends exactly at ``path[-1]``.
     """
-    keep = np.ones(len(path), dtype=bool)
-    if len(path) >= 3 and world.segment_free(path[0], path[2]):
-        keep[1] = False
-    if len(path) >= 3 and keep[-2]:
-        prev = np.flatnonzero(keep[:-2])[-1]  # the point before the goal's cell centre
-        if world.segment_free(path[prev], path[-1]):
-            keep[-2] = False
-    out = path[keep] if not keep.all() else path
-    return distinct(out)
+    n = len(path)
+    if n < 3:
+        return distinct(path)
+    first = world.segment_free(path[0], path[2])  # start -> the second cell's centre
+    last = False  # one cell (n = 3): its centre goes with the first join, or stays
+    if n > 3:
+        prev = 0 if n == 4 and first else n - 3  # the point before the goal's cell centre
+        last = world.segment_free(path[prev], path[-1])
+    if first or last:
+        path = path[[i for i in range(n) if not (i == 1 and first or i == n - 2 and last)]]
+    return distinct(path)
 
 
 def distinct(path: np.ndarray) -> np.ndarray:
@@ -279,8 +281,15 @@ def distinct(path: np.ndarray) -> np.ndarray:
     last point is kept: a path ends exactly at its goal)."""
     if len(path) < 2:
         return path
-    r = np.round(path, 6)
-    same = np.all(r[1:] == r[:-1], axis=1)
+    if len(path) <= SHORT_PATH:  # np.round's values (rint of um), without its temporaries
+        r = [tuple(round(v * 1e6) for v in row) for row in path.tolist()]
+        same = [r[i + 1] == r[i] for i in range(len(r) - 1)]
+        if not any(same):
+            return path
+        same = np.array(same)
+    else:
+        r = np.round(path, 6)
+        same = np.all(r[1:] == r[:-1], axis=1)
     if not same.any():
         return path
     keep = np.concatenate([[True], ~same])

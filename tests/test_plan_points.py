@@ -106,6 +106,30 @@ def test_plan_errors_are_the_endpoint_errors():
         plan(w, np.array([3.0, 3.0, 3.0]), good, method="nope")
 
 
+def test_tuple_and_list_endpoints_take_the_one_call_path_with_the_same_results():
+    """The README's own form, plan(world, (x, y, z), ...), takes the same compiled call as
+    float64 arrays: the same path, lookups and errors; other forms are checked as before."""
+    w = _world(n=12, blocked=[(5, y, z) for y in range(12) for z in range(11)])
+    a, b = np.array([1.0, 1.0, 1.0]), np.array([10.0, 9.0, 2.0])
+    ref = plan(w, a, b)
+    forms = [(tuple(a.tolist()), tuple(b.tolist())), (a.tolist(), b.tolist()),
+             ((1, 1, 1), [10, 9, 2]), ((np.float64(1), 1.0, 1), b)]
+    for s, g in forms:
+        before = w.cell_checks
+        p = plan(w, s, g)
+        assert w.cell_checks - before == p.cell_checks + 2 + p.extra["join_checks"]
+        assert np.array_equal(p.path, ref.path) and p.length == ref.length
+        assert (p.cell_checks, p.expansions) == (ref.cell_checks, ref.expansions)
+    for bad, what in [((30.0, 1.0, 1.0), "start"), ((1.0, float("nan"), 1.0), "start"),
+                      ((10**400, 1, 1), "start"),
+                      ((1.0, 1.0), "start")]:
+        with pytest.raises(PlanError, match=what) as one_call:
+            plan(w, bad, b)
+        with pytest.raises(PlanError) as checked:
+            w.endpoint(bad, "start")
+        assert str(one_call.value) == str(checked.value)
+
+
 def test_long_and_sealed_searches_through_the_one_call_path():
     """A search that grows its arrays and pauses for the goal probe, and one whose goal is
     sealed in a pocket (the probe stops it), go on from the one call as search() does."""

@@ -53,6 +53,7 @@ class ValidityChecker:
         self._rounding = None  # Lattice.point_rounding(), or () when there is none (locate)
         self._point_cell = None  # compiled entry point of grid.point_cell (see locate)
         self._point_cells = None  # and of grid.point_cells (see locate_two)
+        self._segment = None  # and of walk.motion_free (see segment)
 
     @property
     def quantizer(self) -> Quantizer:
@@ -64,7 +65,8 @@ class ValidityChecker:
     def __getstate__(self) -> dict:
         self.quantizer  # noqa: B018 - a worker would otherwise redo the lattice geometry
         d = self.__dict__.copy()
-        d["_free_one"] = d["_point_cell"] = d["_point_cells"] = None  # entry points do not pickle
+        # entry points do not pickle
+        d["_free_one"] = d["_point_cell"] = d["_point_cells"] = d["_segment"] = None
         return d
 
     def is_valid(self, point) -> bool:
@@ -83,6 +85,21 @@ class ValidityChecker:
         self.checks += int(n)
         self.motions += 1
         return bool(free)
+
+    def segment(self, a0: float, a1: float, a2: float, b0: float, b1: float,
+                b2: float) -> tuple[bool, int]:
+        """:meth:`check_motion`'s exact walk of the segment (a0, a1, a2) -> (b0, b1, b2) (m,
+        finite Python floats) as ``(every touched cell free, lookups made)``, called without
+        numba's typing of the structs (a plan joins its two ends with it). Not counted
+        here (the world counts its own lookups)."""
+        f = self._segment
+        if f is None:
+            f = self._segment = entry_point(motion_free, (
+                self.occupancy, self.walk, self.quantizer, a0, a1, a2, b0, b1, b2, self._buf,
+                self._out))
+        free, n = f(self.occupancy, self.walk, self.quantizer, a0, a1, a2, b0, b1, b2,
+                    self._buf, self._out)
+        return bool(free), int(n)
 
     def cell_free(self, i: int, j: int, k: int) -> bool:
         """Cell (i, j, k) (Python ints) is in bounds and free: one lookup, called without

@@ -52,6 +52,24 @@ __all__ = ["World", "DENSE_BUDGET", "Occupancy", "ValidityChecker", "Walk", "as_
 DENSE_BUDGET = 256 * 2**20  # bytes of free bits: above this the hash set is used
 _BOUNDS_TOL = 1e-9
 _P3, _F8 = (3,), np.dtype(np.float64)
+_REAL = (float, int, np.float64)  # scalar types a point's coordinates are read from as-is
+
+
+def _xyz(p) -> list | tuple | None:
+    """The three coordinates of point ``p`` as Python floats when it is a (3,) float64
+    array, or a tuple or list of three Python (or numpy float64) reals, else None (any
+    other input: :func:`as_point` checks it and names what is wrong)."""
+    kind = type(p)
+    if kind is np.ndarray:
+        return p.tolist() if p.shape == _P3 and p.dtype == _F8 else None
+    if (kind is tuple or kind is list) and len(p) == 3:
+        a, b, c = p
+        if type(a) in _REAL and type(b) in _REAL and type(c) in _REAL:
+            try:
+                return float(a), float(b), float(c)
+            except OverflowError:  # an int beyond float range
+                return None
+    return None
 
 
 class World(CellSets, UnknownSpace, LocalFrame):
@@ -294,6 +312,12 @@ class World(CellSets, UnknownSpace, LocalFrame):
     def segment_free(self, a: np.ndarray, b: np.ndarray) -> bool:
         """True iff every cell the segment a-b touches (see :meth:`segment_cells`) is free.
         Stops at the first blocked cell; adds the lookups made to :attr:`cell_checks`."""
+        if self._lattice.dim == 3:  # one compiled call: the generic walk's rule and lookups
+            x, y = _xyz(a), _xyz(b)
+            if x is not None and y is not None and math.isfinite(sum(x) + sum(y)):
+                free, n = self.checker.segment(*x, *y)
+                self.cell_checks += n
+                return free
         _, free, n = self._walk(a, b, True)
         self.cell_checks += int(n)
         return bool(free)
@@ -329,14 +353,16 @@ class World(CellSets, UnknownSpace, LocalFrame):
 
     def end_coords(self, start, goal) -> tuple[float, ...] | None:
         """``(x0, x1, x2, y0, y1, y2)``: a start and a goal point as Python floats (m) when
-        both are (3,) float64 arrays that pass :meth:`endpoint`'s bounds test (a plan's
-        usual case), else None (other input, NaN, infinities, a point outside, an offset)."""
-        if self.local_frame or not (type(start) is np.ndarray and type(goal) is np.ndarray
-                and start.shape == _P3 and goal.shape == _P3 and start.dtype == _F8
-                and goal.dtype == _F8):
+        both are (3,) float64 arrays or tuples or lists of three reals that pass
+        :meth:`endpoint`'s bounds test (a plan's usual case), else None (other input, NaN,
+        infinities, a point outside, a world in a local frame)."""
+        if self.local_frame:
             return None
-        x0, x1, x2 = start.tolist()
-        y0, y1, y2 = goal.tolist()
+        s, g = _xyz(start), _xyz(goal)
+        if s is None or g is None:
+            return None
+        x0, x1, x2 = s
+        y0, y1, y2 = g
         (l0, l1, l2), (h0, h1, h2) = self._bounds.tolist()
         t = _BOUNDS_TOL  # endpoint's test, inverted: NaN and infinities fail it
         if (l0 - t <= x0 <= h0 + t and l1 - t <= x1 <= h1 + t and l2 - t <= x2 <= h2 + t
@@ -355,7 +381,7 @@ class World(CellSets, UnknownSpace, LocalFrame):
             if hit is not None and hit[1] == 3:  # both free
                 self.cell_checks += 2
                 cells = hit[0]
-                return start, cells[0], goal, cells[1]
+                return np.array(pts[:3]), cells[0], np.array(pts[3:]), cells[1]
         s, s_cell = self.endpoint(start, "start")  # anything else, and the errors
         g, g_cell = self.endpoint(goal, "goal")
         return s, s_cell, g, g_cell
@@ -428,6 +454,9 @@ def as_point(p, what: str = "point", dim: int = 3) -> np.ndarray:
             return p
     try:
         a = np.asarray(p, dtype=float).reshape(-1)
+    except OverflowError:  # an integer beyond float range
+        raise PlanError(f"{what} must be three finite numbers x, y, z, got "
+                        f"{_show(p)}") from None
     except (TypeError, ValueError):
         raise PlanError(f"{what} must be three numbers x, y, z, got {_show(p)}") from None
     if dim == 2 and a.shape == (2,) and np.isfinite(a).all():
@@ -442,7 +471,7 @@ def _show(p) -> str:
     anything else by its repr with the white space folded."""
     try:
         return _fmt(np.asarray(p, dtype=float))
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         return " ".join(repr(p).split())
 
 
