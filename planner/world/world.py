@@ -45,31 +45,14 @@ from planner.voxels import OccupiedVoxelList
 from planner.world.cells import CellSets
 from planner.world.checker import ValidityChecker
 from planner.world.frame import LocalFrame
+from planner.world.points import as_point, fmt, xyz
 from planner.world.unknown import SortedKeys, UnknownSpace
 
 __all__ = ["World", "DENSE_BUDGET", "Occupancy", "ValidityChecker", "Walk", "as_point"]
 
 DENSE_BUDGET = 256 * 2**20  # bytes of free bits: above this the hash set is used
 _BOUNDS_TOL = 1e-9
-_P3, _F8 = (3,), np.dtype(np.float64)
-_REAL = (float, int, np.float64)  # scalar types a point's coordinates are read from as-is
 
-
-def _xyz(p) -> list | tuple | None:
-    """The three coordinates of point ``p`` as Python floats when it is a (3,) float64
-    array, or a tuple or list of three Python (or numpy float64) reals, else None (any
-    other input: :func:`as_point` checks it and names what is wrong)."""
-    kind = type(p)
-    if kind is np.ndarray:
-        return p.tolist() if p.shape == _P3 and p.dtype == _F8 else None
-    if (kind is tuple or kind is list) and len(p) == 3:
-        a, b, c = p
-        if type(a) in _REAL and type(b) in _REAL and type(c) in _REAL:
-            try:
-                return float(a), float(b), float(c)
-            except OverflowError:  # an int beyond float range
-                return None
-    return None
 
 
 class World(CellSets, UnknownSpace, LocalFrame):
@@ -313,7 +296,7 @@ class World(CellSets, UnknownSpace, LocalFrame):
         """True iff every cell the segment a-b touches (see :meth:`segment_cells`) is free.
         Stops at the first blocked cell; adds the lookups made to :attr:`cell_checks`."""
         if self._lattice.dim == 3:  # one compiled call: the generic walk's rule and lookups
-            x, y = _xyz(a), _xyz(b)
+            x, y = xyz(a), xyz(b)
             if x is not None and y is not None and math.isfinite(sum(x) + sum(y)):
                 free, n = self.checker.segment(*x, *y)
                 self.cell_checks += n
@@ -336,8 +319,8 @@ class World(CellSets, UnknownSpace, LocalFrame):
         x, bl, bh = a.tolist(), lo.tolist(), hi.tolist()  # floats: a plan checks two ends
         for i in range(3):
             if x[i] < bl[i] - _BOUNDS_TOL or x[i] > bh[i] + _BOUNDS_TOL:
-                raise PlanError(f"{what} {_fmt(given)} is outside the map bounds "
-                                f"{_fmt(self.to_map(lo))} .. {_fmt(self.to_map(hi))}")
+                raise PlanError(f"{what} {fmt(given)} is outside the map bounds "
+                                f"{fmt(self.to_map(lo))} .. {fmt(self.to_map(hi))}")
         hit = self.checker.locate(x[0], x[1], x[2])  # quantize and look up: one call
         if hit is None:  # no named rounding kernel
             cell = self._lattice.quantize(a[None])[0]
@@ -348,7 +331,7 @@ class World(CellSets, UnknownSpace, LocalFrame):
             cell, free = hit
             self.cell_checks += 1
         if not free:  # the message only when needed
-            self._not_free(cell, f"{what} {_fmt(given)}")
+            self._not_free(cell, f"{what} {fmt(given)}")
         return a, cell
 
     def end_coords(self, start, goal) -> tuple[float, ...] | None:
@@ -358,7 +341,7 @@ class World(CellSets, UnknownSpace, LocalFrame):
         infinities, a point outside, a world in a local frame)."""
         if self.local_frame:
             return None
-        s, g = _xyz(start), _xyz(goal)
+        s, g = xyz(start), xyz(goal)
         if s is None or g is None:
             return None
         x0, x1, x2 = s
@@ -395,7 +378,7 @@ class World(CellSets, UnknownSpace, LocalFrame):
         c = c[0]
         if not self.is_free(c[None])[0]:  # the message only when needed: searches are short
             centre = self.to_map(self._lattice.to_world(c[None])[0])
-            self._not_free(c, f"{what} cell {c.tolist()} (centre {_fmt(centre)})")
+            self._not_free(c, f"{what} cell {c.tolist()} (centre {fmt(centre)})")
         return c
 
     def _not_free(self, cell: np.ndarray, label: str) -> None:
@@ -409,7 +392,7 @@ class World(CellSets, UnknownSpace, LocalFrame):
             where = "inside an obstacle (after inflation for the robot radius)"
         near = self.nearest_free(cell)
         hint = "; no free cell nearby" if near is None else (
-            f"; nearest free cell centre: {_fmt(self.to_map(self._lattice.to_world(near[None])))}")
+            f"; nearest free cell centre: {fmt(self.to_map(self._lattice.to_world(near[None])))}")
         raise PlanError(f"{label} is {where}{hint}")
 
     def nearest_free(self, cell: np.ndarray, max_radius: float | None = None) -> np.ndarray | None:
@@ -444,36 +427,3 @@ class World(CellSets, UnknownSpace, LocalFrame):
     def __repr__(self) -> str:
         return (f"World({self._lattice!r}, {self.n_blocked} blocked cells, "
                 f"bounds={self._bounds.tolist()})")
-
-def as_point(p, what: str = "point", dim: int = 3) -> np.ndarray:
-    """``p`` as a finite (3,) float array (m); PlanError naming ``what`` otherwise. With
-    ``dim`` 2, (x, y) is accepted too and becomes (x, y, 0)."""
-    if type(p) is np.ndarray and p.shape == (3,) and p.dtype == np.float64:  # the usual case
-        x, y, z = p.tolist()
-        if math.isfinite(x) and math.isfinite(y) and math.isfinite(z):
-            return p
-    try:
-        a = np.asarray(p, dtype=float).reshape(-1)
-    except OverflowError:  # an integer beyond float range
-        raise PlanError(f"{what} must be three finite numbers x, y, z, got "
-                        f"{_show(p)}") from None
-    except (TypeError, ValueError):
-        raise PlanError(f"{what} must be three numbers x, y, z, got {_show(p)}") from None
-    if dim == 2 and a.shape == (2,) and np.isfinite(a).all():
-        a = np.append(a, 0.0)
-    if a.shape != (3,) or not np.isfinite(a).all():
-        raise PlanError(f"{what} must be three finite numbers x, y, z, got {_show(p)}")
-    return a
-
-
-def _show(p) -> str:
-    """A value on one line for an error message: coordinates as :func:`_fmt` prints them,
-    anything else by its repr with the white space folded."""
-    try:
-        return _fmt(np.asarray(p, dtype=float))
-    except (TypeError, ValueError, OverflowError):
-        return " ".join(repr(p).split())
-
-
-def _fmt(p: np.ndarray) -> str:
-    return "(" + ", ".join(f"{v:.3f}" for v in np.asarray(p).reshape(-1)) + ")"
