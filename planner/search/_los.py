@@ -360,3 +360,17 @@ def shortcut_kernel(occ, walk, cells, sc):  # pragma: no cover - compiled
         nk += 1
         i = j
     return keep[:nk].copy(), lookups
+
+
+@njit_cached(_nrt=False)
+def sight_batch(occ, walk, ps, qs, sc, free, lookups):  # pragma: no cover - compiled
+    """:func:`los` between the centres of ``ps[i]`` and ``qs[i]`` for every i ((N, 3)
+    int64 each), into ``free`` ((N,) bool) and ``lookups`` ((N,) int64, the cells looked
+    up for that line). Returns the total lookups."""
+    total = 0
+    for i in range(ps.shape[0]):
+        ok, n = los(occ, walk, ps[i], qs[i], sc, np.int64(i + 1))
+        free[i] = ok
+        lookups[i] = n
+        total += n
+    return total
