@@ -423,7 +423,7 @@ def main(argv: list[str] | None = None) -> int:
     if a.smoke:  # tiny sizes; geb079 (five lattice builds) left out
         a.sample, a.compare, a.da1, a.anyangle, a.repeat = 4, 1, 20, 3, 1
         a.maps, a.geb079, a.all_warframe = ["Simple"], False, False
-        segments, plan_maps, plan_queries = 2000, ["office"], 2
+        segments, plan_maps, plan_queries = 5000, ["office"], 2
     if not a.geb079:
         plan_maps = [m for m in plan_maps if m != "geb079"]
     with harness.session("search engine speed: ours vs the C++ floor, per lattice, "
