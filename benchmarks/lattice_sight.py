@@ -6,54 +6,50 @@ Usage::
     python benchmarks/lattice_sight.py                  # both tables (office, geb079)
     python benchmarks/lattice_sight.py --maps office    # one map
     python benchmarks/lattice_sight.py --segments 20000 --queries 8 --repeat 3
+    python benchmarks/lattice_sight.py --smoke          # tiny sizes, seconds
 
 Sight table: random centre-to-centre sight lines (2 to 40 cells long) in an empty box of
-each lattice at unit cell volume, walked by the line-of-sight function every search and the
-smoothing call (``planner.search._los.los``); time per cell looked up, against the cubic
-lattice's (goal <= 1.5). Every lattice runs the same number of lines, in a compiled loop.
+each lattice at unit cell volume, walked by the line-of-sight test every search and the
+smoothing call apply (``planner.search.sight_many``: one compiled call per batch of lines);
+thread CPU time per cell looked up, against the cubic lattice's (goal <= 1.5). Every lattice
+runs the same number of lines, in batches of :data:`BATCH`; the lattices take turns batch by
+batch, each batch keeping its fastest of ``--repeat`` rounds, and the ``ratio`` line pairs
+the lattice's batches with cubic's.
 
 Planning table: the same queries (world points, quantized on each lattice; kept when a
 path exists on every lattice) on each lattice at the same cell volume and robot radius; per
 query the CPU time (thread time) of ``search`` + ``shortcut`` (A* with smoothing, what
 ``planner plan --shortcut`` pays) and of a Lazy Theta* ``search``; per lattice the sum of
 its queries' times over cubic's on the same queries (goals: BCC and MCC A* + smoothing
-<= 0.8, Lazy Theta* <= 1.5 on every lattice). Each query's time on each lattice is its
-fastest of ``--repeat`` passes, the lattices in turn within each pass (one process).
-First-call compilation happens before any timed run. No assertion on time: it prints.
+<= 0.8, Lazy Theta* <= 1.5 on every lattice), and a ``ratio`` line per lattice and method
+(the per-query ratios against cubic's, ``benchmarks/harness.py``). Each query's time on each
+lattice is its fastest of ``--repeat`` rounds, every lattice and method taking turns on one
+query before the next (one process). First-call compilation happens before any timed run.
+No assertion on time: it prints.
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
-from numba import njit
 
-from planner import search as S
-from planner.lattice import NAMED_LATTICES, Lattice
-from planner.search._los import los, new_scratch
-from planner.world import World
-from planner.world.build import build_world
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import harness  # noqa: E402  (the sibling module)
 
-ROOT = Path(__file__).resolve().parents[1]
-GEB079 = ROOT / ".." / "shared" / "data" / "octomap" / "geb079.bt"
+from planner import search as S  # noqa: E402
+from planner.lattice import NAMED_LATTICES, Lattice  # noqa: E402
+from planner.world import World  # noqa: E402
+from planner.world.build import build_world  # noqa: E402
+
+BATCH = 2500  # sight lines per timed call: one call costs some 20-40 us, under 0.5 ns per cell
+GOALS = {"astar": {"bcc": "<= 0.8", "mcc": "<= 0.8"}, "lazy": "<= 1.5"}
 
 
-# Compiled per run, not cached on disk: a cached kernel outside the package would keep the
-# machine code of the package's walk it was compiled with.
-@njit
-def _walk_all(occ, walk, ps, qs, sc):  # pragma: no cover - compiled
-    """Walk every sight line ps[i] -> qs[i]; returns (lines in sight, cells looked up)."""
-    free = 0
-    cells = 0
-    for i in range(ps.shape[0]):
-        ok, n = los(occ, walk, ps[i], qs[i], sc, np.int64(i + 1))
-        free += ok
-        cells += n
-    return free, cells
+def geb079_path(data: Path) -> Path:
+    return data / "octomap" / "geb079.bt"
 
 
 def sight_lines(lat: Lattice, n: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
@@ -69,42 +65,54 @@ def sight_lines(lat: Lattice, n: int, seed: int = 0) -> tuple[np.ndarray, np.nda
 
 
 def sight_table(n: int, repeat: int) -> None:
+    batch = min(BATCH, n)
+    nb = max(1, n // batch)
+    n = nb * batch
     print(f"\nsight walk per lattice: {n:,} random centre-to-centre lines of 2-40 cells, empty "
-          f"box, unit cell volume; CPU ns per cell looked up, fastest of {repeat} passes\n"
-          "(the lattices in turn); ratio against the cubic integer walk (goal <= 1.5)")
+          f"box, unit cell volume; thread CPU ns per cell looked up (batches of {batch} lines, "
+          f"one call each,\nthe lattices in turn, each batch its fastest of {repeat} rounds); "
+          "ratio against the cubic integer walk (goal <= 1.5)")
     print(f"{'lattice':8s} {'cells/line':>10s} {'ns/cell':>8s} {'vs cubic':>8s}")
-    cases = []
+    cases = {}
     for name in NAMED_LATTICES:
         lat = Lattice.named(name, 1.0)
         w = World(lat, np.zeros((0, 3), np.int64), np.array([[-60.0] * 3, [60.0] * 3]))
-        chk = w.checker
         ps, qs = sight_lines(lat, n)
-        sc = new_scratch(100.0, chk.walk)
-        _walk_all(chk.occupancy, chk.walk, ps[:10], qs[:10], sc)  # compile / load
-        cases.append((name, chk, ps, qs, sc, []))
-    for _ in range(max(1, repeat)):
-        for _, chk, ps, qs, sc, runs in cases:
-            t = time.process_time()
-            free, cells = _walk_all(chk.occupancy, chk.walk, ps, qs, sc)
-            runs.append((time.process_time() - t, cells, free))
-    base = None
-    for name, _, ps, _, _, runs in cases:
-        sec = min(r[0] for r in runs)
-        cells = runs[0][1]
-        assert runs[0][2] == len(ps)  # an empty box: every line is in sight
-        ns = 1e9 * sec / cells
-        base = ns if base is None else base
-        print(f"{name:8s} {cells / len(ps):10.1f} {ns:8.1f} {ns / base:8.2f}")
+        S.sight_many(w, ps[:10], qs[:10])  # compile / load
+        cases[name] = (w, ps.reshape(nb, batch, 3), qs.reshape(nb, batch, 3),
+                       np.zeros(nb, np.int64), np.zeros(nb, np.int64))
+
+    def side(name):
+        w, ps, qs, cells, free = cases[name]
+
+        def run(i):
+            r, t = harness.cpu_result(lambda: S.sight_many(w, ps[i], qs[i]))
+            cells[i], free[i] = r.lookups.sum(), r.free.sum()
+            return t
+        return run
+
+    best = harness.interleaved({k: side(k) for k in cases}, range(nb), repeat)
+    ns = {}
+    for name, (_, _, _, cells, free) in cases.items():
+        assert free.sum() == n  # an empty box: every line is in sight
+        ns[name] = 1e9 * best[name] / cells
+        tot = 1e9 * best[name].sum() / cells.sum()
+        base = 1e9 * best["cubic"].sum() / cases["cubic"][3].sum()
+        print(f"{name:8s} {cells.sum() / n:10.1f} {tot:8.1f} {tot / base:8.2f}")
+    for name in cases:
+        if name != "cubic":
+            print(harness.ratio_line(f"sight walk ns per cell {name}/cubic", ns[name],
+                                     ns["cubic"], goal="<= 1.5",
+                                     note=f"per batch of {batch} lines"))
 
 
-def _worlds(map_name: str) -> tuple[dict[str, World], np.ndarray]:
-    """The map on every lattice and random free query pairs (world points)."""
+def _worlds(map_name: str, data: Path) -> dict[str, World]:
+    """The map on every lattice."""
     if map_name == "geb079":
-        src, kw = GEB079, dict(cell_volume=0.08 ** 3, radius=0.2)
+        src, kw = geb079_path(data), dict(cell_volume=0.08 ** 3, radius=0.2)
     else:
         src, kw = map_name, {}
-    worlds = {name: build_world(src, name, **kw) for name in NAMED_LATTICES}
-    return worlds, kw
+    return {name: build_world(src, name, **kw) for name in NAMED_LATTICES}
 
 
 def query_points(worlds: dict[str, World], n: int, seed: int = 0) -> np.ndarray:
@@ -142,66 +150,89 @@ def query_points(worlds: dict[str, World], n: int, seed: int = 0) -> np.ndarray:
     return np.array(out)
 
 
-def _timed(fn) -> tuple[float, object]:
-    t = time.thread_time()
-    r = fn()
-    return time.thread_time() - t, r
-
-
-def plan_table(map_name: str, n: int, repeat: int) -> None:
-    worlds, kw = _worlds(map_name)
+def plan_table(map_name: str, n: int, repeat: int, data: Path) -> None:
+    worlds = _worlds(map_name, data)
     pts = query_points(worlds, n)
     cv = worlds["cubic"].lattice.cell_volume
     print(f"\n{map_name}: cell volume {cv:.3g} m^3, {len(pts)} queries solved on every lattice; "
-          f"CPU s per lattice (sum over queries of each query's fastest of {repeat} passes)")
-    cases = []
+          f"thread CPU s per lattice (sum over queries of each query's fastest of {repeat} "
+          "rounds)")
+    cases = {}
     for name, w in worlds.items():
         q = w.lattice.quantize(pts.reshape(-1, 3)).reshape(-1, 2, 3)
         S.search(w, q[0, 0], q[0, 1], method="lazy-theta")  # compile / load
         r = S.search(w, q[0, 0], q[0, 1])
         if r.found:
             S.shortcut(w, r.cells)
-        cases.append((name, w, q, np.full((len(q), 2), np.inf), []))
-    for _ in range(max(1, repeat)):
-        for _, w, q, best, info in cases:
-            info.clear()
-            for i, (s, g) in enumerate(q):
-                def astar_smooth(w=w, s=s, g=g):
-                    r = S.search(w, s, g)
-                    return r, (S.shortcut(w, r.cells) if r.found else r.cells)
-                ta, (ra, sm) = _timed(astar_smooth)
-                tl, rl = _timed(lambda w=w, s=s, g=g: S.search(w, s, g, method="lazy-theta"))
-                best[i, 0] = min(best[i, 0], ta)
-                best[i, 1] = min(best[i, 1], tl)
-                info.append((ra.found, rl.found, ra.expansions, rl.expansions))
+        cases[name] = (w, q, {})  # info: (query, method) -> (found, expansions)
+
+    def astar_smooth(name):
+        w, q, info = cases[name]
+
+        def run(i):
+            def call():
+                r = S.search(w, q[i, 0], q[i, 1])
+                return r, (S.shortcut(w, r.cells) if r.found else r.cells)
+            (r, _), t = harness.cpu_result(call)
+            info[i, "astar"] = (r.found, r.expansions)
+            return t
+        return run
+
+    def lazy(name):
+        w, q, info = cases[name]
+
+        def run(i):
+            r, t = harness.cpu_result(lambda: S.search(w, q[i, 0], q[i, 1],
+                                                       method="lazy-theta"))
+            info[i, "lazy"] = (r.found, r.expansions)
+            return t
+        return run
+
+    sides = {}
+    for name in cases:
+        sides[name, "astar"] = astar_smooth(name)
+        sides[name, "lazy"] = lazy(name)
+    best = harness.interleaved(sides, range(len(pts)), repeat)
     print(f"{'lattice':8s} {'found':>5s} {'A*+sm s':>8s} {'vs cubic':>8s} {'med q':>6s} "
           f"{'A* exp':>9s} {'LT* s':>8s} {'vs cubic':>8s} {'med q':>6s} {'LT* exp':>9s}")
-    base = cases[0][3]
-    for name, _, _, best, info in cases:
-        found = sum(a and b for a, b, _, _ in info)
-        ra = best[:, 0].sum() / base[:, 0].sum()
-        rl = best[:, 1].sum() / base[:, 1].sum()
-        print(f"{name:8s} {found:5d} {best[:, 0].sum():8.3f} {ra:8.2f} "
-              f"{np.median(best[:, 0] / base[:, 0]):6.2f} {sum(x[2] for x in info):9d} "
-              f"{best[:, 1].sum():8.3f} {rl:8.2f} {np.median(best[:, 1] / base[:, 1]):6.2f} "
-              f"{sum(x[3] for x in info):9d}")
+    ba, bl = best["cubic", "astar"], best["cubic", "lazy"]
+    for name, (_, q, info) in cases.items():
+        a, lz = best[name, "astar"], best[name, "lazy"]
+        found = sum(info[i, "astar"][0] and info[i, "lazy"][0] for i in range(len(q)))
+        print(f"{name:8s} {found:5d} {a.sum():8.3f} {a.sum() / ba.sum():8.2f} "
+              f"{np.median(a / ba):6.2f} {sum(info[i, 'astar'][1] for i in range(len(q))):9d} "
+              f"{lz.sum():8.3f} {lz.sum() / bl.sum():8.2f} {np.median(lz / bl):6.2f} "
+              f"{sum(info[i, 'lazy'][1] for i in range(len(q))):9d}")
+    for name in cases:
+        if name == "cubic":
+            continue
+        print(harness.ratio_line(f"A*+smoothing time {name}/cubic, {map_name}",
+                                 best[name, "astar"], ba, goal=GOALS["astar"].get(name, ""),
+                                 note="per query"))
+        print(harness.ratio_line(f"Lazy Theta* time {name}/cubic, {map_name}",
+                                 best[name, "lazy"], bl, goal=GOALS["lazy"], note="per query"))
 
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    harness.add_arguments(ap, repeat=3, data=True)
     ap.add_argument("--segments", type=int, default=20_000, help="sight lines per lattice")
     ap.add_argument("--maps", nargs="*", default=["office", "geb079"],
                     help="maps of the planning table (bundled names or geb079)")
     ap.add_argument("--queries", type=int, default=8, help="queries per map")
-    ap.add_argument("--repeat", type=int, default=3, help="passes; each query its fastest")
     a = ap.parse_args(argv)
-    if a.segments:
-        sight_table(a.segments, a.repeat)
-    for m in a.maps:
-        if m == "geb079" and not GEB079.is_file():
-            print(f"\nno geb079 at {GEB079}; skipped")
-            continue
-        plan_table(m, a.queries, a.repeat)
+    if a.smoke:
+        a.segments, a.queries, a.repeat = 5000, 2, 1
+        a.maps = [m for m in a.maps if m != "geb079"]
+    with harness.session("non-cubic lattices at cubic's cost per check: sight walk and "
+                         "planning per lattice", smoke=a.smoke):
+        if a.segments:
+            sight_table(a.segments, a.repeat)
+        for m in a.maps:
+            if m == "geb079" and not geb079_path(a.data).is_file():
+                print(f"\nskipped table: no geb079 at {geb079_path(a.data)}")
+                continue
+            plan_table(m, a.queries, a.repeat, a.data)
     return 0
 
 

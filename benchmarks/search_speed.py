@@ -7,14 +7,20 @@ Usage::
     python benchmarks/search_speed.py                 # every table, sampled queries
     python benchmarks/search_speed.py --all-warframe  # all 30,000 Warframe queries, mismatches
     python benchmarks/search_speed.py --da1 1000      # time 1,000 DA1 queries
+    python benchmarks/search_speed.py --smoke         # tiny sizes, well under a minute
 
 The per-lattice tables (sight walk per cell against the cubic integer walk, A* + smoothing
 and Lazy Theta* per lattice against cubic on the office map and geb079) are
 ``benchmarks/lattice_sight.py``'s, printed here too (``--no-lattice-sight`` skips them).
 
-The C++ anchor (``benchmarks/cpp_anchor.py``) is compiled at run time with the system
-compiler and skipped with a note when there is none. Every ratio is measured in one run on
-the same queries (the machine may be shared: trust ratios, not absolute times).
+Ours against the C++ floor is ``benchmarks/cpp_anchor.py``'s table (compiled at run time
+with the system compiler, called in this process; skipped with a line when there is none).
+Timing (``benchmarks/harness.py``): this thread's CPU time around each call, the sides of a
+comparison taking turns query by query, each query its fastest of ``--repeat`` rounds; each
+comparison prints a ``ratio`` line (median of the per-query ratios with its 95% interval).
+Every ratio is measured in one run on the same queries (the machine may be shared: trust
+ratios, not absolute times). Tables whose data is absent under ``--data`` are skipped with
+a line.
 
 Cubic lattice, 26 neighbours, safe rule (= MovingAI no corner cutting). networkx and the
 Python baseline run on a cropped world (the start/goal box padded by ``--pad`` cells) so
@@ -35,20 +41,20 @@ from pathlib import Path
 
 import numpy as np
 
-from planner import search as S
-from planner.lattice import Lattice
-from planner.search.run import H_WEIGHT as WEIGHT
-from planner.world import World
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import harness  # noqa: E402  (the sibling module)
+
+from planner import search as S  # noqa: E402
+from planner.lattice import Lattice  # noqa: E402
+from planner.search.run import H_WEIGHT as WEIGHT  # noqa: E402
+from planner.world import World  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
-WARFRAME = ROOT / ".." / "shared" / "data" / "warframe"
 MAPS = ("Simple", "Complex", "DA1")
-LONG = 10_000  # expansions: the queries the floor goal is about
-GEB079 = ROOT / ".." / "shared" / "data" / "octomap" / "geb079.bt"
 
 
-def load_warframe(name: str) -> tuple[World, np.ndarray]:
-    path = WARFRAME / f"{name}.3dmap"
+def load_warframe(name: str, data: Path = harness.DATA) -> tuple[World, np.ndarray]:
+    path = data / "warframe" / f"{name}.3dmap"
     dims = np.loadtxt(path, max_rows=1, usecols=(1, 2, 3), dtype=np.int64)
     blocked = np.loadtxt(path, skiprows=1, dtype=np.int64, ndmin=2)
     scen = np.loadtxt(f"{path}.3dscen", skiprows=2, ndmin=2)
@@ -142,65 +148,9 @@ def numba_batch(world: World, queries: np.ndarray) -> dict:
                 costs=costs, secs=secs, exps=exps)
 
 
-def anchor_batch(world: World, queries: np.ndarray, repeat: int = 1) -> dict | None:
-    """The C++ anchor (:mod:`cpp_anchor`, cubic-26, MovingAI rule) on the same world and
-    queries, ``repeat`` passes over them in one process: its expansions (one pass) and
-    per-query search seconds, the fastest pass of each (grid loading outside its clock).
-    None when no compiler is present. Costs are checked against ours by the caller."""
-    import cpp_anchor
-
-    if not cpp_anchor.available():
-        return None
-    occ = world.occupancy
-    if occ.mode != 0:
-        return None
-    n = int(np.prod(occ.dims))  # the occupancy grid holds one bit per cell
-    free = np.unpackbits(occ.grid, count=n, bitorder="little").astype(bool).reshape(
-        tuple(occ.dims))
-    cells = queries[:, :6].astype(np.int64) - np.tile(occ.lo, 2)
-    res = cpp_anchor.run(free, np.tile(cells, (max(1, repeat), 1)))
-    res, secs = res[: len(cells)], res[:, 2].reshape(-1, len(cells)).min(axis=0)
-    step = 2.0 * world.lattice.packing_radius  # the anchor counts cells; ours are metres
-    cost = np.where(res[:, 0] < 0, res[:, 0], res[:, 0] * step)
-    return dict(exp=int(res[:, 1].sum()), sec=float(secs.sum()), cost=cost, secs=secs,
-                exps=res[:, 1].astype(np.int64))
-
-
-def anchor_row(name: str, world: World, qs: np.ndarray, repeat: int = 3) -> tuple[str, dict]:
-    """Ours vs the anchor on the same queries: expansions/s of each and their ratio.
-
-    Each side makes ``repeat`` passes over the queries in one process (ours: this one; the
-    anchor: its own), and each query counts its fastest pass on each side: a busy machine
-    slows whichever side it happens to meet, and the minimum filters that out. Both sides
-    keep their arrays between passes, so both see a query's memory warm after the first.
-    Returns the row and our first pass (costs, mismatches)."""
-    repeat = max(1, repeat)
-    runs = [numba_batch(world, qs)]
-    an = anchor_batch(world, qs, repeat)
-    runs += [numba_batch(world, qs) for _ in range(repeat - 1)]
-    r = runs[0]
-    secs = np.min([x["secs"] for x in runs], axis=0)
-    ours = r["exp"] / secs.sum()
-    if an is None:
-        return (f"{name:10s} {r['n']:7d} {ours:11.3g}  (C++ anchor skipped: no g++ / c++ on "
-                "PATH)", r)
-    ok = np.isclose(an["cost"], r["costs"], rtol=1e-9, atol=1e-9) | (
-        (an["cost"] < 0) & ~np.isfinite(r["costs"]))
-    aps = an["exp"] / an["sec"]
-    # the goal's queries: >= LONG expansions, where the per-call cost no longer counts
-    long = r["exps"] >= LONG
-    if long.any():
-        lr = (r["exps"][long].sum() / secs[long].sum()) / (
-            an["exps"][long].sum() / an["secs"][long].sum())
-        tail = f" {int(long.sum()):6d} {lr:7.2f}"
-    else:
-        tail = f" {0:6d} {'-':>7s}"
-    return (f"{name:10s} {r['n']:7d} {ours:11.3g} {aps:11.3g} {ours / aps:7.2f} "
-            f"{r['exp'] / max(an['exp'], 1):9.3f} {int((~ok).sum()):8d}" + tail, r)
-
-
 def compare(world: World, queries: np.ndarray, pad: int, with_nx: bool = True) -> dict:
-    """numba vs networkx (build included) vs Python A* on cropped worlds. Queries whose
+    """numba vs networkx (build included) vs Python A* on cropped worlds (thread CPU
+    seconds, one run each: the slow sides take seconds per query). Queries whose
     cropped box holds more cells than the networkx backend takes are skipped for all three
     (counted in ``skipped``)."""
     from planner.search.reference import NX_NODE_CAP
@@ -215,32 +165,31 @@ def compare(world: World, queries: np.ndarray, pad: int, with_nx: bool = True) -
             skipped += 1
             continue
         S.search(w, s, g)  # build the cropped world's grid outside the timing
-        t = time.perf_counter()
-        a = S.search(w, s, g)
-        tn += time.perf_counter() - t
+        a, t = harness.cpu_result(lambda w=w, s=s, g=g: S.search(w, s, g))
+        tn += t
         exp += a.expansions
-        t = time.perf_counter()
-        c, _ = python_astar(w, s, g)
-        tp += time.perf_counter() - t
+        (c, _), t = harness.cpu_result(lambda w=w, s=s, g=g: python_astar(w, s, g))
+        tp += t
         assert c == a.cost or abs(c - a.cost) <= 1e-9 * max(1.0, c), (c, a.cost)
         if with_nx:
-            t = time.perf_counter()
-            b = S.search(w, s, g, backend="networkx")
-            tx += time.perf_counter() - t
+            b, t = harness.cpu_result(lambda w=w, s=s, g=g: S.search(w, s, g,
+                                                                     backend="networkx"))
+            tx += t
             assert b.cost == a.cost or abs(b.cost - a.cost) <= 1e-9 * max(1.0, a.cost), (
                 b.cost, a.cost)
     return dict(numba=tn, nx=tx, py=tp, exp=exp, skipped=skipped)
 
 
-def geb079(n_queries: int = 20, seed: int = 0, lattice: str = "cubic"
-           ) -> tuple[World, np.ndarray] | None:
+def geb079(n_queries: int = 20, seed: int = 0, lattice: str = "cubic",
+           data: Path = harness.DATA) -> tuple[World, np.ndarray] | None:
     """The real OctoMap scan geb079.bt on the cubic lattice at its native 0.08 m, with
     random free start/goal cells at least 10 m apart (None when the data is absent)."""
     from planner.world.build import build_world
 
-    if not GEB079.is_file():
+    path = data / "octomap" / "geb079.bt"
+    if not path.is_file():
         return None
-    world = build_world(GEB079, lattice, cell_volume=0.08**3, radius=0.0)
+    world = build_world(path, lattice, cell_volume=0.08**3, radius=0.0)
     rng = np.random.default_rng(seed)
     lo = np.ceil(world.bounds[0] / 0.08).astype(np.int64)
     hi = np.floor(world.bounds[1] / 0.08).astype(np.int64)
@@ -252,79 +201,117 @@ def geb079(n_queries: int = 20, seed: int = 0, lattice: str = "cubic"
     return world, np.array(q, float)
 
 
-def lattice_table(geb: tuple[World, np.ndarray], repeat: int = 3) -> None:
+def warframe_cases(names, data: Path) -> list[tuple[str, World, np.ndarray]]:
+    """The named Warframe maps present under ``data`` (a line for each one absent)."""
+    out = []
+    for name in names:
+        if (data / "warframe" / f"{name}.3dmap").is_file():
+            out.append((name, *load_warframe(name, data)))
+        else:
+            print(f"{name}: not under {data / 'warframe'}, skipped")
+    return out
+
+
+def lattice_table(geb: tuple[World, np.ndarray], repeat: int = 3,
+                  data: Path = harness.DATA) -> None:
     """A* per-expansion cost on each lattice relative to cubic: geb079 at the same cell
-    volume (0.08 m^3), the cubic queries' centres quantized on each lattice. ``repeat``
-    passes over the lattices in turn; each query counts its fastest pass (a busy machine
-    slows whichever lattice it happens to meet)."""
+    volume (0.08 m^3), the cubic queries' centres quantized on each lattice (a query whose
+    ends are blocked on a lattice is left out there). Thread CPU time per ``search`` call,
+    the lattices taking turns query by query, each query its fastest of ``repeat``
+    rounds."""
     from planner.lattice import NAMED_LATTICES
 
     gw, gq = geb
     pts = gw.lattice.to_world(gq[:, :6].reshape(-1, 3).astype(np.int64)).reshape(-1, 2, 3)
     print("\nA* per expansion by lattice, geb079 (cell volume 0.08^3 m^3, full neighbours, "
           "safe rule); ratio = ns per expansion / cubic's (goal <= 1.3);\n"
-          f"each query's time is its fastest of {max(1, repeat)} passes, the lattices in turn")
+          f"thread CPU time per query, the lattices taking turns query by query, each its "
+          f"fastest of {max(1, repeat)} rounds")
     print(f"{'lattice':8s} {'queries':>7s} {'expansions':>11s} {'ns/exp':>8s} {'vs cubic':>8s}")
-    cases = []
+    cases = {}
     for name in NAMED_LATTICES:
-        w = gw if name == "cubic" else geb079(0, lattice=name)[0]
+        w = gw if name == "cubic" else geb079(0, lattice=name, data=data)[0]
         q = w.lattice.quantize(pts.reshape(-1, 3)).reshape(-1, 6)
-        q = q[w.is_free(q[:, :3]) & w.is_free(q[:, 3:])]
-        S.search(w, q[0, :3], q[0, 3:])
-        cases.append((name, w, q.astype(float), []))
-    for _ in range(max(1, repeat)):
-        for _, w, q, runs in cases:
-            runs.append(numba_batch(w, q))
-    base = None
-    for name, _, _, runs in cases:
-        exp = runs[0]["exp"]
-        ns = 1e9 * np.min([x["secs"] for x in runs], axis=0).sum() / exp
-        base = ns if base is None else base
-        print(f"{name:8s} {len(runs[0]['secs']):7d} {exp:11d} {ns:8.0f} {ns / base:8.2f}")
+        ok = w.is_free(q[:, :3]) & w.is_free(q[:, 3:])
+        i0 = int(np.flatnonzero(ok)[0])
+        S.search(w, q[i0, :3], q[i0, 3:])  # compile / load outside the clock
+        cases[name] = (w, q, ok, np.zeros(len(q), np.int64))
+
+    def side(name):
+        w, q, ok, exps = cases[name]
+
+        def run(i):
+            if not ok[i]:
+                return math.inf
+            r, t = harness.cpu_result(lambda: S.search(w, q[i, :3], q[i, 3:]))
+            exps[i] = r.expansions
+            return t
+        return run
+
+    best = harness.interleaved({k: side(k) for k in cases}, range(len(pts)), repeat)
+    per = {}
+    ns = {}
+    for name, (_, _, ok, exps) in cases.items():
+        exp = int(exps[ok].sum())
+        ns[name] = 1e9 * best[name][ok].sum() / exp
+        per[name] = np.where(ok, best[name] / np.maximum(exps, 1), math.inf)
+        print(f"{name:8s} {int(ok.sum()):7d} {exp:11d} {ns[name]:8.0f} "
+              f"{ns[name] / ns['cubic']:8.2f}")
+    for name in cases:
+        if name != "cubic":
+            print(harness.ratio_line(f"A* ns per expansion {name}/cubic, geb079", per[name],
+                                     per["cubic"], goal="<= 1.3", overall=ns[name] / ns["cubic"],
+                                     note="per query"))
 
 
-def anyangle_table(geb: tuple[World, np.ndarray] | None, n: int,
-                   save: Path | None = None, check: Path | None = None,
-                   repeat: int = 3) -> None:
+def _method_sides(world: World, qs: np.ndarray, methods) -> tuple[dict, dict, dict]:
+    """One side per search method over the queries ``qs`` (Q, >= 6): each returns the
+    thread CPU seconds of one ``search`` call and records the result's expansions and
+    cost."""
+    exps = {m: np.zeros(len(qs), np.int64) for m in methods}
+    costs = {m: np.full(len(qs), math.inf) for m in methods}
+
+    def side(m):
+        def run(i):
+            s, g = qs[i, :3].astype(np.int64), qs[i, 3:6].astype(np.int64)
+            r, t = harness.cpu_result(lambda: S.search(world, s, g, method=m))
+            exps[m][i], costs[m][i] = r.expansions, r.cost
+            return t
+        return run
+
+    return {m: side(m) for m in methods}, exps, costs
+
+
+def anyangle_table(cases: list, n: int, save: Path | None = None,
+                   check: Path | None = None, repeat: int = 3) -> None:
     """Lazy Theta* vs A* on the same queries: median per-query time ratio (goal <= 2), and
     the median per-query expansion ratio beside it (most of the time ratio: where an obstacle
     makes the path longer than the straight line by a little, Lazy Theta* must expand every
     cell whose g + |x - goal| is below the path length, a thin tube along the whole line; A*'s
     move-set gauge is flat along the many equal-cost lattice paths, so it dives).
 
-    ``save`` writes each query's Lazy Theta* path length (JSON, per world); ``check``
-    compares this run's lengths with such a file (a run of another version): the largest
-    relative difference and the queries differing by more than 0.1% (goal: none).
-    Each query's time on each side is its fastest of ``repeat`` alternating runs."""
-    print(f"\nLazy Theta* vs A* (cubic-26, same queries; kernel time, fastest of {repeat} "
+    ``cases``: (name, world, queries (Q, >= 6)) per world. ``save`` writes each query's Lazy
+    Theta* path length (JSON, per world); ``check`` compares this run's lengths with such a
+    file (a run of another version): the largest relative difference and the queries
+    differing by more than 0.1% (goal: none). Thread CPU time per call, the two methods
+    taking turns query by query, each query its fastest of ``repeat`` rounds."""
+    print(f"\nLazy Theta* vs A* (cubic-26, same queries; thread CPU time, fastest of {repeat} "
           f"alternating runs per query); up to {n} per world")
     head = (f"{'world':10s} {'queries':>7s} {'A* med ms':>9s} {'LT* med ms':>10s} "
             f"{'med ratio':>9s} {'LT*/A* exp':>10s} {'med exp':>7s} {'LT* length m':>12s}")
     ref = json.loads(check.read_text()) if check is not None else None
     print(head + (f" {'max dlen':>9s} {'>0.1%':>5s}" if ref is not None else ""))
-    cases = [(m, *load_warframe(m)) for m in MAPS]
-    if geb is not None:
-        cases.append(("geb079", *geb))
     lengths = {}
+    ratios = []
     for name, world, scen in cases:
         qs = scen[:: max(1, len(scen) // n)][:n]
-        ta, tl, ea, el, ll = [], [], [], [], []
         S.search(world, qs[0, :3].astype(np.int64), qs[0, 3:6].astype(np.int64),
                  method="lazy-theta")
-        for q in qs:
-            s, g = q[:3].astype(np.int64), q[3:6].astype(np.int64)
-            ka, kl = [], []
-            for _ in range(max(1, repeat)):
-                ra = S.search(world, s, g)
-                rl = S.search(world, s, g, method="lazy-theta")
-                ka.append(ra.seconds)
-                kl.append(rl.seconds)
-            ta.append(min(ka))
-            tl.append(min(kl))
-            ea.append(ra.expansions)
-            el.append(rl.expansions)
-            ll.append(rl.cost)
-        ta, tl, ea, el = np.array(ta), np.array(tl), np.array(ea), np.array(el)
+        sides, exps, costs = _method_sides(world, qs, ("astar", "lazy-theta"))
+        best = harness.interleaved(sides, range(len(qs)), repeat)
+        ta, tl = best["astar"], best["lazy-theta"]
+        ea, el = exps["astar"], exps["lazy-theta"]
+        ll = costs["lazy-theta"].tolist()
         lengths[name] = ll
         row = (f"{name:10s} {len(qs):7d} {1e3 * np.median(ta):9.2f} "
                f"{1e3 * np.median(tl):10.2f} {np.median(tl / ta):9.2f} "
@@ -335,48 +322,52 @@ def anyangle_table(geb: tuple[World, np.ndarray] | None, n: int,
             rel[~np.isfinite(old) & ~np.isfinite(new)] = 0.0
             row += f" {rel.max():9.2e} {int((rel > 1e-3).sum()):5d}"
         print(row)
+        ratios.append(harness.ratio_line(f"Lazy Theta*/A* time, {name}", tl, ta,
+                                         goal="<= 2", note="per query"))
+    for line in ratios:
+        print(line)
     if save is not None:
         save.write_text(json.dumps(lengths))
 
 
-def weighted_table(geb: tuple[World, np.ndarray] | None, n: int, repeat: int = 3) -> None:
-    """Any-angle at A*'s cost (issue goal: <= 2x A*): per world (DA1, geb079 at 0.08 m),
-    the median per-query time ratio of Lazy Theta* / A* and of weighted-theta / A*, and the
-    per-query length ratio weighted-theta / Lazy Theta* (goal: within 0.5% on every
-    query): its largest, median and the share within 0.5%. Kernel time, each query's
-    fastest of ``repeat`` alternating runs of the three methods."""
+def weighted_table(cases: list, n: int, repeat: int = 3) -> None:
+    """Any-angle at A*'s cost (issue goal: <= 2x A*): per world (``cases``: DA1, geb079 at
+    0.08 m), the median per-query time ratio of Lazy Theta* / A* and of weighted-theta /
+    A*, and the per-query length ratio weighted-theta / Lazy Theta* (goal: within 0.5% on
+    every query): its largest, median and the share within 0.5%. Thread CPU time per call,
+    the three methods taking turns query by query, each query its fastest of ``repeat``
+    rounds."""
     print(f"\nweighted-theta (Lazy Theta*, heuristic x{WEIGHT}) vs Lazy Theta* vs A* "
           f"(cubic-26, same queries, fastest of {repeat} alternating runs); up to {n} per "
           "world\ntime goal <= 2 (median of per-query ratios); length goal: "
           "weighted / LT* <= 1.005 on every query")
     print(f"{'world':8s} {'queries':>7s} {'LT*/A*':>7s} {'W/A*':>6s} {'W/A* exp':>8s} "
           f"{'len max':>8s} {'len med':>8s} {'<=0.5%':>6s}")
-    cases = [("DA1", *load_warframe("DA1"))]
-    if geb is not None:
-        cases.append(("geb079", *geb))
     methods = ("astar", "lazy-theta", "weighted-theta")
+    ratios = []
     for name, world, scen in cases:
         qs = scen[:: max(1, len(scen) // n)][:n]
         for m in methods:  # compile / load every kernel outside the timed runs
             S.search(world, qs[0, :3].astype(np.int64), qs[0, 3:6].astype(np.int64), method=m)
-        tl, tw, ew, ln = [], [], [], []
-        for q in qs:
-            s, g = q[:3].astype(np.int64), q[3:6].astype(np.int64)
-            best = dict.fromkeys(methods, math.inf)
-            for _ in range(max(1, repeat)):
-                res = {m: S.search(world, s, g, method=m) for m in methods}
-                for m in methods:
-                    best[m] = min(best[m], res[m].seconds)
-            if not res["astar"].found:  # no path: nothing to compare
-                continue
-            tl.append(best["lazy-theta"] / best["astar"])
-            tw.append(best["weighted-theta"] / best["astar"])
-            ew.append(res["weighted-theta"].expansions / res["astar"].expansions)
-            ln.append(res["weighted-theta"].cost / res["lazy-theta"].cost)
-        ln = np.array(ln)
-        print(f"{name:8s} {len(ln):7d} {np.median(tl):7.2f} {np.median(tw):6.2f} "
+        sides, exps, costs = _method_sides(world, qs, methods)
+        best = harness.interleaved(sides, range(len(qs)), repeat)
+        found = np.isfinite(costs["astar"])  # no path: nothing to compare
+        ta, tl, tw = (best[m][found] for m in methods)
+        ew = exps["weighted-theta"][found] / exps["astar"][found]
+        ln = costs["weighted-theta"][found] / costs["lazy-theta"][found]
+        print(f"{name:8s} {len(ln):7d} {np.median(tl / ta):7.2f} {np.median(tw / ta):6.2f} "
               f"{np.median(ew):8.2f} {ln.max():8.4f} {np.median(ln):8.4f} "
               f"{np.mean(ln <= 1.005):6.0%}")
+        ratios += [harness.ratio_line(f"weighted-theta/A* time, {name}", tw, ta, goal="<= 2",
+                                      note="per query"),
+                   harness.ratio_line(f"weighted-theta/Lazy Theta* time, {name}", tw, tl,
+                                      note="per query"),
+                   harness.ratio_line(f"weighted-theta/Lazy Theta* length, {name}",
+                                      costs["weighted-theta"][found],
+                                      costs["lazy-theta"][found],
+                                      goal="<= 1.005 on every query", note="per query")]
+    for line in ratios:
+        print(line)
 
 
 def cold_warm() -> tuple[float, float]:
@@ -400,10 +391,11 @@ def cold_warm() -> tuple[float, float]:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    harness.add_arguments(ap, repeat=3, data=True)
     ap.add_argument("--all-warframe", action="store_true",
                     help="check all 10,000 queries of each Warframe map")
     ap.add_argument("--maps", nargs="+", choices=MAPS, default=list(MAPS),
-                    help="Warframe maps of the anchor table (default: all three)")
+                    help="Warframe maps of the floor table (default: all three)")
     ap.add_argument("--sample", type=int, default=200, help="queries per map for the table")
     ap.add_argument("--compare", type=int, default=10, help="queries per map vs nx/Python")
     ap.add_argument("--pad", type=int, default=6, help="crop padding (cells) for nx/Python")
@@ -416,11 +408,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--no-lattices", dest="lattices", action="store_false",
                     help="skip the per-lattice cost table on geb079")
     ap.add_argument("--no-anchor", dest="anchor", action="store_false",
-                    help="skip the A* vs C++ anchor table")
-    ap.add_argument("--repeat", type=int, default=3,
-                    help="runs of each side (ours / the anchor, A* / Lazy Theta*, each "
-                         "lattice), alternating; each query counts its fastest run on each "
-                         "side (load on a shared machine)")
+                    help="skip the A* vs C++ floor table")
     ap.add_argument("--anyangle", type=int, default=20,
                     help="queries per world for Lazy Theta* and weighted-theta vs A* (0: skip)")
     ap.add_argument("--no-lattice-sight", dest="lattice_sight", action="store_false",
@@ -431,59 +419,77 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--check-lengths", type=Path, metavar="JSON",
                     help="compare Lazy Theta* path lengths with a --save-lengths file")
     a = ap.parse_args(argv)
-    if not WARFRAME.exists():
-        print(f"no Warframe data at {WARFRAME}; skipping")
-        return 0
+    segments, plan_maps, plan_queries = 20_000, ["office", "geb079"], 8
+    if a.smoke:  # tiny sizes; geb079 (five lattice builds) left out
+        a.sample, a.compare, a.da1, a.anyangle, a.repeat = 4, 1, 20, 3, 1
+        a.maps, a.geb079, a.all_warframe = ["Simple"], False, False
+        segments, plan_maps, plan_queries = 5000, ["office"], 2
+    if not a.geb079:
+        plan_maps = [m for m in plan_maps if m != "geb079"]
+    with harness.session("search engine speed: ours vs the C++ floor, per lattice, "
+                         "any-angle vs A*", smoke=a.smoke):
+        return _run(a, segments, plan_maps, plan_queries)
+
+
+def _run(a: argparse.Namespace, segments: int, plan_maps: list[str], plan_queries: int
+         ) -> int:
+    import cpp_anchor  # the sibling scripts
+    import fixed_cost
+    import lattice_sight
 
     cold, warm = cold_warm()
     print(f"first call in a fresh process (import + cached-kernel load + tiny search): "
           f"{cold:.2f} s; second call {warm * 1e3:.2f} ms")
-    import fixed_cost  # the sibling script
+    print(fixed_cost.line(300 if a.smoke else 3000))
 
-    print(fixed_cost.line())
+    print("\nA*, cubic-26, safe rule (= MovingAI no corner cutting), ours vs the strongest "
+          "C++ floor (benchmarks/cpp_anchor.py, in process) on the same queries;\nthread CPU "
+          f"time per query, the two sides taking turns, each query its fastest of {a.repeat} "
+          "rounds")
+    total_bad = 0
+    if not a.anchor:
+        print("skipped table: --no-anchor")
+    elif not cpp_anchor.available():
+        print("skipped table: no C++ compiler (g++ / c++) on PATH: the C++ floor")
+    else:
+        names = list(a.maps) + (["geb079"] if a.geb079 else [])
+        rows = cpp_anchor.floor_rows(a.data, names, None if a.all_warframe else a.sample,
+                                     a.geb_queries, a.repeat)
+        if rows:
+            cpp_anchor.print_rows(rows)
+            total_bad = sum(r.mismatches for r in rows)
+            print(f"optimal costs: {total_bad} mismatches (ours vs the floor vs the listed "
+                  "Warframe optimum)"
+                  + (f" (all {10_000 * len(a.maps):,} Warframe queries)" if a.all_warframe
+                     else f" ({a.sample} per Warframe map)"))
+        else:
+            print(f"skipped table: none of the maps under {a.data}")
 
-    print("\nA*, cubic-26, safe rule (= MovingAI no corner cutting), ours vs the C++ anchor "
-          "(benchmarks/cpp_anchor.py, g++ -O3) on the same queries; kernel time only.\n"
-          "ratio = our exp/s / anchor exp/s; exp ratio = our expansions / its; long: the\n"
-          f"queries of >= {LONG:,} expansions and the ratio over them alone (goal >= 0.7);\n"
-          f"each side's time per query is its fastest of {a.repeat} passes (each side in "
-          "one process)")
-    head = (f"{'map':10s} {'queries':>7s} {'ours exp/s':>11s} {'anchor':>11s} {'ratio':>7s} "
-            f"{'exp ratio':>9s} {'cost!=':>8s} {'long':>6s} {'ratio':>7s}")
-    print(head)
-    total_bad = []
-    for name in a.maps if a.anchor else ():
-        world, scen = load_warframe(name)
-        S.search(world, scen[0, :3].astype(np.int64), scen[0, 3:6].astype(np.int64))
-        qs = scen if a.all_warframe else scen[:: max(1, len(scen) // a.sample)][: a.sample]
-        row, r = anchor_row(name, world, qs, a.repeat)
-        total_bad += [(name, *b) for b in r["bad"]]
-        print(row)
-    geb = geb079(a.geb_queries) if a.geb079 else None
-    if geb is not None and a.anchor:
-        gw, gq = geb
-        S.search(gw, gq[0, :3].astype(np.int64), gq[0, 3:6].astype(np.int64))
-        print(anchor_row("geb079", gw, gq, a.repeat)[0])
-    print(f"Warframe optimal costs: {len(total_bad)} mismatches"
-          + (f" (all {10_000 * len(a.maps):,} queries)" if a.all_warframe
-             else f" ({a.sample} per map)"))
-    for b in total_bad[:20]:
-        print("  ", b)
-
+    geb = geb079(a.geb_queries, data=a.data) if a.geb079 else None
+    if a.geb079 and geb is None:
+        print(f"\nno geb079 under {a.data / 'octomap'}: its tables are skipped")
     if geb is not None and a.lattices:
-        lattice_table(geb, a.repeat)
+        lattice_table(geb, a.repeat, a.data)
+    wf = warframe_cases(MAPS, a.data) if (a.anyangle or a.compare) else []
     if a.anyangle:
-        anyangle_table(geb, a.anyangle, a.save_lengths, a.check_lengths, a.repeat)
-        weighted_table(geb, a.anyangle, a.repeat)
+        cases = wf + ([("geb079", *geb)] if geb is not None else [])
+        if cases:
+            anyangle_table(cases, a.anyangle, a.save_lengths, a.check_lengths, a.repeat)
+            weighted_table([c for c in cases if c[0] in ("DA1", "geb079")] or cases[:1],
+                           a.anyangle, a.repeat)
+        else:
+            print("\nskipped table: any-angle vs A* (no Warframe map, no geb079)")
 
-    if a.lattice_sight:  # the sibling script: sight walk per cell, planning per lattice
-        import lattice_sight
+    if a.lattice_sight:  # the sibling script's tables: sight walk per cell, planning
+        lattice_sight.sight_table(segments, a.repeat)
+        for m in plan_maps:
+            lattice_sight.plan_table(m, plan_queries, a.repeat, a.data)
 
-        lattice_sight.main(["--repeat", str(a.repeat)]
-                           + ([] if a.geb079 else ["--maps", "office"]))
-
-    if a.da1:
-        world, scen = load_warframe("DA1")
+    da1 = [c for c in wf if c[0] == "DA1"]
+    if a.da1 and not da1:
+        print("\nskipped: DA1 throughput (no DA1 map)")
+    elif a.da1:
+        _, world, scen = da1[0]
         S.search(world, scen[0, :3].astype(np.int64), scen[0, 3:6].astype(np.int64))
         qs = scen[: a.da1]
         r = numba_batch(world, qs)
@@ -498,15 +504,18 @@ def main(argv: list[str] | None = None) -> int:
                       for x, q in zip(res, qs, strict=True))
             print(f"{a.da1} DA1 queries, search_many with {workers} thread(s): {wall:.2f} s "
                   f"wall, {bad} mismatches")
+        total_bad += len(r["bad"])
     if not a.compare:
         return 1 if total_bad else 0
 
-    print(f"\nratios on cropped worlds (start/goal box + {a.pad} cells; same graph for all)")
+    print(f"\nratios on cropped worlds (start/goal box + {a.pad} cells; same graph for all; "
+          "thread CPU s)")
     print(f"{'case':10s} {'queries':>7s} {'numba s':>9s} {'networkx s':>10s} {'python s':>9s} "
           f"{'nx/numba':>9s} {'py/numba':>9s}")
-    cases = [(name, *load_warframe(name)) for name in MAPS]
-    if geb is not None:
-        cases.append(("geb079", *geb))
+    cases = wf + ([("geb079", *geb)] if geb is not None else [])
+    if a.smoke:  # networkx takes seconds per query on the larger maps
+        cases = [c for c in cases if c[0] == "Simple"]
+    ratios = []
     for name, world, scen in cases:
         qs = scen[:: max(1, len(scen) // a.compare)][: a.compare]
         r = compare(world, qs, a.pad)
@@ -518,7 +527,12 @@ def main(argv: list[str] | None = None) -> int:
               f"{r['nx'] / r['numba']:9.0f} {r['py'] / r['numba']:9.0f}"
               + (f"  ({r['skipped']} skipped: crop over the networkx cap)"
                  if r["skipped"] else ""))
-
+        ratios += [harness.single_ratio(f"networkx/numba time, {name} cropped", r["nx"],
+                                        r["numba"], note=f"sums over {done} queries"),
+                   harness.single_ratio(f"Python/numba time, {name} cropped", r["py"],
+                                        r["numba"], note=f"sums over {done} queries")]
+    for line in ratios:
+        print(line)
     return 1 if total_bad else 0
 
 

@@ -5,8 +5,9 @@ its statuses (:mod:`~planner.search.result`), the move sets and the heuristic
 (:mod:`~planner.search.moves`), the A* family's kernel (:mod:`~planner.search.astar`), D* Lite
 (:mod:`~planner.search.dstar`, :class:`DStarLite`), replanning by A* when a change touches
 the path (:mod:`~planner.search.replanner`, :class:`AStarReplanner`), the heap
-(:mod:`~planner.search._heap`), line of sight (:mod:`~planner.search._los`) and the
-networkx reference (:mod:`~planner.search.reference`).
+(:mod:`~planner.search._heap`), line of sight (:mod:`~planner.search._los`;
+:func:`sight_many` for batches of segments, :mod:`~planner.search.sight`) and the networkx
+reference (:mod:`~planner.search.reference`).
 """
 
 from planner.search.dstar.lite import DStarLite
@@ -22,7 +23,9 @@ from planner.search.run import (
     shortcut,
     warm_up,
 )
+from planner.search.sight import Sight, sight_many
 
-__all__ = ["AStarReplanner", "DStarLite", "METHODS", "STATUSES", "SearchResult",
+__all__ = ["AStarReplanner", "DStarLite", "METHODS", "STATUSES", "SearchResult", "Sight",
            "carries_guarantee", "default_max_expansions", "default_memory_budget",
-           "move_heuristic", "move_stencils", "search", "search_many", "shortcut", "warm_up"]
+           "move_heuristic", "move_stencils", "search", "search_many", "shortcut", "sight_many",
+           "warm_up"]

@@ -360,3 +360,35 @@ def shortcut_kernel(occ, walk, cells, sc):  # pragma: no cover - compiled
         nk += 1
         i = j
     return keep[:nk].copy(), lookups
+
+
+@njit_cached(_nrt=False)
+def sight_batch(occ, walk, ps, qs, sc, free, lookups):  # pragma: no cover - compiled
+    """:func:`los` between the centres of ``ps[i]`` and ``qs[i]`` for every i ((N, 3)
+    int64 each), into ``free`` ((N,) bool) and ``lookups`` ((N,) int64, the cells looked
+    up for that line). Returns the total lookups."""
+    total = 0
+    for i in range(ps.shape[0]):
+        ok, n = los(occ, walk, ps[i], qs[i], sc, np.int64(i + 1))
+        free[i] = ok
+        lookups[i] = n
+        total += n
+    return total
+
+
+@njit_cached(_nrt=False)
+def longest_segment(g, ps, qs):  # pragma: no cover - compiled
+    """The longest centre-to-centre segment ``ps[i]`` -> ``qs[i]`` (m; ``g`` the (3, 3)
+    generator): sizes :func:`new_scratch` for :func:`sight_batch` in one pass, with no
+    temporary arrays."""
+    best = 0.0
+    for i in range(ps.shape[0]):
+        d0 = qs[i, 0] - ps[i, 0]
+        d1 = qs[i, 1] - ps[i, 1]
+        d2 = qs[i, 2] - ps[i, 2]
+        s = 0.0
+        for r in range(3):
+            x = g[r, 0] * d0 + g[r, 1] * d1 + g[r, 2] * d2
+            s += x * x
+        best = max(best, s)
+    return math.sqrt(best)
