@@ -74,6 +74,16 @@ def test_a_lattice_that_blocks_an_end_fails_the_query_and_leaves_the_pairs():
     assert c["success"]["cubic_only"] == 4 and c["success"]["x_only"] == 1
 
 
+def test_fair_queries_table_skips_a_map_where_only_ompl_ran():
+    """A map whose rows are all OMPL runs has no lattice search to count: the table leaves
+    it out instead of failing (an OMPL-only suite's report)."""
+    rows = [_row("cubic", q, checks=10.0, cpu=0.001, nb="-", meth="ompl:rrtstar", m="o")
+            for q in range(4)]
+    rows += [_row("cubic", q, checks=10.0, cpu=0.001) for q in range(4)]
+    text = fair_queries_table(rows, {})
+    assert "| m | cubic | 4 |" in text and "| o |" not in text
+
+
 def test_the_decision_table_cites_the_rows_it_comes_from():
     rows = []
     for q in range(12):

@@ -113,6 +113,8 @@ def fair_queries_table(rows: list[dict], record: dict | None = None,
     for m in sorted({r["map"] for r in rows}):
         mrows = [r for r in rows if r["map"] == m and not str(r["method"]).startswith("ompl:")]
         meths = sorted({r["method"] for r in mrows})
+        if not meths:  # only OMPL ran on this map: no lattice search to count
+            continue
         meth = "astar" if "astar" in meths else meths[0]
         for lat in [c[0] for c in configs(mrows) if c[1:] == (nbs[0], meth)]:
             cells = [Path(m).name, lat]
