@@ -16,7 +16,7 @@ from planner import ompl, search
 from planner.errors import PlanError
 from planner.lattice import Lattice
 from planner.ompl import check_seed
-from planner.path import SHORT_PATH, path_length, rows_length
+from planner.path import SHORT_PATH, path_length
 from planner.search.run import search_points
 from planner.world import World, as_point
 from planner.world.build import build_world
@@ -164,13 +164,6 @@ def plan(
     else:
         world = build_world(map_or_points, lattice, cell_volume=cell_volume, radius=radius,
                             bounds=bounds, unknown=unknown)
-    lat = world.lattice
-    common = dict(
-        lattice=lat.name or "custom",
-        cell_volume=lat.cell_area if world.dim == 2 else lat.cell_volume, method=method,
-        neighbors=neighbors, build_seconds=world.build_seconds or 0.0,
-        unknown_note=world.unknown_note,
-    )
     res = None
     if pts is not None and backend == "numba" and not method.startswith("ompl:"):
         res = search_points(world, pts, method=method, neighbors=neighbors,
@@ -182,49 +175,58 @@ def plan(
         s, s_cell, g, g_cell = world.endpoints(start, goal)  # local points
         if method.startswith("ompl:"):
             return _plan_ompl(world, start, goal, method.split(":", 1)[1], time_limit, seed,
-                              common)
+                              _common(world, method, neighbors))
         res = search.search(
             world, s_cell, g_cell, method=method, neighbors=neighbors,
             corner_cutting=corner_cutting, backend=backend, max_expansions=max_expansions,
             memory_budget=memory_budget,
         )
+        s, g = s.tolist(), g.tolist()
     if not res.found:
         return PlanResult(
             found=False, path=np.zeros((0, 3)), cells=np.zeros((0, 3), np.int64),
             length=math.inf, cell_checks=res.cell_checks, expansions=res.expansions,
             generated=res.generated, seconds=res.seconds, reason=res.reason,
-            peak_bytes=res.peak_bytes, status=res.status, guarantee=res.guarantee, **common,
+            peak_bytes=res.peak_bytes, status=res.status, guarantee=res.guarantee,
+            **_common(world, method, neighbors),
         )
     path_cells = res.cells
     checks = res.cell_checks
     seconds = res.seconds
     # the lookups joining the ends (joined): in extra, not in the search's count
-    joins = world.cell_checks
-    path = joined(world, _path_points(lat, s, path_cells, g))
-    joins = world.cell_checks - joins
-    # a short path's length from its rows (path_length's float, without its checks)
-    length = raw_length = (rows_length(path.tolist()) if len(path) <= SHORT_PATH
-                           else path_length(path, 0.0))
+    path, joins, length = _joined_path(world, s, path_cells, g)
+    raw_length = length
     if shortcut and method in ("astar", "dijkstra"):
         t0 = time.perf_counter()
         before = world.cell_checks
         path_cells = search.shortcut(world, path_cells)
         checks += world.cell_checks - before
         seconds += time.perf_counter() - t0
-        before = world.cell_checks
-        path = joined(world, _path_points(lat, s, path_cells, g))
-        joins += world.cell_checks - before
-        length = path_length(path, 0.0)
-    c = common  # the fields in their order: a keyword call costs 2 us more, every plan
+        path, more, length = _joined_path(world, s, path_cells, g)
+        joins += more
+    lat = world.lattice
     out = PlanResult(
-        True, path, path_cells, length, checks, res.expansions, res.generated, seconds,
-        c["lattice"], c["cell_volume"], method, neighbors, "", res.peak_bytes,
-        c["build_seconds"], {"cost_between_centres": res.cost, "raw_length": raw_length,
-                             "smoothed_length": length if shortcut else None,
-                             "join_checks": joins},
-        "found", res.guarantee, unknown_on_path(world, path), c["unknown_note"],
+        found=True, path=path, cells=path_cells, length=length, cell_checks=checks,
+        expansions=res.expansions, generated=res.generated, seconds=seconds,
+        lattice=lat.name or "custom",
+        cell_volume=lat.cell_area if world.dim == 2 else lat.cell_volume, method=method,
+        neighbors=neighbors, peak_bytes=res.peak_bytes,
+        build_seconds=world.build_seconds or 0.0,
+        extra={"cost_between_centres": res.cost, "raw_length": raw_length,
+               "smoothed_length": length if shortcut else None, "join_checks": joins},
+        guarantee=res.guarantee, unknown_cells=unknown_on_path(world, path),
+        unknown_note=world.unknown_note,
     )
     return _in_map_frame(out, world) if world.local_frame else out
+
+
+def _common(world: World, method: str, neighbors: str) -> dict:
+    """The :class:`PlanResult` fields saying what was planned on, by name."""
+    lat = world.lattice
+    return dict(lattice=lat.name or "custom",
+                cell_volume=lat.cell_area if world.dim == 2 else lat.cell_volume,
+                method=method, neighbors=neighbors, build_seconds=world.build_seconds or 0.0,
+                unknown_note=world.unknown_note)
 
 
 def _in_map_frame(res: PlanResult, world) -> PlanResult:
@@ -246,6 +248,20 @@ def _path_points(lat: Lattice, s: np.ndarray, cells: np.ndarray, g: np.ndarray) 
     return path
 
 
+def _joined_path(world: World, s, cells: np.ndarray, g) -> tuple[np.ndarray, int, float]:
+    """``joined(world, _path_points(lat, s, cells, g))``, the lookups it made (also added to
+    ``world.cell_checks``) and its length (m, as :func:`path_length` gives it): the cell
+    centres from :meth:`Lattice.to_world`, then one compiled call (the joined path is a
+    view of the first rows of the array it fills). ``s``, ``g``: three Python floats."""
+    path = np.empty((len(cells) + 2, 3))
+    world.lattice.to_world(cells, out=path[1:-1])
+    m, n, length = world.checker.join(path, *s, *g)
+    world.cell_checks += n
+    if m <= SHORT_PATH:  # rows_length's float; numpy sums longer paths in another order
+        return path[:m], n, length
+    return path[:m], n, path_length(path[:m], 0.0)
+
+
 def joined(world, path: np.ndarray) -> np.ndarray:
     """The path a robot drives from a lattice path ``path`` (K + 2, 3): the start point, the
     centres of the K cells searched (the start's cell first, the goal's last), the goal
@@ -263,6 +279,12 @@ def joined(world, path: np.ndarray) -> np.ndarray:
     ndarray, shape (K', 3), K' <= K + 2
         Starts exactly at ``path[0]`` and ends exactly at ``path[-1]``.
     """
+    if isinstance(world, World):  # one compiled call, on a copy
+        p = np.array(path, dtype=np.float64, order="C")
+        if p.ndim == 2 and p.shape[1] == 3 and len(p) >= 2 and np.isfinite(p).all():
+            m, looked, _ = world.checker.join(p, *p[0].tolist(), *p[-1].tolist())
+            world.cell_checks += looked
+            return p[:m]
     n = len(path)
     if n < 3:
         return distinct(path)

@@ -56,7 +56,7 @@ def __getattr__(name: str):
     raise AttributeError(f"module 'planner.lattice' has no attribute {name!r}")
 
 
-_I8 = np.dtype(np.int64)  # compared by identity in to_world
+_I8 = np.dtype(np.int64)  # to_world's usual index dtype
 _CHUNK = 1 << 20  # points per chunk of the input checks (no full-size temporaries)
 # Largest |index| a quantized point may have: float64 holds integers exactly up to 2**53.
 _INDEX_LIMIT = 2.0**52
@@ -380,11 +380,12 @@ class Lattice:
         ndarray, shape (N, d), float64
         """
         w = indices
-        if type(w) is np.ndarray and w.dtype is _I8 and w.ndim == 2 and w.shape[1] == self.dim:
-            # the usual case (a path's cells), checked at once. np.dot: the product ``w @
-            # G.T`` has the same floats (both go to BLAS for 2-D float64) at less dispatch
-            # cost; it refuses (ValueError) an ``out`` that is not a C-contiguous float64
-            # array of the product's shape, which matmul takes
+        if type(w) is np.ndarray and w.dtype == _I8 and w.ndim == 2 and w.shape[1] == self.dim:
+            # the usual case (a path's cells), checked at once (the dtype by equality: an
+            # array a compiled kernel returns has a dtype object of its own). np.dot: the
+            # product ``w @ G.T`` has the same floats (both go to BLAS for 2-D float64) at
+            # less dispatch cost; it refuses (ValueError) an ``out`` that is not a
+            # C-contiguous float64 array of the product's shape, which matmul takes
             if out is None:
                 return np.dot(w, self._g.T)
             try:

@@ -11,6 +11,7 @@ from planner.lattice.quantize import Quantizer
 from planner.occupancy import grid as wk
 from planner.occupancy.grid import Occupancy
 from planner.occupancy.walk import Walk, motion_free
+from planner.world.join import join_path, new_joiner
 
 __all__ = ["ValidityChecker"]
 
@@ -54,6 +55,7 @@ class ValidityChecker:
         self._point_cell = None  # compiled entry point of grid.point_cell (see locate)
         self._point_cells = None  # and of grid.point_cells (see locate_two)
         self._segment = None  # and of walk.motion_free (see segment)
+        self._join = None  # (Joiner, compiled entry point of join.join_path): see join
 
     @property
     def quantizer(self) -> Quantizer:
@@ -66,7 +68,7 @@ class ValidityChecker:
         self.quantizer  # noqa: B018 - a worker would otherwise redo the lattice geometry
         d = self.__dict__.copy()
         # entry points do not pickle
-        d["_free_one"] = d["_point_cell"] = d["_point_cells"] = d["_segment"] = None
+        d["_free_one"] = d["_point_cell"] = d["_point_cells"] = d["_segment"] = d["_join"] = None
         return d
 
     def is_valid(self, point) -> bool:
@@ -100,6 +102,21 @@ class ValidityChecker:
         free, n = f(self.occupancy, self.walk, self.quantizer, a0, a1, a2, b0, b1, b2,
                     self._buf, self._out)
         return bool(free), int(n)
+
+    def join(self, path: np.ndarray, s0: float, s1: float, s2: float, g0: float, g1: float,
+             g2: float) -> tuple[int, int, float]:
+        """:func:`planner.world.join.join_path`: the start (s0, s1, s2) and goal (g0, g1, g2)
+        (m, Python floats) written to the first and last rows of ``path`` ((K + 2, 3)
+        float64, C-contiguous and writable, the K cell centres between) and its ends joined
+        in place: ``(rows of the joined path, lookups made, its length in m)``. One
+        compiled call, on scratch kept for the next (a plan joins its ends with it); the
+        caller makes sure of ``path``'s type (the compiled call does not check it). Not
+        counted here (the world counts its own lookups)."""
+        jf = self._join
+        if jf is None:
+            j = new_joiner(self.occupancy, self.walk, self.quantizer)
+            jf = self._join = (j, entry_point(join_path, (j, path, s0, s1, s2, g0, g1, g2)))
+        return jf[1](jf[0], path, s0, s1, s2, g0, g1, g2)
 
     def cell_free(self, i: int, j: int, k: int) -> bool:
         """Cell (i, j, k) (Python ints) is in bounds and free: one lookup, called without
