@@ -237,22 +237,13 @@ def _in_map_frame(res: PlanResult, world) -> PlanResult:
     return res
 
 
-def _path_points(lat: Lattice, s: np.ndarray, cells: np.ndarray, g: np.ndarray) -> np.ndarray:
-    """(K + 2, 3) float64 path: the start point ``s``, the centres of ``cells`` (K, 3), the
-    goal point ``g`` (m). The values of ``np.concatenate([s[None], lat.to_world(cells),
-    g[None]])``, without its temporaries."""
-    path = np.empty((len(cells) + 2, 3))
-    path[0] = s
-    path[-1] = g
-    lat.to_world(cells, out=path[1:-1])
-    return path
-
-
 def _joined_path(world: World, s, cells: np.ndarray, g) -> tuple[np.ndarray, int, float]:
-    """``joined(world, _path_points(lat, s, cells, g))``, the lookups it made (also added to
-    ``world.cell_checks``) and its length (m, as :func:`path_length` gives it): the cell
-    centres from :meth:`Lattice.to_world`, then one compiled call (the joined path is a
-    view of the first rows of the array it fills). ``s``, ``g``: three Python floats."""
+    """:func:`joined` of the path from start point ``s`` through the centres of ``cells``
+    ((K, 3) int64) to goal point ``g`` (``s``, ``g``: three Python floats, m), the lookups
+    it made (also added to ``world.cell_checks``) and its length (m, :func:`path_length`'s
+    float). The centres come from :meth:`Lattice.to_world` (BLAS's floats, which a compiled
+    loop does not reproduce), all the rest from one compiled call; the joined path is a
+    view of the first rows of the array it fills."""
     path = np.empty((len(cells) + 2, 3))
     world.lattice.to_world(cells, out=path[1:-1])
     m, n, length = world.checker.join(path, *s, *g)
@@ -278,6 +269,10 @@ def joined(world, path: np.ndarray) -> np.ndarray:
     -------
     ndarray, shape (K', 3), K' <= K + 2
         Starts exactly at ``path[0]`` and ends exactly at ``path[-1]``.
+
+    On a :class:`World` these steps run in one compiled call
+    (:func:`planner.world.join.join_path`); any other object with a ``segment_free``
+    takes them here, in Python.
     """
     if isinstance(world, World):  # one compiled call, on a copy
         p = np.array(path, dtype=np.float64, order="C")

@@ -5,6 +5,7 @@ checks followed by search()."""
 from __future__ import annotations
 
 import itertools
+import pickle
 
 import numpy as np
 import pytest
@@ -155,16 +156,19 @@ def test_long_and_sealed_searches_through_the_one_call_path():
 
 @pytest.mark.parametrize("name", ["cubic", "bcc", "fcc", "mcc", "hex"])
 def test_path_points_are_the_cell_centres_to_world_gives(name):
-    from planner.planning import _path_points
-
+    """A plan writes its cell centres with to_world(cells, out=...): the same floats as
+    to_world(cells), also for an array a compiled kernel returned (its int64 dtype is an
+    object of its own, as an unpickled one is)."""
+    own = pickle.loads(pickle.dumps(np.dtype(np.int64)))
+    assert own == np.dtype(np.int64) and own is not np.dtype(np.int64)
     rng = np.random.default_rng(11)
     for vol in (1.0, 0.37, 2.5, 0.08**3):
         lat = Lattice.named(name, vol)
         for k in (*range(1, 12), 31, 100, 1000):
             cells = rng.integers(-100_000, 100_000, (k, 3))
-            s, g = rng.uniform(-5, 5, 3), rng.uniform(-5, 5, 3)
-            want = np.concatenate([s[None], lat.to_world(cells), g[None]])
-            assert np.array_equal(_path_points(lat, s, cells, g), want)
+            want = lat.to_world(cells)
             # to_world writes the same floats to any ``out`` (np.dot or np.matmul inside)
-            for out in (np.empty((k, 3)), np.empty((k, 3), order="F"), np.empty((k, 4))[:, :3]):
-                assert np.array_equal(lat.to_world(cells, out=out), want[1:-1])
+            for out in (np.empty((k, 3)), np.empty((k, 3), order="F"), np.empty((k, 4))[:, :3],
+                        np.empty((k + 2, 3))[1:-1]):
+                assert np.array_equal(lat.to_world(cells, out=out), want)
+                assert np.array_equal(lat.to_world(cells.view(own), out=out), want)
