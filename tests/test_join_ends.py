@@ -78,6 +78,9 @@ def test_compiled_joins_match_the_python_steps(name):
             s = centres[0] + half[rng.integers(len(half))]
         elif kind == 3:  # the goal at the start
             g = s.copy()
+        elif kind == 4:  # far ends: joins longer than the walk's first scratch
+            lo, hi = w.bounds
+            s, g = rng.uniform(lo, hi), rng.uniform(lo, hi)
         path = np.concatenate([s[None], centres, g[None]])
         _same_as_python(w, path)
 

@@ -63,13 +63,16 @@ def _segment_free(j, path, i, k):  # pragma: no cover - compiled
         buf[1, c] = path[k, c]
     qk.quantize_generic3(buf[:1], quant.basis, quant.basis_inv, quant.cand, quant.cand_z,
                          quant.counts, quant.reduction, out)
-    length = np.sqrt(((buf[1] - buf[0]) ** 2).sum())
+    length = -1.0  # the segment's length, needed only for more scratch
     while True:
         j.gen += 1
         _, free, n, ok = walk_on(j.occ, j.walk, buf[0], buf[1], out[0], True, j.vis, j.vgen,
                                  j.gen, j.queue)
         if ok:
             return free, n
+        if length < 0.0:
+            d0, d1, d2 = buf[1, 0] - buf[0, 0], buf[1, 1] - buf[0, 1], buf[1, 2] - buf[0, 2]
+            length = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
         length = 2.0 * length + 1.0
         vis, vgen, queue = walk_scratch(length, np.sqrt(2.0 * j.walk.rhs.min()),
                                         j.walk.full.shape[0])
