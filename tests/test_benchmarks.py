@@ -28,7 +28,7 @@ ROOT = Path(__file__).resolve().parents[1]
 BENCH = ROOT / "benchmarks"
 MODULES = {"harness.py"}  # imported by the scripts, not run
 # Scripts without --smoke yet: add their smoke mode, then take them off this list.
-NO_SMOKE_YET = {"explore_phases.py", "explore_profile.py", "explore_speed.py"}
+NO_SMOKE_YET = {"explore_phases.py", "explore_profile.py"}
 SCRIPTS = sorted(p.name for p in BENCH.glob("*.py") if p.name not in MODULES)
 # Scripts that still import a private name of the package: make them use public API, then
 # take them off this list.
