@@ -6,136 +6,96 @@ Usage::
 
     python benchmarks/explore_phases.py                       # office, every lattice
     python benchmarks/explore_phases.py --lattices bcc cubic
+    python benchmarks/explore_phases.py --smoke               # office, cubic
 
-A replan is one compiled call (:func:`planner.search.dstar.replan.replan`) that runs its
-phases in turn and can resume at any of them (``st.phase``). Here each replan that repairs
-runs its first three phases as separate compiled calls (their entry points looked up once:
-no argument typing is timed), then the planner's own call finishes it from the phase left
-(the path). The planner's answers are unchanged: the run's cost mismatches against A* are
-printed. The phases' times include the cold start of each call, as a replan's own call
-has once. An exploration runs once untimed first (compilation).
+The exploration runs with ``planner.explore.explore(..., replanner="dstar",
+phases=True)``: every replan is
+:meth:`planner.search.dstar.lite.DStarLite.plan_phases`, the same phase code as a plan's
+one compiled call, one call per phase, each timed (the calls' entry points are looked up
+once: no argument typing is timed). The planner's answers are unchanged: the run's cost
+mismatches against A* are printed. The phases' times include the cold start of each call,
+as a replan's own call has once. An exploration runs once untimed first (caches and the
+phase calls' compilation; not in ``--smoke``).
+The repairs counted are the replans after the first that repaired (a kept replan checks
+nothing) and did not grow the planner's arrays (their phases are not separated).
+
+Times are the engines' own wall clocks (``time.perf_counter`` around the compiled calls:
+the phases' and A*'s ``SearchResult.seconds``), in microseconds: a thread CPU clock read
+costs about a microsecond itself, as much as a short phase. On the benchmark harness
+(``benchmarks/harness.py``): its header (machine, load, versions, commit), and per
+lattice a ``ratio`` line: the repair (its four phases) / A* from scratch on the same map
+state, paired per replan.
 """
 
 from __future__ import annotations
 
 import argparse
-import time
+import sys
+from pathlib import Path
 
 import numpy as np
-from numba import njit, typeof
 
-import planner.explore.run as ex
-from planner._entry import entry_point
-from planner.maps import load_map_info, map_path
-from planner.search.astar.dense import grid_offsets
-from planner.search.dstar import kernel as dk
-from planner.search.dstar import replan as dr
-from planner.search.dstar.lite import DStarLite
-from planner.search.result import RUN_GROW
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import harness  # noqa: E402  (the sibling module)
 
-PHASES = ("collect", "apply", "search", "extract")
+from planner.explore import explore  # noqa: E402
+from planner.lattice import NAMED_LATTICES  # noqa: E402
+from planner.maps import load_map_info, map_path  # noqa: E402
+from planner.search.dstar.replan import PHASES  # noqa: E402
 
 
-@njit(cache=False)
-def _collect(occ, ms, affect, bx, nd, sa, cells, blocked, ss, old, redo):
-    st = sa[0]
-    off = grid_offsets(ms.union, ms.moves, bx.dims[1], bx.dims[2])[0]
-    st.collected = dr.collect(occ, ms, affect, bx, nd, st, cells, blocked, ss, old, redo, off)
-    st.phase = dr.PH_APPLY
-
-
-@njit(cache=False)
-def _apply(occ, ms, ufree, bx, nd, heap, sa, fs, start, ss, old, redo, touched):
-    st = sa[0]
-    n, nm = st.collected, ms.moves.shape[0]
-    if st.nodes + n * nm + 1 > nd.key.shape[0] or touched.shape[0] < 2 * n * nm + 1:
-        return False  # room first: the planner's call asks for it
-    dr.apply_changes(occ, ms, ufree, bx, nd, heap, st, fs[0], start, ss, old, redo, n, touched)
-    st.phase = dr.PH_SEARCH
-    return True
-
-
-@njit(cache=False)
-def _search(occ, ms, ufree, bx, nd, heap, sa, fs, start):
-    st = sa[0]
-    if dk.compute_path(occ, ms, ufree, bx, nd, heap, st, fs[0], start,
-                       st.check_start == 1) == RUN_GROW:
-        return False
-    st.check_start = 0
-    st.phase = dr.PH_PATH
-    return True
-
-
-def phases(name: str, lattice: str, query: int) -> tuple[np.ndarray, np.ndarray, int]:
+def phases(name: str, lattice: str, query: int, resolution: float = 3.0, warm: bool = True
+           ) -> tuple[np.ndarray, np.ndarray, int]:
     """Per repair: the phases' times (s, columns :data:`PHASES`) and A*'s time from
-    scratch on the same map state (s); and the run's cost mismatches."""
-    rows: list[list[float]] = []
-    own_call = DStarLite._call
-    calls: dict = {}
-
-    def phased_call(self):
-        call, arg = own_call(self)
-
-        def run(arg_, cells, blocked):
-            if int(self._st["phase"]) != dr.PH_COLLECT:  # resumed, or nothing changed
-                return call(arg_, cells, blocked)
-            sc, occ, sa = self._sc, self.world.occupancy, self._state_array
-            args = ((occ, self._ms, sc.affect, self._bx, self._nd, sa, cells, blocked, sc.ss,
-                     sc.old, sc.redo),
-                    (occ, self._ms, sc.ufree, self._bx, self._nd, self._heap, sa, self._fs,
-                     self.start, sc.ss, sc.old, sc.redo, sc.touched),
-                    (occ, self._ms, sc.ufree, self._bx, self._nd, self._heap, sa, self._fs,
-                     self.start))
-            fns = []
-            for fn, a in zip((_collect, _apply, _search), args, strict=True):
-                key = (fn, tuple(typeof(x) for x in a))
-                if key not in calls:  # compiled or looked up once, untimed
-                    calls[key] = entry_point(fn, a)
-                fns.append(calls[key])
-            first = self._mark == (0, 0)  # the first plan: nothing to repair yet
-            t = [time.perf_counter()]
-            whole = True
-            for fn, a in zip(fns, args, strict=True):
-                whole = fn(*a) is not False
-                t.append(time.perf_counter())
-                if not whole:
-                    break
-            done = call(arg_, cells, blocked)
-            t.append(time.perf_counter())
-            if whole and done != RUN_GROW and not first:
-                rows.append(list(np.diff(t)))
-            return done
-
-        return run, arg
-
+    scratch on the same map state (s); and the run's cost mismatches. ``resolution``:
+    degrees between the sensor's rays; ``warm``: one untimed run first."""
     q = load_map_info(name)["queries"][query]
-    ex.explore(map_path(name), q["start"], q["goal"], lattice=lattice,
-               replanner="dstar")  # compile
-    DStarLite._call = phased_call
-    try:
-        r = ex.explore(map_path(name), q["start"], q["goal"], lattice=lattice,
-                       replanner="dstar")
-    finally:
-        DStarLite._call = own_call
-    rep = r.replan_checks[1:] > 0  # the replans that repaired (a kept one checks nothing)
-    return np.array(rows), r.astar_seconds[1:][rep], r.mismatches
+    run = {"lattice": lattice, "replanner": "dstar", "phases": True,
+           "resolution": resolution}
+    if warm:
+        explore(map_path(name), q["start"], q["goal"], **run)
+    r = explore(map_path(name), q["start"], q["goal"], **run)
+    t = r.replan_phase_seconds[1:]
+    rep = (r.replan_checks[1:] > 0) & np.isfinite(t).all(axis=1)  # repaired, not grown
+    return t[rep], r.astar_seconds[1:][rep], r.mismatches
 
 
-def main(argv=None) -> None:
+def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--map", default="office", help="bundled map name (office)")
-    ap.add_argument("--lattices", nargs="+", default=["cubic", "bcc", "fcc", "mcc", "hex"])
+    ap.add_argument("--lattices", nargs="+", default=list(NAMED_LATTICES))
     ap.add_argument("--query", type=int, default=0)
+    ap.add_argument("--resolution", type=float, default=3.0,
+                    help="degrees between the sensor's rays (3, the explorer's default)")
+    harness.add_arguments(ap, repeat=None)
     a = ap.parse_args(argv)
-    print(f"{a.map} query {a.query}: medians over the replans that repaired (us)")
-    print(f"{'lattice':8s} {'repairs':>7s} " + " ".join(f"{p:>8s}" for p in PHASES)
-          + f" {'A*':>8s} {'mism':>5s}")
-    for lat in a.lattices:
-        t, astar, bad = phases(a.map, lat, a.query)
-        med = np.median(t, axis=0) * 1e6 if len(t) else np.full(4, np.nan)
-        print(f"{lat:8s} {len(t):7d} " + " ".join(f"{m:8.0f}" for m in med)
-              + f" {np.median(astar) * 1e6 if len(astar) else np.nan:8.0f} {bad:5d}")
+    if a.smoke:  # one short run: cubic, a coarse sensor, no warm-up run
+        a.lattices, a.resolution = ["cubic"], 6.0
+    with harness.session("D* Lite while exploring: a repair's time per phase against A* "
+                         "from scratch", smoke=a.smoke):
+        print(f"{a.map} query {a.query}: medians over the replans that repaired (us)")
+        print(f"{'lattice':8s} {'repairs':>7s} " + " ".join(f"{p:>8s}" for p in PHASES)
+              + f" {'A*':>8s} {'mism':>5s}")
+        ratios, bad = [], 0
+        for lat in a.lattices:
+            t, astar, mism = phases(a.map, lat, a.query, a.resolution, warm=not a.smoke)
+            bad += mism
+            med = np.median(t, axis=0) * 1e6 if len(t) else np.full(len(PHASES), np.nan)
+            print(f"{lat:8s} {len(t):7d} " + " ".join(f"{m:8.0f}" for m in med)
+                  + f" {np.median(astar) * 1e6 if len(astar) else np.nan:8.0f} {mism:5d}",
+                  flush=True)
+            ratios.append(harness.ratio_line(f"repair/A* {lat}", t.sum(axis=1), astar,
+                                             note="the four phases against A* from scratch "
+                                                  "on the same map state, per repair"))
+        for line in ratios:
+            print(line)
+        peak = harness.peak_rss()
+        print(f"peak resident memory {peak / 2**20:.0f} MB" if peak else
+              "peak resident memory n/a")
+    if bad:
+        print(f"FAIL: {bad} replans whose cost differs from A*", file=sys.stderr)
+    return 1 if bad else 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

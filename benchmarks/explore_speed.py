@@ -8,6 +8,7 @@ Usage::
     python benchmarks/explore_speed.py --replanner dstar     # D* Lite instead of the default
     python benchmarks/explore_speed.py --plots results/      # one summary PNG per run
     python benchmarks/explore_speed.py --lattices bcc --near-median 8  # the replans at the median
+    python benchmarks/explore_speed.py --smoke               # office, cubic, coarse sensor
 
 For each map and lattice the robot explores from the query's start to its goal
 (:func:`planner.explore.explore` with ``--replanner``, default the explorer's: ``astar``,
@@ -36,24 +37,33 @@ plan's ratio; "mism" the replans whose cost differs from A*'s (the run fails if 
 "cont" the moves that touched an obstacle the sensor had not seen. The first plan of a
 run also loads the compiled kernels (not timed: warmed up first). No timed assertions:
 figures only.
+
+On the benchmark harness (``benchmarks/harness.py``): its header (machine, load,
+versions, commit), and per run a ``ratio`` line: the per-replan CPU ratios replanner / A*
+from scratch (the replans after the first that searched; Hodges-Lehmann median with its
+paired 95% interval), whose "overall" is the run's WHOLE (sum over sum, first plan and
+kept replans included); "run s" is the run's thread CPU time and "peak MB" the process's
+resident high-water mark after it (the sensor's rays and the known map included).
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
-import time
+from functools import partial
 from pathlib import Path
 
 import numpy as np
 
-from planner.explore import explore
-from planner.explore.run import REPLANNERS
-from planner.lattice import NAMED_LATTICES
-from planner.maps import load_map_info, map_path
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import harness  # noqa: E402  (the sibling module)
 
-ROOT = Path(__file__).resolve().parents[1]
-GEB079 = ROOT / ".." / "shared" / "data" / "octomap" / "geb079.bt"
+from planner.explore import explore  # noqa: E402
+from planner.explore.run import REPLANNERS  # noqa: E402
+from planner.lattice import NAMED_LATTICES  # noqa: E402
+from planner.maps import load_map_info, map_path  # noqa: E402
+
+GEB079 = harness.DATA / "octomap" / "geb079.bt"
 # geb079 (Freiburg building 079, OctoMap 0.08 m; radius 0.2 m as in the README): along the
 # corridor, and from the corridor into a room.
 GEB079_QUERIES = (((-2.96, -0.05, 1.0), (25.0, 0.0, 1.0)),
@@ -98,24 +108,33 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--near-median", type=int, default=0, metavar="N",
                    help="also list the N replans either side of each run's median time "
                         "ratio: which replan, whether it kept the path, both times")
+    harness.add_arguments(p, repeat=None)
     a = p.parse_args(argv)
+    if a.smoke:  # one short run: office, cubic, a coarse sensor
+        a.maps, a.lattices, a.resolution, a.near_median = ["office"], ["cubic"], 6.0, 0
+    with harness.session("exploration: the replanner over a whole run against A* from "
+                         "scratch at every replan", smoke=a.smoke):
+        return _run(a)
+
+
+def _run(a: argparse.Namespace) -> int:
     head = (f"{'map':<12} {'lattice':<7} {'status':<8} {'moves':>5} {'replans':>7} "
             f"{'srch':>4} {'med t':>6} {'med wall':>8} {'med chk':>7} {'rep t':>6} "
             f"{'1st t':>6} {'R ms':>8} {'A* ms':>8} {'tot t':>6} {'R cpu':>7} {'A* cpu':>7} "
             f"{'WHOLE':>6} "
-            f"{'mism':>4} {'cont':>4} {'run s':>6}")
+            f"{'mism':>4} {'cont':>4} {'run s':>6} {'peak MB':>7}")
     print(f"sensor {a.sensor_range} m, fov 360 x +-{a.vertical} deg every {a.resolution} "
           f"deg, {a.neighbors} moves; replanner {a.replanner}; ratios = replanner / A* from "
           f"scratch at every replan (same map states, same process)")
     print(head)
-    bad, whole, per_map = 0, [], {}
+    bad, whole, per_map, ratios = 0, [], {}, []
     for label, src, (start, goal), kw in runs(a.maps, a.query, a.geb079):
         for lat in a.lattices:
-            t0 = time.perf_counter()
-            r = explore(src, start, goal, lattice=lat, sensor_range=a.sensor_range,
-                        fov=(360.0, a.vertical), resolution=a.resolution,
-                        neighbors=a.neighbors, replanner=a.replanner, **kw)
-            secs = time.perf_counter() - t0
+            r, secs = harness.cpu_result(partial(
+                explore, src, start, goal, lattice=lat, sensor_range=a.sensor_range,
+                fov=(360.0, a.vertical), resolution=a.resolution,
+                neighbors=a.neighbors, replanner=a.replanner, **kw))
+            peak = harness.peak_rss()
             q = r.ratios()
             k = slice(1, None) if r.replans > 1 else slice(None)
             rep = (r.replan_seconds[k] / r.astar_seconds[k])[r.searched[k]]
@@ -132,7 +151,9 @@ def main(argv: list[str] | None = None) -> int:
                   f"{1e3 * r.replan_seconds.sum():>8.2f} {1e3 * r.astar_seconds.sum():>8.2f} "
                   f"{q['total_time_ratio']:>6.3f} {1e3 * r.replan_cpu_seconds.sum():>7.1f} "
                   f"{1e3 * r.astar_cpu_seconds.sum():>7.1f} {q['total_cpu_ratio']:>6.3f} "
-                  f"{r.mismatches:>4} {r.contacts:>4} {secs:>6.1f}", flush=True)
+                  f"{r.mismatches:>4} {r.contacts:>4} {secs:>6.1f} "
+                  f"{peak / 2**20 if peak else float('nan'):>7.0f}", flush=True)
+            ratios.append((label, lat, r, q["total_cpu_ratio"]))
             if a.near_median and r.replans > 1:
                 _near_median(r, a.near_median)
             bad += r.mismatches
@@ -144,6 +165,14 @@ def main(argv: list[str] | None = None) -> int:
               f"{max(cpu):.2f} of A* at every replan (CPU; engine time {min(eng):.2f}-"
               f"{max(eng):.2f}), {min(srch)}-{max(srch)} of {min(reps)}-{max(reps)} replans "
               f"searched, {sum(mism)} mismatches")
+    for label, lat, r, total in ratios:
+        srch = r.searched.copy()
+        srch[0] = False  # the first plan apart: it is in "overall" (the WHOLE)
+        print(harness.ratio_line(
+            f"{a.replanner}/A* cpu per replan {label} {lat}", r.replan_cpu_seconds[srch],
+            r.astar_cpu_seconds[srch], overall=total, goal="overall <= 0.5",
+            note="median over the replans after the first that searched; overall = the "
+                 "whole run (WHOLE)"))
     if whole:
         print(f"whole-run ratio over {len(whole)} runs: {min(whole):.3f} .. {max(whole):.3f} "
               f"(goal <= 0.5); mismatches: {bad}")

@@ -50,3 +50,31 @@ def test_a_row_charges_search_and_smoothing_and_their_sums(cost_rows):
             assert r["delivered"] == "raw"
             assert r["smooth_checks"] == 0 and r["smooth_seconds"] == 0.0
             assert r["length_smoothed"] == r["length"]
+
+
+def test_a_row_delivers_the_path_plan_delivers(cost_rows, tmp_path):
+    """The smoothed row is what ``planner.plan(..., shortcut=True)`` returns for the same
+    query on the same world: its length, its raw length and its cell checks."""
+    import planner
+    from planner.bench.task import _world
+
+    p = tmp_path / "cost.toml"
+    p.write_text(SUITE.format(map=map_path("office").as_posix()))
+    tasks, _ = tasks_mod.plan_tasks(load_suite(str(p)), log=lambda m: None)
+    rows = {(r["lattice"], r["method"], r["query"]): r for r in cost_rows}
+    compared = 0
+    for t in tasks:
+        if t["method"] != "astar":
+            continue
+        world = _world(t)
+        for q in t["queries"]:
+            r = rows[(t["lattice"], "astar", q["id"])]
+            if not r["found"]:
+                continue
+            got = planner.plan(world, q["start"], q["goal"], neighbors=t["neighbors"],
+                               shortcut=True)
+            assert r["length_smoothed"] == pytest.approx(got.length, abs=1e-9)
+            assert r["length"] == pytest.approx(got.extra["raw_length"], abs=1e-9)
+            assert r["cell_checks"] == got.cell_checks
+            compared += 1
+    assert compared >= 3

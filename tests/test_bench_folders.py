@@ -12,28 +12,15 @@ import json
 from pathlib import Path
 
 import pytest
+from _suites import result_row, suite_text  # tests/_suites.py
 
 from planner.bench.run_folder import MARKER, remove_world_cache, suite_digest, write_marker
 from planner.bench.suite import SuiteError, load_suite
 from planner.cli import main
 
-SUITE = """name = "tiny"
-queries = 2
-lattices = ["cubic"]
-neighbors = ["face"]
-methods = ["astar"]
-min_distance = 0.3
-
-[[maps]]
-path = "office"
-cell_volumes = [0.01]
-radii = [0.1]
-"""
-
-ROW = {"suite": "tiny", "map": "office.ply", "cell_volume": 0.01, "radius": 0.1,
-       "rotation": 0, "lattice": "cubic", "neighbors": "face", "method": "astar", "seed": 0,
-       "query": 0, "found": True, "length": 3.5, "length_smoothed": 3.4, "cell_checks": 10,
-       "expansions": 5, "seconds": 0.01, "clearance": 0.2, "collision_free": True}
+SUITE = suite_text("tiny", seed=None, queries=2, path="office", cell_volume=0.01)
+ROW = result_row(suite="tiny", map="office.ply", cell_volume=0.01, length=3.5,
+                 length_smoothed=3.4, cell_checks=10, expansions=5)
 
 
 def _snapshot(folder: Path) -> dict:

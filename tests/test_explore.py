@@ -157,3 +157,20 @@ def test_cli_reads_the_map_in_the_format_given_and_has_no_unknown_option(tmp_pat
     with pytest.raises(SystemExit) as stop:
         main([*args, "--format", "ply", "--unknown", "free"])
     assert stop.value.code == 2 and "--unknown" in capsys.readouterr().err
+
+
+def test_dstar_phases_are_timed_per_replan_without_changing_the_run():
+    kw = dict(lattice="cubic", radius=0.2, cell_volume=0.1**3, bounds=BOUNDS,
+              sensor_range=3.0, fov=(360, 20), resolution=5.0, replanner="dstar")
+    plain = explore(_wall(door=True), [1, 1, 1], [9, 1, 1], **kw)
+    r = explore(_wall(door=True), [1, 1, 1], [9, 1, 1], phases=True, **kw)
+    assert np.array_equal(r.replan_cost, plain.replan_cost) and r.mismatches == 0
+    assert np.array_equal(r.replan_checks, plain.replan_checks)
+    assert r.replan_phase_seconds.shape == (r.replans, 4)
+    t = r.replan_phase_seconds[1:][r.replan_checks[1:] > 0]  # the repairs
+    timed = ~np.isnan(t).all(axis=1)  # the others grew the planner's arrays
+    assert timed.any() and (t[timed] > 0).all()
+    assert plain.replan_phase_seconds.shape == (0, 4)
+    with pytest.raises(PlanError, match="replanner='dstar'"):
+        explore(_wall(door=True), [1, 1, 1], [9, 1, 1], lattice="cubic", radius=0.2,
+                cell_volume=0.1**3, bounds=BOUNDS, phases=True)

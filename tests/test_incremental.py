@@ -208,3 +208,55 @@ def test_blocked_cells_off_the_path_keep_it_until_one_lands_on_it():
     assert world.is_free(again.cells).all() and not (again.cells == [6, 3, 1]).all(1).any()
     d.update(world.set_cells([[6, 0, 0]], False), blocked=False)  # a freed cell repairs
     assert abs(d.plan().cost - _astar_cost(world, d.start, [12, 3, 1], "full")) <= 1e-9
+
+
+def test_plan_phases_plans_as_plan_does_and_times_each_phase_it_ran():
+    """plan_phases() runs each phase of a replan as its own call: the same paths, costs
+    and counts as plan() on the same changes, a time for each phase that ran, NaN for the
+    others, and all NaN for the plan whose search had to grow the node table."""
+    rng = np.random.default_rng(3)
+    lat = Lattice.named("bcc", 1.0)
+    worlds = [World(lat, np.zeros((0, 3), np.int64), [[0, 0, 0], [30, 30, 6]])
+              for _ in range(2)]
+    cells = _in_bounds_cells(worlds[0])
+    assert len(cells) > 4096  # more than the planner's first node table
+    walls = cells[rng.random(len(cells)) < 0.1]
+    for w in worlds:
+        w.set_cells(walls, blocked=True)
+    free = _free_cells(worlds[0])
+    start, goal = free[0], free[-1]
+    ends = np.array([start, goal])
+    # the start walled in: the first search (from the goal) floods the whole world, past
+    # 4096 nodes
+    d = np.linalg.norm(lat.to_world(cells) - lat.to_world(start[None]), axis=1)
+    shell = cells[(d > 0) & (d < 2.5)]
+    for w in worlds:
+        w.set_cells(shell, blocked=True)
+    plain, phased = (DStarLite(w, start, goal) for w in worlds)
+    ran = {"grew": 0, "repair": 0, "kept": 0}
+    for batch in range(10):
+        want = plain.plan()
+        got, secs = phased.plan_phases()
+        assert np.array_equal(got.cells, want.cells) and got.cost == want.cost, batch
+        assert (got.cell_checks, got.expansions) == (want.cell_checks, want.expansions)
+        assert secs.shape == (4,)
+        if batch == 0:  # nothing to repair; the flood grew the node table
+            assert not got.found and phased.nodes > 4096
+        if np.isnan(secs).all():  # kept the stored path (no check), or grew its arrays
+            ran["kept" if want.cell_checks == 0 else "grew"] += 1
+        else:
+            assert (secs > 0).all(), (batch, secs)
+            ran["repair"] += 1
+        on_path = want.cells[1:-1]
+        far = cells[rng.random(len(cells)) < 0.01]
+        far = far[~(far[:, None] == ends[None]).all(2).any(1)]
+        block = on_path[rng.random(len(on_path)) < 0.2] if batch % 3 else on_path[:0]
+        for w, p in zip(worlds, (plain, phased), strict=True):
+            if batch == 0:
+                p.update(w.set_cells(shell, False), blocked=False)
+            p.update(w.set_cells(block, True), blocked=True)
+            if batch % 3 == 0:
+                p.update(w.set_cells(far, True), blocked=True)
+            elif batch % 3 == 1:
+                p.update(w.set_cells(far, False), blocked=False)
+    assert ran["repair"] >= 3 and ran["grew"] >= 1, ran

@@ -112,11 +112,12 @@ def run_task(task: dict) -> list[dict]:
     Every row carries what the user pays for the path it delivers: the search
     (``search_checks``, ``search_seconds`` wall, ``search_cpu_seconds`` CPU of the whole
     :func:`planner.plan` call) and the post-processing (``smooth_*``: line-of-sight
-    shortcutting of an A*/Dijkstra path, :func:`planner.search.shortcut`, and rebuilding
-    its points; 0 for any-angle methods, whose path is delivered as searched, and for OMPL,
-    whose simplification is inside its own time), and their sums ``cell_checks``,
-    ``seconds`` and ``cpu_seconds``. ``delivered`` names the path whose length the
-    report compares (``"smoothed"`` or ``"raw"``; ``length_smoothed`` is always that
+    shortcutting of an A*/Dijkstra path, :func:`planner.search.shortcut`, and joining its
+    ends as :func:`planner.plan` with ``shortcut=True`` does: the same path, its checks
+    counted as plan() counts them; 0 for any-angle methods, whose path is delivered as
+    searched, and for OMPL, whose simplification is inside its own time), and their sums
+    ``cell_checks``, ``seconds`` and ``cpu_seconds``. ``delivered`` names the path whose
+    length the report compares (``"smoothed"`` or ``"raw"``; ``length_smoothed`` is always that
     path's length). ``blocked`` is True when the lattice blocks the start or goal (the
     query was sampled free on another lattice).
     """
@@ -164,13 +165,10 @@ def run_task(task: dict) -> list[dict]:
                 smooth = raw
                 raw = raw_path if len(raw_path) > 1 else raw
             elif smoothed:
+                s_pt, _, g_pt, _ = world.endpoints(q["start"], q["goal"])  # as plan()'s
                 t1, c1 = time.perf_counter(), time.process_time()
-                before = world.cell_checks
-                cells = search.shortcut(world, res.cells)
-                smooth = np.concatenate([raw[:1], world.to_map(world.lattice.to_world(cells)),
-                                         raw[-1:]])
-                smooth_cost = Cost(world.cell_checks - before, time.perf_counter() - t1,
-                                   time.process_time() - c1)
+                smooth, checks = _smoothed(world, res.cells, s_pt, g_pt)
+                smooth_cost = Cost(checks, time.perf_counter() - t1, time.process_time() - c1)
             else:
                 smooth = raw
             c_raw = clear.of_path(raw, step)
@@ -182,6 +180,22 @@ def run_task(task: dict) -> list[dict]:
                        waypoints=len(raw))
         rows.append({**row, **_cost_fields(searched, smooth_cost)})
     return rows
+
+
+def _smoothed(world, cells: np.ndarray, start: np.ndarray, goal: np.ndarray
+              ) -> tuple[np.ndarray, int]:
+    """The path ``plan(..., shortcut=True)`` delivers for the searched ``cells`` (K, 3)
+    and the checks it counts for its smoothing: :func:`planner.search.shortcut` of the
+    cells (its lookups counted), then the ends joined as :func:`planner.planning.joined`
+    joins them (those lookups uncounted, as plan()'s ``cell_checks`` leaves them out).
+    ``start``, ``goal`` (3,): the endpoints in the world's frame (m); the path is in the
+    map's frame (m), shape (K', 3)."""
+    before = world.cell_checks
+    cut = search.shortcut(world, cells)
+    checks = world.cell_checks - before
+    path = api.joined(world, np.concatenate([start[None], world.lattice.to_world(cut),
+                                             goal[None]]))
+    return world.to_map(path), checks
 
 
 def _blocked(world, q: dict) -> bool:

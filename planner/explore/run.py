@@ -129,6 +129,7 @@ class ExploreResult:
     replan_cpu_seconds: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
     astar_cpu_seconds: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
     replanner: str = "astar"
+    replan_phase_seconds: np.ndarray = field(default_factory=lambda: np.zeros((0, 4)), repr=False)
 
     @property
     def replans(self) -> int:
@@ -207,6 +208,7 @@ def explore(
     max_steps: int = 100_000,
     progress: bool = False,
     replanner: str = "astar",
+    phases: bool = False,
 ) -> ExploreResult:
     """Explore from ``start`` to ``goal`` (points, m) in a map the robot does not know.
 
@@ -240,6 +242,8 @@ def explore(
         :data:`REPLANNERS` (module docstring). ``"astar"``: over whole runs on the bundled
         office and on geb079 it costs a fraction of A* at every replan, D* Lite more
         (``benchmarks/explore_speed.py``).
+    phases : bool
+        ``"dstar"`` only: replan_phase_seconds (R, 4), from ``DStarLite.plan_phases``.
 
     Returns
     -------
@@ -249,6 +253,8 @@ def explore(
     if replanner not in REPLANNERS:
         raise PlanError(f"unknown replanner {replanner!r}; expected one of "
                         f"{', '.join(REPLANNERS)}")
+    if phases and replanner != "dstar":
+        raise PlanError("phases=True times D* Lite's phases: it needs replanner='dstar'")
     planner_class = _replanner_class(replanner)
     if isinstance(source, str | Path):  # a bundled map by name ("office"), as build_world
         source = resolve(source)
@@ -293,7 +299,7 @@ def explore(
     dl = planner_class(known, s, gcell, neighbors=neighbors)
     rec = {k: [] for k in ("changed", "ds", "dc", "de", "dcost", "as", "ac", "ae", "acost",
                            "step", "dw", "aw", "dcpu", "acpu")}
-    paths = []
+    paths, phase_secs = [], []
     cur = s.copy()
     traj = [cur.copy()]
     status, distance, contacts, mismatches, path, at = "budget", 0.0, 0, 0, None, 0
@@ -323,16 +329,16 @@ def explore(
                     a = _scratch_astar(search, known, cur, gcell, neighbors)
                 c0, t0 = time.thread_time(), time.perf_counter()
                 dl.update(changed, blocked=True)
-                r = dl.plan()
+                r, secs = dl.plan_phases() if phases else (dl.plan(), None)
                 rec["dw"].append(time.perf_counter() - t0)
                 rec["dcpu"].append(time.thread_time() - c0)
-                d_secs = r.seconds
+                phase_secs += [secs] if phases else []
                 if not a_first:
                     a = _scratch_astar(search, known, cur, gcell, neighbors)
                 rec["changed"].append(len(changed))
                 rec["step"].append(_step)
                 paths.append(lat.to_world(r.cells) if len(r.cells) else np.zeros((0, 3)))
-                rec["ds"].append(d_secs)
+                rec["ds"].append(r.seconds)
                 rec["dc"].append(r.cell_checks)
                 rec["de"].append(r.expansions)
                 rec["dcost"].append(r.cost)
@@ -379,6 +385,7 @@ def explore(
         replan_wall_seconds=arr["dw"].astype(float), astar_wall_seconds=arr["aw"].astype(float),
         replan_cpu_seconds=arr["dcpu"].astype(float), astar_cpu_seconds=arr["acpu"].astype(float),
         replanner=replanner,
+        replan_phase_seconds=np.array(phase_secs).reshape(-1, 4),
         ring_ranges=np.array(sensor.ring_ranges).reshape(len(sensor.ring_ranges),
                                                          len(sensor.ring)))
 

@@ -29,26 +29,11 @@ import zlib
 from pathlib import Path
 
 import numpy as np
+from _suites import result_row, suite_text  # tests/_suites.py (tests/ is on the path)
 from cli_cases import OFFICE_QUERY, Run
 
-SUITE = """name = "faults"
-seed = 1
-queries = 1
-lattices = ["cubic"]
-neighbors = ["face"]
-methods = ["astar"]
-min_distance = 0.3
-
-[[maps]]
-path = "suite_map.xyz"
-cell_volumes = [0.5]
-radii = [0.1]
-"""
-
-ROW = {"suite": "faults", "map": "m.xyz", "cell_volume": 0.5, "radius": 0.1, "rotation": 0,
-       "lattice": "cubic", "neighbors": "face", "method": "astar", "seed": 0, "query": 0,
-       "found": True, "length": 1.0, "length_smoothed": 1.0, "cell_checks": 3,
-       "expansions": 2, "seconds": 0.01, "clearance": 0.2, "collision_free": True}
+SUITE = suite_text("faults")
+ROW = result_row()
 
 
 def snapshot(folder: Path) -> str:

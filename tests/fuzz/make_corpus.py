@@ -20,6 +20,9 @@ from pathlib import Path
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # tests/, when run as a script
+from _suites import suite_text  # noqa: E402
+
 
 @dataclass(frozen=True)
 class Case:
@@ -298,19 +301,7 @@ def _bag_seed(path: Path) -> bytes:
 
 
 # -- benchmark suites and saved voxel lists -------------------------------------------------------
-SUITE = """name = "fuzz"
-seed = 1
-queries = 1
-lattices = ["cubic"]
-neighbors = ["face"]
-methods = ["astar"]
-min_distance = 0.3
-
-[[maps]]
-path = "suite_map.xyz"
-cell_volumes = [0.5]
-radii = [0.1]
-"""
+SUITE = suite_text("fuzz")
 
 
 def suite_variants() -> list[str]:

@@ -125,6 +125,7 @@ class DStarLite:
         self._kept_n = 0  # cells in _kept
         self._state = None  # (occupancy, its ReplanState, entry point): see _call
         self._keep_call = None  # keep_state's entry point (_keep)
+        self._phase_call = None  # replan_phase_state's entry point (_phases)
         self._fl = {True: np.ones(1024, np.bool_), False: np.zeros(1024, np.bool_)}
         self._peak = 0
         self._ordered = 0  # node count at the last renumbering (_compact)
@@ -265,6 +266,33 @@ class DStarLite:
             its own (an :meth:`update` told nothing still counts its lookups here) and no
             expansion.
         """
+        return self._plan(None)
+
+    def plan_phases(self) -> tuple[SearchResult, np.ndarray]:
+        """:meth:`plan`, each phase of the replan run as its own compiled call and timed.
+
+        The same phase code runs as in :meth:`plan` (one compiled call per phase instead
+        of one for all), and the result is the same. For profiling: where a replan's time
+        goes.
+
+        Returns
+        -------
+        result : SearchResult
+            As :meth:`plan`'s (its ``seconds`` include the phases' calls).
+        seconds : ndarray, shape (4,), float64
+            Wall seconds (``time.perf_counter``) of each phase's call, in the order of
+            :data:`planner.search.dstar.replan.PHASES`: collecting the nodes whose edges
+            the changes touch, repairing their edges, the search, extracting the path.
+            NaN for a phase that did not run (collect and repair without changes; all
+            four when the plan kept the stored path), and all NaN when a phase had to
+            grow the planner's arrays (that plan's phases are not separated).
+        """
+        secs = np.full(len(dr.PHASES), np.nan)
+        return self._plan(secs), secs
+
+    def _plan(self, phase_secs: np.ndarray | None) -> SearchResult:
+        """:meth:`plan`; with ``phase_secs`` (4,) the phases one call each, timed into it
+        (:meth:`plan_phases`)."""
         st, pend = self._st, self._pending
         self._pending = []
         if self._sv[_PATH_VALID] and self._blocks_only(pend):
@@ -290,13 +318,15 @@ class DStarLite:
             st["phase"] = dr.PH_SEARCH
         st["check_start"] = 1  # the start's own cell: one lookup, as A*'s endpoint check
         call, arg = self._call()
+        if phase_secs is not None and self._phase_call is None:  # compiled off the clock
+            self._phase_call = entry_point(dr.replan_phase_state, (arg, cells, state))
         t0 = time.perf_counter()
-        while True:
+        done = None if phase_secs is None else self._phases(arg, cells, state, phase_secs)
+        while done is None or done == RUN_GROW:
+            if done is not None:
+                self._room(int(st["need_nodes"]))
+                call, arg = self._call()
             done = call(arg, cells, state)
-            if done != RUN_GROW:
-                break
-            self._room(int(st["need_nodes"]))
-            call, arg = self._call()
         if int(st["nodes"]) >= max(_COMPACT_MIN, 2 * self._ordered):
             self._compact()
         self._seconds += time.perf_counter() - t0
@@ -306,6 +336,21 @@ class DStarLite:
         why = ("start cell is blocked" if STATUS_OF_RUN[done] == "blocked"
                else f"goal unreachable: explored {self.nodes} cells")
         return self._result(None, math.inf, why, done)
+
+    def _phases(self, arg, cells, state, secs: np.ndarray) -> int:
+        """Run the replan one compiled call per phase (:func:`dr.replan_phase_state`),
+        timing each into ``secs``; returns the replan's code. A phase that needs room
+        returns RUN_GROW with ``secs`` all NaN: :meth:`_plan` grows and resumes it."""
+        st = self._st  # self._phase_call: looked up once, its argument types never change
+        while True:
+            k = int(st["phase"])
+            t0 = time.perf_counter()
+            done = self._phase_call(arg, cells, state)
+            secs[k] = time.perf_counter() - t0
+            if done == RUN_GROW:
+                secs[:] = np.nan
+            if done != _RUN_NEXT:
+                return done
 
     def _keep(self, pend: list) -> SearchResult | None:
         """The stored path from the start on, when the changes ``pend`` (all blocked)
@@ -381,6 +426,7 @@ _NONE = np.zeros((0, 3), np.int64)
 _COMPACT_MIN = 1 << 14  # nodes: below this the node table fits in cache anyway
 _KEEP_MAX = 1 << 15  # unrepaired cells: then a repair (bounds its batch's scratch)
 _NONE_B = np.zeros(0, np.bool_)
+_RUN_NEXT = dr.RUN_NEXT
 # field indices of the state record, read through an int64 view (``_sv``): a record's
 # field by name costs microseconds, more than a kept replan's compiled call
 _PATH_VALID, _PATH_FROM, _PATH_TO, _LOOKUPS, _EXPANSIONS, _NODES = (

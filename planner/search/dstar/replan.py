@@ -33,6 +33,8 @@ from planner.search.dstar.rest import keep_path, mark_path
 from planner.search.result import RUN_BLOCKED, RUN_EXHAUSTED, RUN_FOUND, RUN_GROW
 
 PH_COLLECT, PH_APPLY, PH_SEARCH, PH_PATH = 0, 1, 2, 3
+PHASES = ("collect", "apply", "search", "extract")  # names of the PH_* phases, in order
+RUN_NEXT = -1  # replan_phase_state: a phase ran, the next one remains (no RUN_* code)
 
 
 class DScratch(NamedTuple):
@@ -115,16 +117,43 @@ def replan(occ, ms, bx, nd, heap, sc, st, fs, start, cells, blocked):
 
 
 @njit_cached
-def _replan(occ, ms, bx, nd, heap, sc, st, fs, start, cells, blocked):
-    # pragma: no cover - compiled
-    nm = ms.moves.shape[0]
+def replan_phase_state(state, cells, blocked):  # pragma: no cover - compiled
+    """One phase of :func:`replan` on the planner's arrays in ``state``
+    (:class:`ReplanState`): the phase ``st.phase`` names, which it then advances. Returns
+    :data:`RUN_NEXT` when a phase remains, else what :func:`replan` returns (RUN_GROW
+    leaves ``st.phase`` where it was, for the call after growing). The same phase code as
+    :func:`replan` runs: a caller that times each call sees where a replan's time goes
+    (:meth:`planner.search.dstar.lite.DStarLite.plan_phases`)."""
+    st = state.counts[0]
     st.need_nodes = 0
     st.need_scratch = 0
+    st.status = _phase(state.occ, state.ms, state.bx, state.nd, state.heap, state.sc, st,
+                       state.fs, state.start, cells, blocked)
+    return st.status
+
+
+@njit_cached
+def _replan(occ, ms, bx, nd, heap, sc, st, fs, start, cells, blocked):
+    # pragma: no cover - compiled
+    st.need_nodes = 0
+    st.need_scratch = 0
+    while True:
+        r = _phase(occ, ms, bx, nd, heap, sc, st, fs, start, cells, blocked)
+        if r != RUN_NEXT:
+            return r
+
+
+@njit_cached
+def _phase(occ, ms, bx, nd, heap, sc, st, fs, start, cells, blocked):
+    # pragma: no cover - compiled
+    """Run the phase ``st.phase`` (PH_*) and advance it: RUN_NEXT, or the replan's code."""
+    nm = ms.moves.shape[0]
     if st.phase == PH_COLLECT:
         off = grid_offsets(ms.union, ms.moves, bx.dims[1], bx.dims[2])[0]
         st.collected = collect(occ, ms, sc.affect, bx, nd, st, cells, blocked, sc.ss, sc.old,
                                sc.redo, off)
         st.phase = PH_APPLY
+        return RUN_NEXT
     if st.phase == PH_APPLY:
         n = st.collected
         if st.nodes + n * nm + 1 > nd.key.shape[0] or sc.touched.shape[0] < 2 * n * nm + 1:
@@ -134,6 +163,7 @@ def _replan(occ, ms, bx, nd, heap, sc, st, fs, start, cells, blocked):
         apply_changes(occ, ms, sc.ufree, bx, nd, heap, st, fs[0], start, sc.ss, sc.old,
                       sc.redo, n, sc.touched)
         st.phase = PH_SEARCH
+        return RUN_NEXT
     if st.phase == PH_SEARCH:
         r = compute_path(occ, ms, sc.ufree, bx, nd, heap, st, fs[0], start, st.check_start == 1)
         st.check_start = 0
@@ -143,6 +173,7 @@ def _replan(occ, ms, bx, nd, heap, sc, st, fs, start, cells, blocked):
         if r == RUN_BLOCKED:
             return RUN_BLOCKED
         st.phase = PH_PATH
+        return RUN_NEXT
     if sc.path.shape[0] < st.nodes + 1:
         return RUN_GROW
     j, k, cost = extract(occ, ms, sc.ufree, bx, nd, st, start, sc.path, sc.step)
