@@ -10,7 +10,7 @@ expanded, falling back to its best closed lattice neighbour (SetVertex). Both us
 Euclidean heuristic and the exact walk of :mod:`planner.search._los`.
 
 Lattice A* / Dijkstra on a dense grid runs the loop of :mod:`planner.search.astar.dense`,
-written for that case alone, and Lazy Theta* on a dense cubic grid that of
+written for that case alone, and Lazy Theta* on a dense grid (every lattice) that of
 :mod:`planner.search.astar.dense_theta`. The general loop here writes out its hot parts
 (the dense lookups, the safe-rule test, the slot lookup, the heuristic of a new node, the
 any-angle g) instead of calling the shared inline helpers (:mod:`planner.search.heuristic`, ...):
@@ -28,7 +28,7 @@ from planner._numba import njit_cached
 from planner.occupancy.grid import cell_free, occ_free
 from planner.occupancy.keys import mix64, pack3, unpack3
 from planner.search import _heap
-from planner.search._los import DDA_MAX, cubic_edge, cubic_walk, dense_walk, is_cubic, sight
+from planner.search._los import DDA_MAX, cubic_walk, dense_walk, is_cubic, sight
 from planner.search._nodes import (
     PAGE,
     block_key,
@@ -144,10 +144,9 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state
         st.status = status
         return status
     if (params.anyangle == LAZY_THETA and occ.mode == 0 and slots.dense.shape[0] > 1
-            and ms.union.shape[0] <= MAX_BITS and is_cubic(walk.g)
-            and occ.dims.max() <= DDA_MAX):
-        status = dense_lazy_theta(occ, ms, nodes, heap, slots.dense, st, params.max_nodes,
-                                  params.max_expansions, goal, cubic_edge(walk.g), params.h_weight)
+            and ms.union.shape[0] <= MAX_BITS):
+        status = dense_lazy_theta(occ, walk, ms, nodes, heap, slots.dense, sc, st,
+                                  params.max_nodes, params.max_expansions, goal, params.h_weight)
         st.status = status
         return status
     # the loop's tables, made here: the loop allocates nothing (see _loop)
