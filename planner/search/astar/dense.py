@@ -21,7 +21,7 @@ from typing import NamedTuple
 import numpy as np
 
 from planner._numba import njit_cached
-from planner.occupancy.keys import pack3, unpack3
+from planner.occupancy.keys import pack3, step3, unpack3
 from planner.search import _heap
 from planner.search.heuristic import H_GAUGE, octile
 from planner.search.result import RUN_BUDGET, RUN_EXHAUSTED, RUN_FOUND, RUN_GROW, RUN_LIMIT
@@ -140,7 +140,7 @@ def dense_tables(ms, dims, used):  # pragma: no cover - compiled
     roff, rshift, rmask, ubit, need2, all_u, rows = stencil_rows(ust, ms.need, d1, d2)
     mkey = np.empty(nm, np.int64)
     for m in range(nm):
-        mkey[m] = (moves[m, 0] << 42) + (moves[m, 1] << 21) + moves[m, 2]
+        mkey[m] = step3(moves[m, 0], moves[m, 1], moves[m, 2])
     # The gauge's facets that can hold a new node's maximum: a move changes each facet's
     # value by at most hmd (see dense_astar).
     gauge = ms.hkind == H_GAUGE and ms.octile <= 0.0

@@ -10,12 +10,9 @@ expanded, falling back to its best closed lattice neighbour (SetVertex). Both us
 Euclidean heuristic and the exact walk of :mod:`planner.search._los`.
 
 Lattice A* / Dijkstra on a dense grid runs the loop of :mod:`planner.search.astar.dense`,
-written for that case alone, and Lazy Theta* on a dense grid (every lattice) that of
-:mod:`planner.search.astar.dense_theta`. The general loop here writes out its hot parts
-(the dense lookups, the safe-rule test, the slot lookup, the heuristic of a new node, the
-any-angle g) instead of calling the shared inline helpers (:mod:`planner.search.heuristic`, ...):
-with them the loop compiled to a markedly slower one on cubic-26
-(``benchmarks/search_speed.py``).
+and Lazy Theta* on a dense grid (every lattice) that of :mod:`planner.search.astar.
+dense_theta` (this loop took 1.08-1.2x its time on the same worlds: ``benchmarks/
+search_speed.py --anyangle 20``, cubic-26).
 """
 
 from __future__ import annotations
@@ -195,6 +192,7 @@ def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, 
     nu = ust.shape[0]
     nm = moves.shape[0]
     bits = nu <= MAX_BITS  # one mask test per move instead of its CSR list
+    all_u = (np.int64(1) << nu) - 1 if bits else np.int64(0)
     gk = pack3(goal[0], goal[1], goal[2])
     base = np.int64(0)
     fq_inv = 1.0 / fq
@@ -206,11 +204,13 @@ def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, 
     sn = 0
     fcur = np.nan
     plateau = anyangle == 0
+    lazy = anyangle == LAZY_THETA
     expansions = st.expansions
     lookups = st.lookups
     status = RUN_EXHAUSTED
     while hn + sn > 0:
-        if n + nm > cap or st.pages + nm > pcap or 2 * (st.pages + nm) > bsize:
+        if n + nm > cap or (not dense and (st.pages + nm > pcap
+                                            or 2 * (st.pages + nm) > bsize)):
             status = RUN_GROW
             break
         if max_exp > 0 and expansions >= max_exp:
@@ -222,13 +222,28 @@ def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, 
         npos[s] = -1
         expansions += 1
         u0, u1, u2 = unpack3(nkey[s])
+        blocked = np.int64(0)
         if mode == 0:
-            # Dense bit-grid lookups written out here: numba does not reliably inline the
-            # helper inside this large loop and a call pays reference counting.
             a0, b0, c0 = u0 - lo0, u1 - lo1, u2 - lo2
             base = (a0 * d1 + b0) * d2 + c0
-            if (a0 >= reach and b0 >= reach and c0 >= reach and a0 < d0 - reach
-                    and b0 < d1 - reach and c0 < d2 - reach):
+            inner = (a0 >= reach and b0 >= reach and c0 >= reach and a0 < d0 - reach
+                     and b0 < d1 - reach and c0 < d2 - reach)
+            if bits:  # straight into the mask of free cells
+                free = np.int64(0)
+                if inner:
+                    for j in range(nu):
+                        f = base + uoff[j]
+                        free |= np.int64((grid[np.uint64(f >> 3)] >> (f & 7)) & 1) << j
+                else:
+                    for j in range(nu):
+                        a = a0 + ust[j, 0]
+                        b = b0 + ust[j, 1]
+                        c = c0 + ust[j, 2]
+                        if a >= 0 and b >= 0 and c >= 0 and a < d0 and b < d1 and c < d2:
+                            f = (a * d1 + b) * d2 + c
+                            free |= np.int64((grid[f >> 3] >> (f & 7)) & 1) << j
+                blocked = all_u & ~free
+            elif inner:
                 for j in range(nu):
                     f = base + uoff[j]
                     ufree[j] = (grid[f >> 3] >> (f & 7)) & 1 != 0
@@ -243,16 +258,15 @@ def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, 
         else:
             for j in range(nu):
                 ufree[j] = cell_free(mode, grid, lo, dims, otable, otmask, gg, blo, bhi,
-                                 u0 + ust[j, 0], u1 + ust[j, 1], u2 + ust[j, 2])
-        blocked = np.int64(0)
-        if bits:
-            for j in range(nu):
-                if not ufree[j]:
-                    blocked |= np.int64(1) << j
+                                     u0 + ust[j, 0], u1 + ust[j, 1], u2 + ust[j, 2])
+            if bits:
+                for j in range(nu):
+                    if not ufree[j]:
+                        blocked |= np.int64(1) << j
         lookups += nu
         # Verify the assumed sight line, walked from s: a blocked cell is likelier near s
         # (its parent saw s's generator), so the walk stops sooner.
-        if anyangle == LAZY_THETA and npar[s] != s:
+        if lazy and npar[s] != s:
             p0, p1, p2 = unpack3(nkey[npar[s]])
             if cubic_dense:
                 ok, c = dense_walk(grid, lo, dims, u0, u1, u2, p0, p1, p2)
@@ -263,9 +277,7 @@ def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, 
             lookups += c
             if not ok:
                 # SetVertex: the best closed neighbour that an allowed move reaches (one
-                # exists: the node that generated s). Written out: a call taking the
-                # structs pays reference counting on every failed sight line, and Lazy
-                # Theta* has many of those.
+                # exists: the node that generated s)
                 best = np.inf
                 bp = np.int64(-1)
                 for m in range(nm):
@@ -313,7 +325,7 @@ def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, 
             elif not move_allowed(ufree, mptr, midx, m):
                 continue
             if dense:
-                loc = base + moff[m]
+                loc = np.uint64(base + moff[m])
                 t = np.int64(dsl[loc]) - 1  # stored as slot + 1, 0 none
             else:
                 bk = block_key(v0, v1, v2)
@@ -328,19 +340,19 @@ def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, 
                         q = new_page(slots, st, bk, p)
                     last_bk = bk
                     last_pg = q
-                loc = last_pg * PAGE + local(v0, v1, v2)
+                loc = np.uint64(last_pg * PAGE + local(v0, v1, v2))
                 t = np.int64(pages[loc])
-            if t != _EMPTY and npos[t] == -1:
-                continue  # closed: a consistent heuristic never improves it
-            if t == _EMPTY:
+            new = t == _EMPTY
+            if new:
                 t = n
                 n += 1
                 if dense:
                     dsl[loc] = t + 1
                 else:
                     pages[loc] = t
-                nkey[t] = pack3(v0, v1, v2)
-                ng[t] = np.inf
+                tu = np.uint64(t)  # unsigned: no negative-index fix-up on each access
+                nkey[tu] = pack3(v0, v1, v2)
+                ng[tu] = np.inf
                 e0 = gl0 - v0
                 e1 = gl1 - v1
                 e2 = gl2 - v2
@@ -357,15 +369,20 @@ def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, 
                     y = g10 * e0 + g11 * e1 + g12 * e2
                     z = g20 * e0 + g21 * e1 + g22 * e2
                     hv = hw * np.sqrt(x * x + y * y + z * z)
-                nh[t] = hv
-                npos[t] = -2
+                nh[tu] = hv
+            else:
+                tu = np.uint64(t)
+                if npos[tu] == -1:
+                    continue  # closed: a consistent heuristic never improves it
+                if lazy and npar[tu] == ps:
+                    # its g came through this parent, the sum below to the bit (a closed
+                    # node's g stays): not less, so no square root
+                    continue
             if anyangle == 0:
                 gt = ng[s] + mcost[m]
                 par = s
             else:
-                # Any-angle g through s's parent, written out: numba did not inline a helper
-                # here, and the call's reference counting (once per move) outweighed the
-                # whole A* expansion.
+                # any-angle g through s's parent
                 e0 = v0 - p0
                 e1 = v1 - p1
                 e2 = v2 - p2
@@ -376,7 +393,7 @@ def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, 
                 par = ps
                 if anyangle == THETA and ps != s:
                     g1 = ng[s] + mcost[m]
-                    if gt >= ng[t] and g1 >= ng[t]:
+                    if gt >= ng[tu] and g1 >= ng[tu]:
                         continue  # neither parent improves t: its sight line is moot
                     if cubic_dense:
                         ok, c = dense_walk(grid, lo, dims, v0, v1, v2, p0, p1, p2)
@@ -388,16 +405,17 @@ def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, 
                     if not ok:
                         gt = g1
                         par = s
-            if gt < ng[t]:
-                ng[t] = gt
+            if gt < ng[tu]:
+                ng[tu] = gt
                 # f on a 1e-9-cell grid: equal-cost paths tie exactly (float noise would
                 # otherwise decide), so the larger-g tie-break can dive; costs stay exact.
-                nf[t] = np.floor((gt + nh[t]) * fq_inv + 0.5) * fq
-                npar[t] = par
-                if npos[t] == -2:
-                    hn, sn = _heap.pq_push(heap, npos, hn, sn, fcur, t, nf[t], gt)
+                fv = np.floor((gt + nh[tu]) * fq_inv + 0.5) * fq
+                nf[tu] = fv
+                npar[tu] = par
+                if new:
+                    hn, sn = _heap.pq_push(heap, npos, hn, sn, fcur, t, fv, gt)
                 else:
-                    hn, sn = _heap.pq_decrease(heap, npos, hn, sn, fcur, t, nf[t], gt)
+                    hn, sn = _heap.pq_decrease(heap, npos, hn, sn, fcur, t, fv, gt)
     if status != RUN_FOUND:  # the arrays may be copied or the search resumed
         hn = _heap.pq_flush(heap, npos, hn, sn, fcur)
     st.nodes = n
