@@ -191,7 +191,7 @@ def dense_astar(grid, lo, dims, ms, nodes, heap, dsl, st, max_nodes, max_exp, go
     moves, mcost, ust, hmat = ms.moves, ms.cost, ms.union, ms.hmat
     oct_s = ms.octile
     gauge = ms.hkind == H_GAUGE and oct_s <= 0.0
-    nkey, ng, nf, nh, npar, npos = nodes
+    nkey, ng, nh, npar, npos = nodes
     nfac = hmat.shape[0]
     nu = ust.shape[0]
     nm = moves.shape[0]
@@ -290,7 +290,6 @@ def dense_astar(grid, lo, dims, ms, nodes, heap, dsl, st, max_nodes, max_exp, go
                     continue  # no better
                 ng[tu] = gt
                 f = np.floor((gt + nh[tu]) * fq_inv + 0.5) * fq
-                nf[tu] = f
                 npar[tu] = s
                 hn, sn = _heap.pq_decrease(heap, npos, hn, sn, fcur, np.int64(v) - 1, f, gt)
                 continue
@@ -329,7 +328,6 @@ def dense_astar(grid, lo, dims, ms, nodes, heap, dsl, st, max_nodes, max_exp, go
             # f on a 1e-9-cell grid: equal-cost paths tie exactly (float noise would
             # otherwise decide), so the larger-g tie-break can dive; costs stay exact.
             f = np.floor((gt + hv) * fq_inv + 0.5) * fq
-            nf[tn] = f
             npar[tn] = s
             hn, sn = _heap.pq_push(heap, npos, hn, sn, fcur, t, f, gt)
     if status != RUN_FOUND:  # the arrays may be copied or the search resumed

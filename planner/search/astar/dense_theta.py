@@ -87,7 +87,7 @@ def _loop(occ, walk, ms, nodes, heap, dsl, sc, st, max_nodes, max_exp, goal, hw,
     lo0, lo1, lo2 = lo[0], lo[1], lo[2]
     d0, d1, d2 = dims[0], dims[1], dims[2]
     moves, mcost, ust, need = ms.moves, ms.cost, ms.union, ms.need
-    nkey, ng, nf, nh, npar, npos = nodes
+    nkey, ng, nh, npar, npos = nodes
     nu = ust.shape[0]
     nm = moves.shape[0]
     cap = nkey.shape[0]
@@ -214,14 +214,12 @@ def _loop(occ, walk, ms, nodes, heap, dsl, sc, st, max_nodes, max_exp, goal, hw,
                 # f on a 1e-9-cell grid: equal-cost paths tie exactly (float noise would
                 # otherwise decide), so the larger-g tie-break can dive; costs stay exact.
                 f = np.floor((gt + hv) * fq_inv + 0.5) * fq
-                nf[t] = f
                 npar[t] = ps
                 hn = _heap.push(heap, npos, hn, t, f, gt)
                 continue
             if gt < ng[tu]:
                 ng[tu] = gt
                 f = np.floor((gt + nh[tu]) * fq_inv + 0.5) * fq
-                nf[tu] = f
                 npar[tu] = ps
                 _heap.decrease_key(heap, npos, t, f, gt)
     st.nodes = n

@@ -69,10 +69,9 @@ def search_init(start, goal, ms, g, nodes, heap, slots, st):  # pragma: no cover
     nodes.key[0] = pack3(start[0], start[1], start[2])
     nodes.g[0] = 0.0
     nodes.h[0] = estimate(ms, g, goal[0] - start[0], goal[1] - start[1], goal[2] - start[2])
-    nodes.f[0] = nodes.h[0]
     nodes.par[0] = 0
     st.pages = 0
-    st.queued = _heap.push(heap, nodes.pos, 0, 0, nodes.f[0], 0.0)
+    st.queued = _heap.push(heap, nodes.pos, 0, 0, nodes.h[0], 0.0)
     if slots.dense.shape[0] > 1:
         slots.dense[dense_index(slots, start[0], start[1], start[2])] = 1  # slot 0, + 1
     else:
@@ -169,7 +168,7 @@ def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, 
     lo0, lo1, lo2 = lo[0], lo[1], lo[2]
     d0, d1, d2 = dims[0], dims[1], dims[2]
     moves, mcost, ust, mptr, midx, hmat, hkind, need, oct_s = ms
-    nkey, ng, nf, nh, npar, npos = nodes
+    nkey, ng, nh, npar, npos = nodes
     pages, btab, bkeys, dsl, _, _ = slots
     dense = dsl.shape[0] > 1 and mode == 0  # the dense slot box is the grid's box
     anyangle, max_nodes, max_exp, hw = params
@@ -410,7 +409,6 @@ def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, 
                 # f on a 1e-9-cell grid: equal-cost paths tie exactly (float noise would
                 # otherwise decide), so the larger-g tie-break can dive; costs stay exact.
                 fv = np.floor((gt + nh[tu]) * fq_inv + 0.5) * fq
-                nf[tu] = fv
                 npar[tu] = par
                 if new:
                     hn, sn = _heap.pq_push(heap, npos, hn, sn, fcur, t, fv, gt)
