@@ -289,7 +289,7 @@ def dense_astar(grid, lo, dims, ms, nodes, heap, dsl, st, max_nodes, max_exp, go
                 if gt >= ng[tu]:
                     continue  # no better
                 ng[tu] = gt
-                f = np.floor((gt + nh[tu]) * fq_inv + 0.5) * fq
+                f = _heap.fkey(gt + nh[tu], fq, fq_inv)
                 npar[tu] = s
                 hn, sn = _heap.pq_decrease(heap, npos, hn, sn, fcur, np.int64(v) - 1, f, gt)
                 continue
@@ -325,9 +325,7 @@ def dense_astar(grid, lo, dims, ms, nodes, heap, dsl, st, max_nodes, max_exp, go
                         hv = x
             nh[tn] = hv
             ng[tn] = gt
-            # f on a 1e-9-cell grid: equal-cost paths tie exactly (float noise would
-            # otherwise decide), so the larger-g tie-break can dive; costs stay exact.
-            f = np.floor((gt + hv) * fq_inv + 0.5) * fq
+            f = _heap.fkey(gt + hv, fq, fq_inv)
             npar[tn] = s
             hn, sn = _heap.pq_push(heap, npos, hn, sn, fcur, t, f, gt)
     if status != RUN_FOUND:  # the arrays may be copied or the search resumed

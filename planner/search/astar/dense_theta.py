@@ -211,15 +211,13 @@ def _loop(occ, walk, ms, nodes, heap, dsl, sc, st, max_nodes, max_exp, goal, hw,
                 hv = hw * np.sqrt(x * x + y * y + z * z)
                 nh[t] = hv
                 ng[t] = gt
-                # f on a 1e-9-cell grid: equal-cost paths tie exactly (float noise would
-                # otherwise decide), so the larger-g tie-break can dive; costs stay exact.
-                f = np.floor((gt + hv) * fq_inv + 0.5) * fq
+                f = _heap.fkey(gt + hv, fq, fq_inv)
                 npar[t] = ps
                 hn = _heap.push(heap, npos, hn, t, f, gt)
                 continue
             if gt < ng[tu]:
                 ng[tu] = gt
-                f = np.floor((gt + nh[tu]) * fq_inv + 0.5) * fq
+                f = _heap.fkey(gt + nh[tu], fq, fq_inv)
                 npar[tu] = ps
                 _heap.decrease_key(heap, npos, t, f, gt)
     st.nodes = n

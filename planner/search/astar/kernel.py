@@ -406,9 +406,7 @@ def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, 
                         par = s
             if gt < ng[tu]:
                 ng[tu] = gt
-                # f on a 1e-9-cell grid: equal-cost paths tie exactly (float noise would
-                # otherwise decide), so the larger-g tie-break can dive; costs stay exact.
-                fv = np.floor((gt + nh[tu]) * fq_inv + 0.5) * fq
+                fv = _heap.fkey(gt + nh[tu], fq, fq_inv)
                 npar[tu] = par
                 if new:
                     hn, sn = _heap.pq_push(heap, npos, hn, sn, fcur, t, fv, gt)
