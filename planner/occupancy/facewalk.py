@@ -17,6 +17,12 @@ segment_walk` (tests check both on random and tie-heavy segments); a tie the tab
 know (the float tolerances failing on a degenerate segment) reports ``ok`` False and the
 caller walks the generic way.
 
+On a dense grid a line of some length is walked from both ends at once
+(:func:`planner.occupancy.facestep.run_both`): two independent chains of fast steps, each
+filling the other's wait on its loads, until the two are about to meet; then the walk from
+p goes on as above and ends where it reaches the far walk's cell (the segment is in that
+cell's interior from there on, and the far walk's crossings are single facets).
+
 Tolerances: a facet is parallel to the segment when ``|d . v| <= 1e-12 |d| |v|``; at an
 exit point a facet is on the face when its slack is below ``1e-8 |v|^2 / 2`` (ties between
 cell centres are exact ties, computed to rounding; distinct crossings are far apart, as for
@@ -33,6 +39,28 @@ import numpy as np
 
 from planner._numba import njit_cached
 from planner.lattice import Lattice
+from planner.occupancy.facestep import (
+    BLOCKED,
+    END,
+    MET,
+    S_CUR,
+    S_DQ,
+    S_F,
+    S_FW,
+    S_FWB,
+    S_IDQ,
+    S_IDQB,
+    S_INC,
+    S_INCB,
+    S_STEP,
+    S_STEPB,
+    S_T,
+    S_TB,
+    SLOTS,
+    STEPPED,
+    run_both,
+    run_one,
+)
 from planner.occupancy.grid import cell_free
 
 __all__ = ["FaceTable", "face_scratch", "face_table", "face_walk", "recorded"]
@@ -41,7 +69,7 @@ SEG_TOL = 1e-9  # relative slack on each Voronoi half-space of every walk: conta
 _PAR = 1e-12  # |cos| below which a facet is parallel to the segment
 _ON = 1e-8  # slack (relative to |v|^2 / 2) below which a facet passes through the exit point
 _GAP = 1e-6  # fast step only when the next exit is this much later (relative, as _ON)
-_SLOTS = 8  # exit-time slots: forward facets of a 3D Voronoi cell (at most 7)
+_BOTH = 6  # index extent |e|_1 from which the walk goes from both ends
 _NEVER = 1e300  # exit time of an empty slot
 
 # Layout of a lattice's packed table (one float64 array ``fd`` and one int64 array ``fi``:
@@ -54,14 +82,6 @@ _NEVER = 1e300  # exit time of an empty slot
 # each one's facets through the face (NF, SM; bit r: facet r) at fi[I_STARMASK].
 I_R, I_NF, I_SM, I_REACH = 0, 1, 2, 3  # reach: |index - segment point| bound, 3 axes
 I_FMASK, I_STARN, I_STAROFF, I_STARMASK, I_RIDX = 6, 7, 8, 9, 10
-# Scratch (``sf`` float64, ``si`` int64, from face_scratch): exit time of forward slot k,
-# 1 / (d . v) of slot k, d . v_r of facet r, the change of slot k's time on a step through
-# slot i (8, 8); the facet of slot k, the flat index step through slot k's facet, the
-# cells the segment runs along (SM, 3), the number of cells to record and the record.
-S_T, S_IDQ, S_DQ, S_INC, S_F = 0, 8, 16, 32, 96
-S_FW, S_STEP, S_CUR = 0, 8, 16
-# Trailing zeros of 1..255: the slot of the one exit time at the minimum.
-_TZ = np.array([0] + [(b & -b).bit_length() - 1 for b in range(1, 256)], np.int64)
 
 
 class FaceTable(NamedTuple):
@@ -124,7 +144,7 @@ def face_table(lattice: Lattice) -> FaceTable:
     ext = np.abs(verts @ ginv.T).max(axis=0)
     reach = np.ceil(ext - 1e-9).astype(np.int64)
     nrel = len(rel)
-    if not 2 <= nrel <= 2 * _SLOTS - 2:
+    if not 2 <= nrel <= 2 * SLOTS - 2:
         raise ValueError(f"a 3D Voronoi cell has 6 to 14 facets, got {nrel}")
     fd = np.concatenate([rel.ravel(), rhs, (rel @ g).ravel(), (rel @ rel.T).ravel()])
     head = np.zeros(I_RIDX, np.int64)
@@ -152,63 +172,6 @@ def recorded(si, sm, n):  # pragma: no cover - compiled
     """The first ``n`` cells :func:`face_walk` looked up, (n, 3), from a recording scratch."""
     o = S_CUR + 3 * max(sm, 1) + 1
     return si[o:o + 3 * n].reshape(-1, 3)
-
-
-_END, _BLOCKED, _TIE, _STEPPED = 0, 1, 2, 3  # how _run stops
-
-
-@njit_cached(_nrt=False)
-def _run(grid, sf, si, idx, lookups, gap, dense):  # pragma: no cover - compiled
-    """The walk's fast steps, from the exit times in ``sf``: while one facet alone is at the
-    exit point, step through it and (``dense``) test the cell's bit at flat index ``idx``.
-    Stops at the segment's end (``_END``), a blocked cell (``_BLOCKED``), a tie
-    (``_TIE``) or, not dense, after one step (``_STEPPED``: the caller looks the cell up).
-    Returns ``(code, idx, lookups, m)``, ``m`` the next exit time; the exit times back in
-    ``sf``. A function of its own, with few arguments and little state, so that the eight
-    exit times stay in registers (in the walk's body the compiler spilled the step's state
-    around them)."""
-    # Eight locals: at most half the facets face forward, and a 3D Voronoi cell has at
-    # most 14. Branch-free minima: which facet comes next is not predictable (a
-    # mispredicted branch per facet doubled the step's time).
-    t0, t1, t2, t3 = sf[S_T], sf[S_T + 1], sf[S_T + 2], sf[S_T + 3]
-    t4, t5, t6, t7 = sf[S_T + 4], sf[S_T + 5], sf[S_T + 6], sf[S_T + 7]
-    code = _END
-    while True:
-        m = min(min(min(t0, t1), min(t2, t3)), min(min(t4, t5), min(t6, t7)))
-        if m >= 1.0:
-            break
-        lim = m + gap
-        # bit k: slot k's exit is at the minimum (up to the tie margin)
-        at = (np.int64(t0 <= lim) | (np.int64(t1 <= lim) << 1) | (np.int64(t2 <= lim) << 2)
-              | (np.int64(t3 <= lim) << 3) | (np.int64(t4 <= lim) << 4)
-              | (np.int64(t5 <= lim) << 5) | (np.int64(t6 <= lim) << 6)
-              | (np.int64(t7 <= lim) << 7))
-        if at & (at - 1) != 0:
-            code = _TIE
-            break
-        # One facet at the exit point: step through it (unsigned indices: no
-        # negative-index fix-up on each load).
-        st = _TZ[at]
-        idx += si[np.uint64(S_STEP + st)]
-        a = np.uint64(S_INC + _SLOTS * st)
-        t0 += sf[a]
-        t1 += sf[a + np.uint64(1)]
-        t2 += sf[a + np.uint64(2)]
-        t3 += sf[a + np.uint64(3)]
-        t4 += sf[a + np.uint64(4)]
-        t5 += sf[a + np.uint64(5)]
-        t6 += sf[a + np.uint64(6)]
-        t7 += sf[a + np.uint64(7)]
-        lookups += 1
-        if not dense:
-            code = _STEPPED
-            break
-        if (grid[np.uint64(idx) >> np.uint64(3)] >> (idx & 7)) & 1 == 0:
-            code = _BLOCKED
-            break
-    sf[S_T], sf[S_T + 1], sf[S_T + 2], sf[S_T + 3] = t0, t1, t2, t3
-    sf[S_T + 4], sf[S_T + 5], sf[S_T + 6], sf[S_T + 7] = t4, t5, t6, t7
-    return code, idx, lookups, m
 
 
 @njit_cached(_nrt=False)
@@ -251,6 +214,7 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
     s1 = d2
     s0 = d1 * d2
     nfw = 0
+    nbw = 0
     fwm = np.int64(0)
     parm = np.int64(0)
     gap = 0.0
@@ -271,14 +235,23 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
             a = I_RIDX + 3 * r
             si[S_STEP + nfw] = fi[a] * s0 + fi[a + 1] * s1 + fi[a + 2]
             nfw += 1
+        else:  # faces forward for the walk from q
+            si[S_FWB + nbw] = r
+            iy = -1.0 / y
+            sf[S_IDQB + nbw] = iy
+            sf[S_TB + nbw] = h * iy
+            gap = max(gap, _GAP * h * iy)
+            a = I_RIDX + 3 * r
+            si[S_STEPB + nbw] = fi[a] * s0 + fi[a + 1] * s1 + fi[a + 2]
+            nbw += 1
     for i in range(nfw):
         a = o_vv + nrel * si[S_FW + i]
-        b = S_INC + _SLOTS * i
+        b = S_INC + SLOTS * i
         for k in range(nfw):
             sf[b + k] = fd[a + si[S_FW + k]] * sf[S_IDQ + k]
     # Empty slots: never the next exit. Their steps keep what an earlier walk left (finite
     # numbers, zero at first), which moves 1e300 by nothing.
-    for k in range(nfw, _SLOTS):
+    for k in range(nfw, SLOTS):
         sf[S_T + k] = _NEVER
     idx = ((p0 - b0) * d1 + (p1 - b1)) * d2 + (p2 - b2)
     if nrec > 0:
@@ -290,16 +263,36 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
         return False, lookups, True
     if nfw == 0:  # p == q
         return True, lookups, True
+    stop = np.int64(-1)  # the far end's cell, when a walk from q met this one
+    if dense and abs(e0) + abs(e1) + abs(e2) >= _BOTH:
+        # Long enough to walk from both ends (the far end's table costs some 20 ns)
+        for i in range(nbw):
+            a = o_vv + nrel * si[S_FWB + i]
+            b = S_INCB + SLOTS * i
+            for k in range(nbw):
+                sf[b + k] = fd[a + si[S_FWB + k]] * sf[S_IDQB + k]
+        for k in range(nbw, SLOTS):
+            sf[S_TB + k] = _NEVER
+        stop = ((q0 - b0) * d1 + (q1 - b1)) * d2 + (q2 - b2)
+        lookups += 1
+        if (grid[np.uint64(stop) >> np.uint64(3)] >> (stop & 7)) & 1 == 0:
+            return False, lookups, True
+        code, idx, stop, lookups = run_both(grid, sf, si, idx, stop, lookups, gap,
+                                             1.0 - 4.0 * gap)
+        if code == BLOCKED:
+            return False, lookups, True
+        if code == MET and idx == stop:
+            return True, lookups, True
     ncur = 0  # cells the segment runs along besides the chain cell (si[S_CUR:][:3 ncur])
     pm = np.int64(0)  # the chain cell's facets the segment runs in
     while True:
         if pm == 0:
-            code, idx, lookups, m = _run(grid, sf, si, idx, lookups, gap, dense)
-            if code == _END:
+            code, idx, lookups, m = run_one(grid, sf, si, idx, lookups, gap, dense, stop)
+            if code == END or code == MET:
                 break
-            if code == _BLOCKED:
+            if code == BLOCKED:
                 return False, lookups, True
-            if code == _STEPPED:  # the cell stepped into, looked up here (not dense)
+            if code == STEPPED:  # the cell stepped into, looked up here (not dense)
                 c2 = idx % d2 + b2
                 c1 = (idx // d2) % d1 + b1
                 c0 = idx // s0 + b0
@@ -343,6 +336,8 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
                     if si[b] == c0 and si[b + 1] == c1 and si[b + 2] == c2:
                         seen = True
                         break
+                # the far end's cell: looked up by its walk
+                seen = seen or ((p0 + c0 - b0) * d1 + (p1 + c1 - b1)) * d2 + p2 + c2 - b2 == stop
                 if not seen:
                     if lookups < nrec:
                         si[o_rec + 3 * lookups] = p0 + c0
@@ -380,6 +375,8 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
         u1 += fi[a + 1]
         u2 += fi[a + 2]
         idx = ((p0 + u0 - b0) * d1 + (p1 + u1 - b1)) * d2 + (p2 + u2 - b2)
+        if idx == stop:
+            break
         for k in range(nfw):
             r = si[S_FW + k]
             w = o_wv + 3 * r
