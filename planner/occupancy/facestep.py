@@ -15,19 +15,17 @@ from numba.cpython.unsafe.numbers import trailing_zeros
 
 from planner._numba import njit_cached
 
-__all__ = ["BLOCKED", "END", "MET", "SLOTS", "STEPPED", "TIE", "run_both", "run_one"]
+__all__ = ["BLOCKED", "END", "MET", "SLOTS", "STEPPED", "TIE", "run_mirror", "run_one"]
 
 SLOTS = 8  # exit-time slots: forward facets of a 3D Voronoi cell (at most 7)
 # Scratch (``sf`` float64, ``si`` int64, from face_scratch): exit time of forward slot k,
 # 1 / (d . v) of slot k, d . v_r of facet r, the change of slot k's time on a step through
 # slot i (8, 8); the facet of slot k, the flat index step through slot k's facet, the
 # cells the segment runs along (SM, 3), the number of cells to record and the record.
-# The walk from the far end (:func:`run_both`): its exit times at S_TB, their change per
-# step at S_INCB (1 / (-d . v) at S_IDQB), its facets at S_FWB and flat index steps at S_STEPB.
-S_T, S_IDQ, S_DQ, S_INC, S_TB, S_IDQB, S_INCB, S_F = 0, 8, 16, 32, 96, 104, 112, 176
-S_FW, S_STEP, S_FWB, S_STEPB, S_CUR = 0, 8, 16, 24, 32
+S_T, S_IDQ, S_DQ, S_INC, S_F = 0, 8, 16, 32, 96
+S_FW, S_STEP, S_CUR = 0, 8, 16
 
-END, BLOCKED, TIE, STEPPED, MET = 0, 1, 2, 3, 4  # how run_one and run_both stop
+END, BLOCKED, TIE, STEPPED, MET = 0, 1, 2, 3, 4  # how run_one and run_mirror stop
 
 
 @njit_cached(_nrt=False)
@@ -93,36 +91,33 @@ def run_one(grid, sf, si, idx, lookups, gap, dense, stop):  # pragma: no cover -
 
 
 @njit_cached(_nrt=False)
-def run_both(grid, sf, si, idx, idb, lookups, gap, lim):  # pragma: no cover - compiled
-    """Fast steps from both ends of the segment in turn, on a dense grid: from p through
-    the exit times at ``S_T`` (flat index ``idx``) and from q through those at ``S_TB``
-    (walking q -> p, flat index ``idb``), while the near end's next exit time plus the far
-    end's stays below ``lim`` (just under 1: the two chains have not met, so every cell
-    stepped into is new) and each step is through one facet alone. Two independent
-    chains of exit times: each step waits for the previous one's minimum and table loads,
-    and the other end's step fills that wait. Returns ``(code, idx, idb, lookups)``
-    (``MET``, ``TIE`` or ``BLOCKED``), the near end's exit times back in ``sf``. Every
-    cell the far end stepped through, q included, was looked up; the near end's walk goes
-    on until it reaches cell ``idb`` (looked up): the segment is in that cell's interior
-    from there on, its crossings single facets."""
+def run_mirror(grid, sf, si, idx, mir, lookups, gap, lim):  # pragma: no cover - compiled
+    """:func:`run_one` on a dense grid, each step looking up the cell stepped into (flat
+    index ``idx``) and its mirror image through the segment's midpoint (``mir - idx``), the
+    cell the same step from q reaches: the walk from q need not be taken. Steps while the
+    next exit time ``m`` is below ``lim / 2`` (just under the midpoint) and is one facet's
+    alone; the mirror image is looked up while the exit time after the step plus ``m``
+    stays below ``lim`` (the walks from both ends have not met: every cell is new).
+    Returns ``(code, idx, stop, lookups)``: ``MET``, ``TIE`` or ``BLOCKED``; ``stop``
+    the last mirror image looked up (q at first): the walk from p goes on until it reaches
+    it (the segment is in its interior from there on, its later crossings single facets,
+    the mirror images of this walk's). The exit times back in ``sf``."""
     t0, t1, t2, t3 = sf[S_T], sf[S_T + 1], sf[S_T + 2], sf[S_T + 3]
     t4, t5, t6, t7 = sf[S_T + 4], sf[S_T + 5], sf[S_T + 6], sf[S_T + 7]
-    u0, u1, u2, u3 = sf[S_TB], sf[S_TB + 1], sf[S_TB + 2], sf[S_TB + 3]
-    u4, u5, u6, u7 = sf[S_TB + 4], sf[S_TB + 5], sf[S_TB + 6], sf[S_TB + 7]
     m = min(min(min(t0, t1), min(t2, t3)), min(min(t4, t5), min(t6, t7)))
-    mb = min(min(min(u0, u1), min(u2, u3)), min(min(u4, u5), min(u6, u7)))
+    stop = mir - idx
     code = MET
-    while m + mb < lim:
+    while m + m < lim:
         lm = m + gap
-        if (np.int64(t0 <= lm) + np.int64(t1 <= lm) + np.int64(t2 <= lm)
-                + np.int64(t3 <= lm) + np.int64(t4 <= lm) + np.int64(t5 <= lm)
-                + np.int64(t6 <= lm) + np.int64(t7 <= lm)) > 1:
+        # bit k: slot k's exit is at the minimum (up to the tie margin)
+        at = (np.int64(t0 <= lm) | (np.int64(t1 <= lm) << 1) | (np.int64(t2 <= lm) << 2)
+              | (np.int64(t3 <= lm) << 3) | (np.int64(t4 <= lm) << 4)
+              | (np.int64(t5 <= lm) << 5) | (np.int64(t6 <= lm) << 6)
+              | (np.int64(t7 <= lm) << 7))
+        if at & (at - 1) != 0:
             code = TIE
             break
-        st = trailing_zeros(np.int64(t0 == m) | (np.int64(t1 == m) << 1)
-                            | (np.int64(t2 == m) << 2) | (np.int64(t3 == m) << 3)
-                            | (np.int64(t4 == m) << 4) | (np.int64(t5 == m) << 5)
-                            | (np.int64(t6 == m) << 6) | (np.int64(t7 == m) << 7))
+        st = trailing_zeros(at)
         idx += si[np.uint64(S_STEP + st)]
         a = np.uint64(S_INC + SLOTS * st)
         t0 += sf[a]
@@ -137,34 +132,15 @@ def run_both(grid, sf, si, idx, idb, lookups, gap, lim):  # pragma: no cover - c
         if (grid[np.uint64(idx) >> np.uint64(3)] >> (idx & 7)) & 1 == 0:
             code = BLOCKED
             break
-        m = min(min(min(t0, t1), min(t2, t3)), min(min(t4, t5), min(t6, t7)))
-        if m + mb >= lim:
+        mn = min(min(min(t0, t1), min(t2, t3)), min(min(t4, t5), min(t6, t7)))
+        if mn + m >= lim:
             break
-        lm = mb + gap
-        if (np.int64(u0 <= lm) + np.int64(u1 <= lm) + np.int64(u2 <= lm)
-                + np.int64(u3 <= lm) + np.int64(u4 <= lm) + np.int64(u5 <= lm)
-                + np.int64(u6 <= lm) + np.int64(u7 <= lm)) > 1:
-            code = TIE
-            break
-        st = trailing_zeros(np.int64(u0 == mb) | (np.int64(u1 == mb) << 1)
-                            | (np.int64(u2 == mb) << 2) | (np.int64(u3 == mb) << 3)
-                            | (np.int64(u4 == mb) << 4) | (np.int64(u5 == mb) << 5)
-                            | (np.int64(u6 == mb) << 6) | (np.int64(u7 == mb) << 7))
-        idb += si[np.uint64(S_STEPB + st)]
-        a = np.uint64(S_INCB + SLOTS * st)
-        u0 += sf[a]
-        u1 += sf[a + np.uint64(1)]
-        u2 += sf[a + np.uint64(2)]
-        u3 += sf[a + np.uint64(3)]
-        u4 += sf[a + np.uint64(4)]
-        u5 += sf[a + np.uint64(5)]
-        u6 += sf[a + np.uint64(6)]
-        u7 += sf[a + np.uint64(7)]
+        stop = mir - idx
         lookups += 1
-        if (grid[np.uint64(idb) >> np.uint64(3)] >> (idb & 7)) & 1 == 0:
+        if (grid[np.uint64(stop) >> np.uint64(3)] >> (stop & 7)) & 1 == 0:
             code = BLOCKED
             break
-        mb = min(min(min(u0, u1), min(u2, u3)), min(min(u4, u5), min(u6, u7)))
+        m = mn
     sf[S_T], sf[S_T + 1], sf[S_T + 2], sf[S_T + 3] = t0, t1, t2, t3
     sf[S_T + 4], sf[S_T + 5], sf[S_T + 6], sf[S_T + 7] = t4, t5, t6, t7
-    return code, idx, idb, lookups
+    return code, idx, stop, lookups

@@ -17,17 +17,13 @@ segment_walk` (tests check both on random and tie-heavy segments); a tie the tab
 know (the float tolerances failing on a degenerate segment) reports ``ok`` False and the
 caller walks the generic way.
 
-On a dense grid a line of some length is walked from both ends at once
-(:func:`planner.occupancy.facestep.run_both`): two independent chains of fast steps, each
-filling the other's wait on its loads, until the two are about to meet; then the walk from
-p goes on as above and ends where it reaches the far walk's cell (the segment is in that
-cell's interior from there on, and the far walk's crossings are single facets).
-
-Tolerances: a facet is parallel to the segment when ``|d . v| <= 1e-12 |d| |v|``; at an
-exit point a facet is on the face when its slack is below ``1e-8 |v|^2 / 2`` (ties between
-cell centres are exact ties, computed to rounding; distinct crossings are far apart, as for
-the cubic integer walk); the fast step is taken only when the next exit is more than a
-hundred times that away.
+Every walk is taken from both ends at no extra cost: the reflection through the segment's
+midpoint maps the lattice's Voronoi cells and the segment onto themselves, so each fast
+step from p looks up the cell it steps into and that cell's mirror image, the cell the same
+step from q would reach (:func:`planner.occupancy.facestep.run_mirror`), until the two are
+about to meet; then the walk from p goes on as above and ends where it reaches the last
+mirror image (the segment is in that cell's interior from there on, and the crossings
+beyond it are single facets, the mirror images of the walk's own). Half the steps per cell.
 """
 
 from __future__ import annotations
@@ -47,18 +43,13 @@ from planner.occupancy.facestep import (
     S_DQ,
     S_F,
     S_FW,
-    S_FWB,
     S_IDQ,
-    S_IDQB,
     S_INC,
-    S_INCB,
     S_STEP,
-    S_STEPB,
     S_T,
-    S_TB,
     SLOTS,
     STEPPED,
-    run_both,
+    run_mirror,
     run_one,
 )
 from planner.occupancy.grid import cell_free
@@ -69,7 +60,6 @@ SEG_TOL = 1e-9  # relative slack on each Voronoi half-space of every walk: conta
 _PAR = 1e-12  # |cos| below which a facet is parallel to the segment
 _ON = 1e-8  # slack (relative to |v|^2 / 2) below which a facet passes through the exit point
 _GAP = 1e-6  # fast step only when the next exit is this much later (relative, as _ON)
-_BOTH = 6  # index extent |e|_1 from which the walk goes from both ends
 _NEVER = 1e300  # exit time of an empty slot
 
 # Layout of a lattice's packed table (one float64 array ``fd`` and one int64 array ``fi``:
@@ -214,7 +204,6 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
     s1 = d2
     s0 = d1 * d2
     nfw = 0
-    nbw = 0
     fwm = np.int64(0)
     parm = np.int64(0)
     gap = 0.0
@@ -235,15 +224,6 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
             a = I_RIDX + 3 * r
             si[S_STEP + nfw] = fi[a] * s0 + fi[a + 1] * s1 + fi[a + 2]
             nfw += 1
-        else:  # faces forward for the walk from q
-            si[S_FWB + nbw] = r
-            iy = -1.0 / y
-            sf[S_IDQB + nbw] = iy
-            sf[S_TB + nbw] = h * iy
-            gap = max(gap, _GAP * h * iy)
-            a = I_RIDX + 3 * r
-            si[S_STEPB + nbw] = fi[a] * s0 + fi[a + 1] * s1 + fi[a + 2]
-            nbw += 1
     for i in range(nfw):
         a = o_vv + nrel * si[S_FW + i]
         b = S_INC + SLOTS * i
@@ -263,26 +243,58 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
         return False, lookups, True
     if nfw == 0:  # p == q
         return True, lookups, True
-    stop = np.int64(-1)  # the far end's cell, when a walk from q met this one
-    if dense and abs(e0) + abs(e1) + abs(e2) >= _BOTH:
-        # Long enough to walk from both ends (the far end's table costs some 20 ns)
-        for i in range(nbw):
-            a = o_vv + nrel * si[S_FWB + i]
-            b = S_INCB + SLOTS * i
-            for k in range(nbw):
-                sf[b + k] = fd[a + si[S_FWB + k]] * sf[S_IDQB + k]
-        for k in range(nbw, SLOTS):
-            sf[S_TB + k] = _NEVER
-        stop = ((q0 - b0) * d1 + (q1 - b1)) * d2 + (q2 - b2)
-        lookups += 1
-        if (grid[np.uint64(stop) >> np.uint64(3)] >> (stop & 7)) & 1 == 0:
-            return False, lookups, True
-        code, idx, stop, lookups = run_both(grid, sf, si, idx, stop, lookups, gap,
-                                             1.0 - 4.0 * gap)
+    # The reflection through the segment's midpoint, c -> p + q - c, maps the lattice, its
+    # Voronoi cells and the segment onto themselves: the cells the walk steps into from p
+    # mirror those a walk from q would step into. So each fast step from p looks up its
+    # cell and that cell's mirror image (flat index ``mir - idx``), while the two have not
+    # met; then the walk from p goes on to the last mirrored cell (``stop``).
+    stop = ((q0 - b0) * d1 + (q1 - b1)) * d2 + (q2 - b2)
+    mir = idx + stop
+    if nrec > 1:
+        si[o_rec + 3] = q0
+        si[o_rec + 4] = q1
+        si[o_rec + 5] = q2
+    lookups += 1
+    if not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi, q0, q1, q2):
+        return False, lookups, True
+    lim = 1.0 - 4.0 * gap
+    if dense:
+        code, idx, stop, lookups = run_mirror(grid, sf, si, idx, mir, lookups, gap, lim)
         if code == BLOCKED:
             return False, lookups, True
-        if code == MET and idx == stop:
-            return True, lookups, True
+    else:
+        m = _NEVER
+        for k in range(nfw):
+            m = min(m, sf[S_T + k])
+        while m + m < lim:
+            code, idx, lookups, _ = run_one(grid, sf, si, idx, lookups, gap, False, stop)
+            if code != STEPPED:  # a tie
+                break
+            mn = _NEVER
+            for k in range(nfw):
+                mn = min(mn, sf[S_T + k])
+            for half in range(2):  # the cell stepped into, then its mirror image
+                if half == 1:
+                    if mn + m >= lim:
+                        break  # its mirror would meet the walk from p: not yet
+                    lookups += 1
+                    stop = mir - idx
+                c = idx if half == 0 else stop
+                c2 = c % d2 + b2
+                c1 = (c // d2) % d1 + b1
+                c0 = c // s0 + b0
+                if lookups <= nrec:
+                    si[o_rec + 3 * lookups - 3] = c0
+                    si[o_rec + 3 * lookups - 2] = c1
+                    si[o_rec + 3 * lookups - 1] = c2
+                if not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi, c0, c1,
+                                 c2):
+                    return False, lookups, True
+            if stop != mir - idx:
+                break
+            m = mn
+    if idx == stop:
+        return True, lookups, True
     ncur = 0  # cells the segment runs along besides the chain cell (si[S_CUR:][:3 ncur])
     pm = np.int64(0)  # the chain cell's facets the segment runs in
     while True:
