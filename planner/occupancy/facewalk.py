@@ -45,7 +45,9 @@ from planner.occupancy.facestep import (
     S_FW,
     S_IDQ,
     S_INC,
+    S_SG,
     S_STEP,
+    S_SY,
     S_T,
     SLOTS,
     STEPPED,
@@ -65,13 +67,15 @@ _NEVER = 1e300  # exit time of an empty slot
 # Layout of a lattice's packed table (one float64 array ``fd`` and one int64 array ``fi``:
 # few arguments, so a call of the walk costs little; R facets, NF faces, SM cells a face).
 # fd: relevant vectors (R, 3) m at 0, |v|^2 / 2 (R,) at 3R, rel @ G (R, 3) at 4R (so
-# c_u . v = (rel @ G) u for the cell at offset u), v_r . v_s (R, R) at 7R.
+# c_u . v = (rel @ G) u for the cell at offset u), v_r . v_s (R, R) at 7R, and the same
+# for the facet pairs (below; padded with zeros to (SLOTS, SLOTS)) at 7R + R^2.
 # fi: the header below, then the relevant vectors as index offsets (R, 3) at I_RIDX, the
 # face id of each facet set (2**R,; -1: no face) at fi[I_FMASK], the number of cells
 # around each face (NF,) at fi[I_STARN], their offsets (NF, SM, 3) at fi[I_STAROFF], and
-# each one's facets through the face (NF, SM; bit r: facet r) at fi[I_STARMASK].
+# each one's facets through the face (NF, SM; bit r: facet r) at fi[I_STARMASK], and the
+# facets in opposite pairs (R / 2, 2; v_s = -v_r) at fi[I_PAIR].
 I_R, I_NF, I_SM, I_REACH = 0, 1, 2, 3  # reach: |index - segment point| bound, 3 axes
-I_FMASK, I_STARN, I_STAROFF, I_STARMASK, I_RIDX = 6, 7, 8, 9, 10
+I_FMASK, I_STARN, I_STAROFF, I_STARMASK, I_PAIR, I_RIDX = 6, 7, 8, 9, 10, 11
 
 
 class FaceTable(NamedTuple):
@@ -136,7 +140,14 @@ def face_table(lattice: Lattice) -> FaceTable:
     nrel = len(rel)
     if not 2 <= nrel <= 2 * SLOTS - 2:
         raise ValueError(f"a 3D Voronoi cell has 6 to 14 facets, got {nrel}")
-    fd = np.concatenate([rel.ravel(), rhs, (rel @ g).ravel(), (rel @ rel.T).ravel()])
+    pairs = np.array([(r, s) for r in range(nrel) for s in range(r + 1, nrel)
+                      if np.allclose(rel[r], -rel[s], atol=1e-9 * np.abs(rel).max())], np.int64)
+    if len(pairs) * 2 != nrel or len(pairs) > SLOTS:
+        raise ValueError("a Voronoi cell's facets come in at most 8 opposite pairs")
+    gp = np.zeros((SLOTS, SLOTS))
+    gp[:len(pairs), :len(pairs)] = (rel @ rel.T)[np.ix_(pairs[:, 0], pairs[:, 0])]
+    fd = np.concatenate([rel.ravel(), rhs, (rel @ g).ravel(), (rel @ rel.T).ravel(),
+                         gp.ravel()])
     head = np.zeros(I_RIDX, np.int64)
     head[I_R], head[I_NF], head[I_SM] = nrel, nf, sm
     head[I_REACH:I_REACH + 3] = reach
@@ -144,8 +155,10 @@ def face_table(lattice: Lattice) -> FaceTable:
     head[I_FMASK] = o
     head[I_STARN] = o = o + len(fmask)
     head[I_STAROFF] = o = o + nf
-    head[I_STARMASK] = o + 3 * nf * sm
-    fi = np.concatenate([head, ridx.ravel(), fmask, star_n, star_off.ravel(), star_mask.ravel()])
+    head[I_STARMASK] = o = o + 3 * nf * sm
+    head[I_PAIR] = o + nf * sm
+    fi = np.concatenate([head, ridx.ravel(), fmask, star_n, star_off.ravel(), star_mask.ravel(),
+                         pairs.ravel()])
     return FaceTable(np.ascontiguousarray(fd, float), np.ascontiguousarray(fi, np.int64))
 
 
@@ -176,7 +189,6 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
     sm = fi[I_SM]
     o_rhs = 3 * nrel
     o_wv = 4 * nrel
-    o_vv = 7 * nrel
     o_cells = fi[I_STAROFF]
     o_masks = fi[I_STARMASK]
     o_rec = S_CUR + 3 * max(sm, 1)
@@ -203,36 +215,55 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
         b0, b1, b2, d1, d2 = lo[0], lo[1], lo[2], dims[1], dims[2]
     s1 = d2
     s0 = d1 * d2
-    nfw = 0
+    # One slot per pair of opposite facets (v, -v): the one facing forward, unless the
+    # segment is parallel to both (exit time never). No branch on the direction (which
+    # of a pair faces forward is unpredictable), and the table of a step's changes is
+    # a product of whole rows: inc[j, k] = v_j . v_k / (d . v_k) = s_j (w_j . w_k) s_k / |y_k|
+    # for v_j = s_j w_j (w_j the pair's first facet, y_k = d . w_k, s = sign y).
+    npair = nrel // 2
+    o_pair = fi[I_PAIR]
+    o_gp = 7 * nrel + nrel * nrel
+    nfw = npair
     fwm = np.int64(0)
     parm = np.int64(0)
     gap = 0.0
     par2 = _PAR * _PAR * dn2
-    for r in range(nrel):
-        y = x0 * fd[3 * r] + x1 * fd[3 * r + 1] + x2 * fd[3 * r + 2]
-        h = fd[o_rhs + r]
-        sf[S_DQ + r] = y
-        if y * y <= par2 * 2.0 * h:
-            parm |= np.int64(1) << r
-        elif y > 0.0:
-            si[S_FW + nfw] = r
-            fwm |= np.int64(1) << r
-            iy = 1.0 / y
-            sf[S_IDQ + nfw] = iy
-            sf[S_T + nfw] = h * iy  # exact exit times (no tolerance): ties to rounding
-            gap = max(gap, _GAP * h * iy)
+    for j in range(SLOTS):
+        t = _NEVER
+        iy = 0.0
+        sg = 0.0
+        rs = 0
+        if j < npair:
+            r = fi[o_pair + 2 * j]
+            r2 = fi[o_pair + 2 * j + 1]
+            y = x0 * fd[3 * r] + x1 * fd[3 * r + 1] + x2 * fd[3 * r + 2]
+            h = fd[o_rhs + r]
+            sf[S_DQ + r] = y
+            sf[S_DQ + r2] = -y
+            par = y * y <= par2 * 2.0 * h
+            pos = y > 0.0
+            rs = r if pos else r2
+            sg = 1.0 if pos else -1.0
             a = I_RIDX + 3 * r
-            si[S_STEP + nfw] = fi[a] * s0 + fi[a + 1] * s1 + fi[a + 2]
-            nfw += 1
-    for i in range(nfw):
-        a = o_vv + nrel * si[S_FW + i]
-        b = S_INC + SLOTS * i
-        for k in range(nfw):
-            sf[b + k] = fd[a + si[S_FW + k]] * sf[S_IDQ + k]
-    # Empty slots: never the next exit. Their steps keep what an earlier walk left (finite
-    # numbers, zero at first), which moves 1e300 by nothing.
-    for k in range(nfw, SLOTS):
-        sf[S_T + k] = _NEVER
+            st = fi[a] * s0 + fi[a + 1] * s1 + fi[a + 2]
+            si[S_STEP + j] = st if pos else -st
+            if par:
+                parm |= (np.int64(1) << r) | (np.int64(1) << r2)
+                sg = 0.0
+            else:
+                fwm |= np.int64(1) << rs
+                iy = 1.0 / abs(y)
+                t = h * iy  # exact exit times (no tolerance): ties to rounding
+                gap = max(gap, _GAP * t)
+        si[S_FW + j] = rs
+        sf[S_T + j] = t
+        sf[S_IDQ + j] = iy
+        sf[S_SG + j] = sg
+        sf[S_SY + j] = sg * iy
+    for j in range(SLOTS):
+        sg = sf[S_SG + j]
+        for k in range(SLOTS):
+            sf[S_INC + SLOTS * j + k] = sg * fd[o_gp + SLOTS * j + k] * sf[S_SY + k]
     idx = ((p0 - b0) * d1 + (p1 - b1)) * d2 + (p2 - b2)
     if nrec > 0:
         si[o_rec] = p0
@@ -241,7 +272,7 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
     lookups = 1
     if not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi, p0, p1, p2):
         return False, lookups, True
-    if nfw == 0:  # p == q
+    if fwm == 0:  # p == q
         return True, lookups, True
     # The reflection through the segment's midpoint, c -> p + q - c, maps the lattice, its
     # Voronoi cells and the segment onto themselves: the cells the walk steps into from p
@@ -328,7 +359,7 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
         am = pm
         for k in range(nfw):
             r = si[S_FW + k]
-            if sf[S_DQ + r] * (sf[S_T + k] - m) <= _ON * fd[o_rhs + r]:
+            if fwm >> r & 1 and sf[S_DQ + r] * (sf[S_T + k] - m) <= _ON * fd[o_rhs + r]:
                 am |= np.int64(1) << r
         f = fi[fi[I_FMASK] + am]
         if f < 0:
@@ -392,6 +423,7 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
         for k in range(nfw):
             r = si[S_FW + k]
             w = o_wv + 3 * r
-            sf[S_T + k] = ((fd[o_rhs + r] + fd[w] * u0 + fd[w + 1] * u1 + fd[w + 2] * u2)
-                           * sf[S_IDQ + k])
+            if fwm >> r & 1:
+                sf[S_T + k] = ((fd[o_rhs + r] + fd[w] * u0 + fd[w + 1] * u1 + fd[w + 2] * u2)
+                               * sf[S_IDQ + k])
     return True, lookups, True
