@@ -28,13 +28,9 @@ beyond it are single facets, the mirror images of the walk's own). Half the step
 
 from __future__ import annotations
 
-import itertools
-from typing import NamedTuple
-
 import numpy as np
 
 from planner._numba import njit_cached
-from planner.lattice import Lattice
 from planner.occupancy.facestep import (
     BLOCKED,
     END,
@@ -51,8 +47,22 @@ from planner.occupancy.facestep import (
     S_T,
     SLOTS,
     STEPPED,
+    TIE,
     run_mirror,
     run_one,
+)
+from planner.occupancy.facetable import (
+    I_FMASK,
+    I_PAIR,
+    I_R,
+    I_REACH,
+    I_RIDX,
+    I_SM,
+    I_STARMASK,
+    I_STARN,
+    I_STAROFF,
+    FaceTable,
+    face_table,
 )
 from planner.occupancy.grid import cell_free
 
@@ -63,103 +73,6 @@ _PAR = 1e-12  # |cos| below which a facet is parallel to the segment
 _ON = 1e-8  # slack (relative to |v|^2 / 2) below which a facet passes through the exit point
 _GAP = 1e-6  # fast step only when the next exit is this much later (relative, as _ON)
 _NEVER = 1e300  # exit time of an empty slot
-
-# Layout of a lattice's packed table (one float64 array ``fd`` and one int64 array ``fi``:
-# few arguments, so a call of the walk costs little; R facets, NF faces, SM cells a face).
-# fd: relevant vectors (R, 3) m at 0, |v|^2 / 2 (R,) at 3R, rel @ G (R, 3) at 4R (so
-# c_u . v = (rel @ G) u for the cell at offset u), v_r . v_s (R, R) at 7R, and the same
-# for the facet pairs (below; padded with zeros to (SLOTS, SLOTS)) at 7R + R^2.
-# fi: the header below, then the relevant vectors as index offsets (R, 3) at I_RIDX, the
-# face id of each facet set (2**R,; -1: no face) at fi[I_FMASK], the number of cells
-# around each face (NF,) at fi[I_STARN], their offsets (NF, SM, 3) at fi[I_STAROFF], and
-# each one's facets through the face (NF, SM; bit r: facet r) at fi[I_STARMASK], and the
-# facets in opposite pairs (R / 2, 2; v_s = -v_r) at fi[I_PAIR].
-I_R, I_NF, I_SM, I_REACH = 0, 1, 2, 3  # reach: |index - segment point| bound, 3 axes
-I_FMASK, I_STARN, I_STAROFF, I_STARMASK, I_PAIR, I_RIDX = 6, 7, 8, 9, 10, 11
-
-
-class FaceTable(NamedTuple):
-    """A lattice's face table, packed (layout: the comments on ``I_*``)."""
-
-    fd: np.ndarray  # float64
-    fi: np.ndarray  # int64
-
-
-def _active(x: np.ndarray, rel: np.ndarray, rhs: np.ndarray, tol: float) -> int:
-    """Bit mask of the facets of the origin's cell through point ``x``."""
-    s = rhs - rel @ x
-    return int(sum(1 << r for r in np.flatnonzero(np.abs(s) <= tol * rhs)))
-
-
-def face_table(lattice: Lattice) -> FaceTable:
-    """The face table of a 3D lattice (a planar prism's too) from its Voronoi cell, packed
-    into one float64 and one int64 array (layout: the comments on ``I_*``)."""
-    g = np.asarray(lattice.generator, float)
-    cell = lattice.voronoi
-    rel = np.asarray(cell.relevant, float)
-    rhs = 0.5 * np.einsum("ij,ij->i", rel, rel)
-    ginv = np.linalg.inv(g)
-    verts = np.asarray(cell.vertices, float)
-    e0, e1 = (np.asarray(e, float) for e in cell.edges)
-    # Representative points: vertices, edge midpoints, facet centroids.
-    pts = list(verts) + list(0.5 * (e0 + e1))
-    vmask = [_active(v, rel, rhs, 1e-7) for v in verts]
-    for r in range(len(rel)):
-        on = [v for v, m in zip(verts, vmask, strict=True) if m >> r & 1]
-        pts.append(np.mean(on, axis=0))
-    # Candidate cells around a boundary point: every lattice point within twice the
-    # covering radius (the cells touching the origin's, and more).
-    span = int(np.ceil(2 * cell.covering_radius * np.abs(ginv).sum(axis=1).max())) + 1
-    cand = np.array(list(itertools.product(range(-span, span + 1), repeat=3)), np.int64)
-    cen = cand @ g.T
-    cand = cand[np.linalg.norm(cen, axis=1) <= 2 * cell.covering_radius * (1 + 1e-9)]
-    cen = cand @ g.T
-    faces: dict[int, list] = {}
-    for x in pts:
-        m = _active(x, rel, rhs, 1e-7)
-        if m == 0 or m in faces:
-            continue
-        d = np.linalg.norm(x - cen, axis=1)
-        near = np.flatnonzero(np.abs(d - np.linalg.norm(x)) <= 1e-7 * cell.covering_radius)
-        faces[m] = [(cand[k], _active(x - cen[k], rel, rhs, 1e-7)) for k in near]
-    sm = max(len(s) for s in faces.values())
-    nf = len(faces)
-    fmask = np.full(1 << len(rel), -1, np.int64)
-    star_n = np.zeros(nf, np.int64)
-    star_off = np.zeros((nf, sm, 3), np.int64)
-    star_mask = np.zeros((nf, sm), np.int64)
-    for f, (m, star) in enumerate(faces.items()):
-        fmask[m] = f
-        star_n[f] = len(star)
-        for j, (o, bm) in enumerate(star):
-            star_off[f, j] = o
-            star_mask[f, j] = bm
-    ridx = np.rint(rel @ ginv.T).astype(np.int64)
-    ext = np.abs(verts @ ginv.T).max(axis=0)
-    reach = np.ceil(ext - 1e-9).astype(np.int64)
-    nrel = len(rel)
-    if not 2 <= nrel <= 2 * SLOTS - 2:
-        raise ValueError(f"a 3D Voronoi cell has 6 to 14 facets, got {nrel}")
-    pairs = np.array([(r, s) for r in range(nrel) for s in range(r + 1, nrel)
-                      if np.allclose(rel[r], -rel[s], atol=1e-9 * np.abs(rel).max())], np.int64)
-    if len(pairs) * 2 != nrel or len(pairs) > SLOTS:
-        raise ValueError("a Voronoi cell's facets come in at most 8 opposite pairs")
-    gp = np.zeros((SLOTS, SLOTS))
-    gp[:len(pairs), :len(pairs)] = (rel @ rel.T)[np.ix_(pairs[:, 0], pairs[:, 0])]
-    fd = np.concatenate([rel.ravel(), rhs, (rel @ g).ravel(), (rel @ rel.T).ravel(),
-                         gp.ravel()])
-    head = np.zeros(I_RIDX, np.int64)
-    head[I_R], head[I_NF], head[I_SM] = nrel, nf, sm
-    head[I_REACH:I_REACH + 3] = reach
-    o = I_RIDX + 3 * nrel
-    head[I_FMASK] = o
-    head[I_STARN] = o = o + len(fmask)
-    head[I_STAROFF] = o = o + nf
-    head[I_STARMASK] = o = o + 3 * nf * sm
-    head[I_PAIR] = o + nf * sm
-    fi = np.concatenate([head, ridx.ravel(), fmask, star_n, star_off.ravel(), star_mask.ravel(),
-                         pairs.ravel()])
-    return FaceTable(np.ascontiguousarray(fd, float), np.ascontiguousarray(fi, np.int64))
 
 
 def face_scratch(sm: int, record: int = 0) -> tuple[np.ndarray, np.ndarray]:
@@ -289,47 +202,59 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
     if not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi, q0, q1, q2):
         return False, lookups, True
     lim = 1.0 - 4.0 * gap
-    if dense:
-        code, idx, stop, lookups = run_mirror(grid, sf, si, idx, mir, lookups, gap, lim)
-        if code == BLOCKED:
-            return False, lookups, True
-    else:
-        m = _NEVER
-        for k in range(nfw):
-            m = min(m, sf[S_T + k])
-        while m + m < lim:
-            code, idx, lookups, _ = run_one(grid, sf, si, idx, lookups, gap, False, stop)
-            if code != STEPPED:  # a tie
-                break
-            mn = _NEVER
-            for k in range(nfw):
-                mn = min(mn, sf[S_T + k])
-            for half in range(2):  # the cell stepped into, then its mirror image
-                if half == 1:
-                    if mn + m >= lim:
-                        break  # its mirror would meet the walk from p: not yet
-                    lookups += 1
-                    stop = mir - idx
-                c = idx if half == 0 else stop
-                c2 = c % d2 + b2
-                c1 = (c // d2) % d1 + b1
-                c0 = c // s0 + b0
-                if lookups <= nrec:
-                    si[o_rec + 3 * lookups - 3] = c0
-                    si[o_rec + 3 * lookups - 2] = c1
-                    si[o_rec + 3 * lookups - 1] = c2
-                if not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi, c0, c1,
-                                 c2):
-                    return False, lookups, True
-            if stop != mir - idx:
-                break
-            m = mn
-    if idx == stop:
-        return True, lookups, True
+    mirroring = True  # stepping from both ends (``stop``: the last mirror image)
     ncur = 0  # cells the segment runs along besides the chain cell (si[S_CUR:][:3 ncur])
     pm = np.int64(0)  # the chain cell's facets the segment runs in
     while True:
-        if pm == 0:
+        if mirroring:
+            if dense:
+                code, idx, stop, lookups = run_mirror(grid, sf, si, idx, mir, lookups, gap,
+                                                      lim)
+                if code == BLOCKED:
+                    return False, lookups, True
+            else:
+                code = MET
+                m = _NEVER
+                for k in range(nfw):
+                    m = min(m, sf[S_T + k])
+                while m + m < lim:
+                    code, idx, lookups, _ = run_one(grid, sf, si, idx, lookups, gap, False,
+                                                    stop)
+                    if code != STEPPED:  # a tie
+                        break
+                    code = MET
+                    mn = _NEVER
+                    for k in range(nfw):
+                        mn = min(mn, sf[S_T + k])
+                    for half in range(2):  # the cell stepped into, then its mirror image
+                        if half == 1:
+                            if mn + m >= lim:
+                                break  # its mirror would meet the walk from p: not yet
+                            lookups += 1
+                            stop = mir - idx
+                        c = idx if half == 0 else stop
+                        c2 = c % d2 + b2
+                        c1 = (c // d2) % d1 + b1
+                        c0 = c // s0 + b0
+                        if lookups <= nrec:
+                            si[o_rec + 3 * lookups - 3] = c0
+                            si[o_rec + 3 * lookups - 2] = c1
+                            si[o_rec + 3 * lookups - 1] = c2
+                        if not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi,
+                                         c0, c1, c2):
+                            return False, lookups, True
+                    if stop != mir - idx:
+                        break
+                    m = mn
+            if code != TIE:  # met: from here on from p only
+                mirroring = False
+                if idx == stop:
+                    break
+                continue
+            m = _NEVER
+            for k in range(nfw):
+                m = min(m, sf[S_T + k])
+        elif pm == 0:
             code, idx, lookups, m = run_one(grid, sf, si, idx, lookups, gap, dense, stop)
             if code == END or code == MET:
                 break
@@ -414,6 +339,7 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
                     ncur += 1
         pm = fi[o_masks + sm * f + nxt] & parm
         a = o_cells + 3 * (sm * f + nxt)
+        o0, o1, o2 = u0, u1, u2
         u0 += fi[a]
         u1 += fi[a + 1]
         u2 += fi[a + 2]
@@ -426,4 +352,28 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
             if fwm >> r & 1:
                 sf[S_T + k] = ((fd[o_rhs + r] + fd[w] * u0 + fd[w + 1] * u1 + fd[w + 2] * u2)
                                * sf[S_IDQ + k])
+        if mirroring:
+            # The tie's mirror image: its cells' images, when the next chain cell's exit
+            # keeps the two walks apart (the segment in its interior: no facet run along).
+            mn = _NEVER
+            for k in range(nfw):
+                mn = min(mn, sf[S_T + k])
+            if not inner or mn + m >= lim:
+                mirroring = False
+                continue
+            for j in range(ns):
+                a = o_cells + 3 * (sm * f + j)
+                if fi[a] != 0 or fi[a + 1] != 0 or fi[a + 2] != 0:
+                    c0 = q0 - o0 - fi[a]
+                    c1 = q1 - o1 - fi[a + 1]
+                    c2 = q2 - o2 - fi[a + 2]
+                    if lookups < nrec:
+                        si[o_rec + 3 * lookups] = c0
+                        si[o_rec + 3 * lookups + 1] = c1
+                        si[o_rec + 3 * lookups + 2] = c2
+                    lookups += 1
+                    if not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi, c0, c1,
+                                     c2):
+                        return False, lookups, True
+            stop = mir - idx
     return True, lookups, True
