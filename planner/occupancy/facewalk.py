@@ -173,9 +173,11 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
         sf[S_IDQ + j] = iy
         sf[S_SG + j] = sg
         sf[S_SY + j] = sg * iy
-    for j in range(SLOTS):
+    # Rows and columns of the pairs only: the other slots' exit times stay 1e300, which
+    # the finite numbers an earlier walk left there (zero at first) move by nothing.
+    for j in range(npair):
         sg = sf[S_SG + j]
-        for k in range(SLOTS):
+        for k in range(npair):
             sf[S_INC + SLOTS * j + k] = sg * fd[o_gp + SLOTS * j + k] * sf[S_SY + k]
     idx = ((p0 - b0) * d1 + (p1 - b1)) * d2 + (p2 - b2)
     if nrec > 0:
