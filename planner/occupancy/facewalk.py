@@ -21,9 +21,12 @@ Every walk is taken from both ends at no extra cost: the reflection through the 
 midpoint maps the lattice's Voronoi cells and the segment onto themselves, so each fast
 step from p looks up the cell it steps into and that cell's mirror image, the cell the same
 step from q would reach (:func:`planner.occupancy.facestep.run_mirror`), until the two are
-about to meet; then the walk from p goes on as above and ends where it reaches the last
-mirror image (the segment is in that cell's interior from there on, and the crossings
-beyond it are single facets, the mirror images of the walk's own). Half the steps per cell.
+about to meet; a tie met on the way looks up its cells' mirror images too, and the walk
+goes on from both ends when the segment enters the next cell's interior. Then the walk
+from p goes on as above and ends where it reaches the last mirror image (the segment is in
+that cell's interior from there on, and the crossings beyond it are single facets, the
+mirror images of the walk's own). Half the steps per cell. (One exit-time slot per pair
+of opposite facets: a Voronoi cell's facets come in pairs, one of which faces forward.)
 """
 
 from __future__ import annotations
