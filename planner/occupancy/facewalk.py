@@ -17,22 +17,56 @@ segment_walk` (tests check both on random and tie-heavy segments); a tie the tab
 know (the float tolerances failing on a degenerate segment) reports ``ok`` False and the
 caller walks the generic way.
 
-Tolerances: a facet is parallel to the segment when ``|d . v| <= 1e-12 |d| |v|``; at an
-exit point a facet is on the face when its slack is below ``1e-8 |v|^2 / 2`` (ties between
-cell centres are exact ties, computed to rounding; distinct crossings are far apart, as for
-the cubic integer walk); the fast step is taken only when the next exit is more than a
-hundred times that away.
+Every walk is taken from both ends at no extra cost: the reflection through the segment's
+midpoint maps the lattice's Voronoi cells and the segment onto themselves, so each fast
+step from p looks up the cell it steps into and that cell's mirror image, the cell the same
+step from q would reach (:func:`planner.occupancy.facestep.run_mirror`), until the two are
+about to meet; a tie met on the way looks up its cells' mirror images too, and the walk
+goes on from both ends when the segment enters the next cell's interior. Then the walk
+from p goes on as above and ends where it reaches the last mirror image (the segment is in
+that cell's interior from there on, and the crossings beyond it are single facets, the
+mirror images of the walk's own). Half the steps per cell. (One exit-time slot per pair
+of opposite facets: a Voronoi cell's facets come in pairs, one of which faces forward.)
 """
 
 from __future__ import annotations
 
-import itertools
-from typing import NamedTuple
-
 import numpy as np
 
 from planner._numba import njit_cached
-from planner.lattice import Lattice
+from planner.occupancy.facestep import (
+    BLOCKED,
+    END,
+    MET,
+    S_CUR,
+    S_DQ,
+    S_F,
+    S_FW,
+    S_IDQ,
+    S_INC,
+    S_SG,
+    S_STEP,
+    S_SY,
+    S_T,
+    SLOTS,
+    STEPPED,
+    TIE,
+    run_mirror,
+    run_one,
+)
+from planner.occupancy.facetable import (
+    I_FMASK,
+    I_PAIR,
+    I_R,
+    I_REACH,
+    I_RIDX,
+    I_SM,
+    I_STARMASK,
+    I_STARN,
+    I_STAROFF,
+    FaceTable,
+    face_table,
+)
 from planner.occupancy.grid import cell_free
 
 __all__ = ["FaceTable", "face_scratch", "face_table", "face_walk", "recorded"]
@@ -41,102 +75,7 @@ SEG_TOL = 1e-9  # relative slack on each Voronoi half-space of every walk: conta
 _PAR = 1e-12  # |cos| below which a facet is parallel to the segment
 _ON = 1e-8  # slack (relative to |v|^2 / 2) below which a facet passes through the exit point
 _GAP = 1e-6  # fast step only when the next exit is this much later (relative, as _ON)
-_SLOTS = 8  # exit-time slots: forward facets of a 3D Voronoi cell (at most 7)
 _NEVER = 1e300  # exit time of an empty slot
-
-# Layout of a lattice's packed table (one float64 array ``fd`` and one int64 array ``fi``:
-# few arguments, so a call of the walk costs little; R facets, NF faces, SM cells a face).
-# fd: relevant vectors (R, 3) m at 0, |v|^2 / 2 (R,) at 3R, rel @ G (R, 3) at 4R (so
-# c_u . v = (rel @ G) u for the cell at offset u), v_r . v_s (R, R) at 7R.
-# fi: the header below, then the relevant vectors as index offsets (R, 3) at I_RIDX, the
-# face id of each facet set (2**R,; -1: no face) at fi[I_FMASK], the number of cells
-# around each face (NF,) at fi[I_STARN], their offsets (NF, SM, 3) at fi[I_STAROFF], and
-# each one's facets through the face (NF, SM; bit r: facet r) at fi[I_STARMASK].
-I_R, I_NF, I_SM, I_REACH = 0, 1, 2, 3  # reach: |index - segment point| bound, 3 axes
-I_FMASK, I_STARN, I_STAROFF, I_STARMASK, I_RIDX = 6, 7, 8, 9, 10
-# Scratch (``sf`` float64, ``si`` int64, from face_scratch): exit time of forward slot k,
-# 1 / (d . v) of slot k, d . v_r of facet r, the change of slot k's time on a step through
-# slot i (8, 8); the facet of slot k, the flat index step through slot k's facet, the
-# cells the segment runs along (SM, 3), the number of cells to record and the record.
-S_T, S_IDQ, S_DQ, S_INC, S_F = 0, 8, 16, 32, 96
-S_FW, S_STEP, S_CUR = 0, 8, 16
-# Trailing zeros of 1..255: the slot of the one exit time at the minimum.
-_TZ = np.array([0] + [(b & -b).bit_length() - 1 for b in range(1, 256)], np.int64)
-
-
-class FaceTable(NamedTuple):
-    """A lattice's face table, packed (layout: the comments on ``I_*``)."""
-
-    fd: np.ndarray  # float64
-    fi: np.ndarray  # int64
-
-
-def _active(x: np.ndarray, rel: np.ndarray, rhs: np.ndarray, tol: float) -> int:
-    """Bit mask of the facets of the origin's cell through point ``x``."""
-    s = rhs - rel @ x
-    return int(sum(1 << r for r in np.flatnonzero(np.abs(s) <= tol * rhs)))
-
-
-def face_table(lattice: Lattice) -> FaceTable:
-    """The face table of a 3D lattice (a planar prism's too) from its Voronoi cell, packed
-    into one float64 and one int64 array (layout: the comments on ``I_*``)."""
-    g = np.asarray(lattice.generator, float)
-    cell = lattice.voronoi
-    rel = np.asarray(cell.relevant, float)
-    rhs = 0.5 * np.einsum("ij,ij->i", rel, rel)
-    ginv = np.linalg.inv(g)
-    verts = np.asarray(cell.vertices, float)
-    e0, e1 = (np.asarray(e, float) for e in cell.edges)
-    # Representative points: vertices, edge midpoints, facet centroids.
-    pts = list(verts) + list(0.5 * (e0 + e1))
-    vmask = [_active(v, rel, rhs, 1e-7) for v in verts]
-    for r in range(len(rel)):
-        on = [v for v, m in zip(verts, vmask, strict=True) if m >> r & 1]
-        pts.append(np.mean(on, axis=0))
-    # Candidate cells around a boundary point: every lattice point within twice the
-    # covering radius (the cells touching the origin's, and more).
-    span = int(np.ceil(2 * cell.covering_radius * np.abs(ginv).sum(axis=1).max())) + 1
-    cand = np.array(list(itertools.product(range(-span, span + 1), repeat=3)), np.int64)
-    cen = cand @ g.T
-    cand = cand[np.linalg.norm(cen, axis=1) <= 2 * cell.covering_radius * (1 + 1e-9)]
-    cen = cand @ g.T
-    faces: dict[int, list] = {}
-    for x in pts:
-        m = _active(x, rel, rhs, 1e-7)
-        if m == 0 or m in faces:
-            continue
-        d = np.linalg.norm(x - cen, axis=1)
-        near = np.flatnonzero(np.abs(d - np.linalg.norm(x)) <= 1e-7 * cell.covering_radius)
-        faces[m] = [(cand[k], _active(x - cen[k], rel, rhs, 1e-7)) for k in near]
-    sm = max(len(s) for s in faces.values())
-    nf = len(faces)
-    fmask = np.full(1 << len(rel), -1, np.int64)
-    star_n = np.zeros(nf, np.int64)
-    star_off = np.zeros((nf, sm, 3), np.int64)
-    star_mask = np.zeros((nf, sm), np.int64)
-    for f, (m, star) in enumerate(faces.items()):
-        fmask[m] = f
-        star_n[f] = len(star)
-        for j, (o, bm) in enumerate(star):
-            star_off[f, j] = o
-            star_mask[f, j] = bm
-    ridx = np.rint(rel @ ginv.T).astype(np.int64)
-    ext = np.abs(verts @ ginv.T).max(axis=0)
-    reach = np.ceil(ext - 1e-9).astype(np.int64)
-    nrel = len(rel)
-    if not 2 <= nrel <= 2 * _SLOTS - 2:
-        raise ValueError(f"a 3D Voronoi cell has 6 to 14 facets, got {nrel}")
-    fd = np.concatenate([rel.ravel(), rhs, (rel @ g).ravel(), (rel @ rel.T).ravel()])
-    head = np.zeros(I_RIDX, np.int64)
-    head[I_R], head[I_NF], head[I_SM] = nrel, nf, sm
-    head[I_REACH:I_REACH + 3] = reach
-    o = I_RIDX + 3 * nrel
-    head[I_FMASK] = o
-    head[I_STARN] = o = o + len(fmask)
-    head[I_STAROFF] = o = o + nf
-    head[I_STARMASK] = o + 3 * nf * sm
-    fi = np.concatenate([head, ridx.ravel(), fmask, star_n, star_off.ravel(), star_mask.ravel()])
-    return FaceTable(np.ascontiguousarray(fd, float), np.ascontiguousarray(fi, np.int64))
 
 
 def face_scratch(sm: int, record: int = 0) -> tuple[np.ndarray, np.ndarray]:
@@ -154,63 +93,6 @@ def recorded(si, sm, n):  # pragma: no cover - compiled
     return si[o:o + 3 * n].reshape(-1, 3)
 
 
-_END, _BLOCKED, _TIE, _STEPPED = 0, 1, 2, 3  # how _run stops
-
-
-@njit_cached(_nrt=False)
-def _run(grid, sf, si, idx, lookups, gap, dense):  # pragma: no cover - compiled
-    """The walk's fast steps, from the exit times in ``sf``: while one facet alone is at the
-    exit point, step through it and (``dense``) test the cell's bit at flat index ``idx``.
-    Stops at the segment's end (``_END``), a blocked cell (``_BLOCKED``), a tie
-    (``_TIE``) or, not dense, after one step (``_STEPPED``: the caller looks the cell up).
-    Returns ``(code, idx, lookups, m)``, ``m`` the next exit time; the exit times back in
-    ``sf``. A function of its own, with few arguments and little state, so that the eight
-    exit times stay in registers (in the walk's body the compiler spilled the step's state
-    around them)."""
-    # Eight locals: at most half the facets face forward, and a 3D Voronoi cell has at
-    # most 14. Branch-free minima: which facet comes next is not predictable (a
-    # mispredicted branch per facet doubled the step's time).
-    t0, t1, t2, t3 = sf[S_T], sf[S_T + 1], sf[S_T + 2], sf[S_T + 3]
-    t4, t5, t6, t7 = sf[S_T + 4], sf[S_T + 5], sf[S_T + 6], sf[S_T + 7]
-    code = _END
-    while True:
-        m = min(min(min(t0, t1), min(t2, t3)), min(min(t4, t5), min(t6, t7)))
-        if m >= 1.0:
-            break
-        lim = m + gap
-        # bit k: slot k's exit is at the minimum (up to the tie margin)
-        at = (np.int64(t0 <= lim) | (np.int64(t1 <= lim) << 1) | (np.int64(t2 <= lim) << 2)
-              | (np.int64(t3 <= lim) << 3) | (np.int64(t4 <= lim) << 4)
-              | (np.int64(t5 <= lim) << 5) | (np.int64(t6 <= lim) << 6)
-              | (np.int64(t7 <= lim) << 7))
-        if at & (at - 1) != 0:
-            code = _TIE
-            break
-        # One facet at the exit point: step through it (unsigned indices: no
-        # negative-index fix-up on each load).
-        st = _TZ[at]
-        idx += si[np.uint64(S_STEP + st)]
-        a = np.uint64(S_INC + _SLOTS * st)
-        t0 += sf[a]
-        t1 += sf[a + np.uint64(1)]
-        t2 += sf[a + np.uint64(2)]
-        t3 += sf[a + np.uint64(3)]
-        t4 += sf[a + np.uint64(4)]
-        t5 += sf[a + np.uint64(5)]
-        t6 += sf[a + np.uint64(6)]
-        t7 += sf[a + np.uint64(7)]
-        lookups += 1
-        if not dense:
-            code = _STEPPED
-            break
-        if (grid[np.uint64(idx) >> np.uint64(3)] >> (idx & 7)) & 1 == 0:
-            code = _BLOCKED
-            break
-    sf[S_T], sf[S_T + 1], sf[S_T + 2], sf[S_T + 3] = t0, t1, t2, t3
-    sf[S_T + 4], sf[S_T + 5], sf[S_T + 6], sf[S_T + 7] = t4, t5, t6, t7
-    return code, idx, lookups, m
-
-
 @njit_cached(_nrt=False)
 def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover - compiled
     """Line of sight between the centres of cells p and q: every cell whose closed Voronoi
@@ -223,7 +105,6 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
     sm = fi[I_SM]
     o_rhs = 3 * nrel
     o_wv = 4 * nrel
-    o_vv = 7 * nrel
     o_cells = fi[I_STAROFF]
     o_masks = fi[I_STARMASK]
     o_rec = S_CUR + 3 * max(sm, 1)
@@ -250,36 +131,57 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
         b0, b1, b2, d1, d2 = lo[0], lo[1], lo[2], dims[1], dims[2]
     s1 = d2
     s0 = d1 * d2
-    nfw = 0
+    # One slot per pair of opposite facets (v, -v): the one facing forward, unless the
+    # segment is parallel to both (exit time never). No branch on the direction (which
+    # of a pair faces forward is unpredictable), and the table of a step's changes is
+    # a product of whole rows: inc[j, k] = v_j . v_k / (d . v_k) = s_j (w_j . w_k) s_k / |y_k|
+    # for v_j = s_j w_j (w_j the pair's first facet, y_k = d . w_k, s = sign y).
+    npair = nrel // 2
+    o_pair = fi[I_PAIR]
+    o_gp = 7 * nrel + nrel * nrel
+    nfw = npair
     fwm = np.int64(0)
     parm = np.int64(0)
     gap = 0.0
     par2 = _PAR * _PAR * dn2
-    for r in range(nrel):
-        y = x0 * fd[3 * r] + x1 * fd[3 * r + 1] + x2 * fd[3 * r + 2]
-        h = fd[o_rhs + r]
-        sf[S_DQ + r] = y
-        if y * y <= par2 * 2.0 * h:
-            parm |= np.int64(1) << r
-        elif y > 0.0:
-            si[S_FW + nfw] = r
-            fwm |= np.int64(1) << r
-            iy = 1.0 / y
-            sf[S_IDQ + nfw] = iy
-            sf[S_T + nfw] = h * iy  # exact exit times (no tolerance): ties to rounding
-            gap = max(gap, _GAP * h * iy)
+    for j in range(SLOTS):
+        t = _NEVER
+        iy = 0.0
+        sg = 0.0
+        rs = 0
+        if j < npair:
+            r = fi[o_pair + 2 * j]
+            r2 = fi[o_pair + 2 * j + 1]
+            y = x0 * fd[3 * r] + x1 * fd[3 * r + 1] + x2 * fd[3 * r + 2]
+            h = fd[o_rhs + r]
+            sf[S_DQ + r] = y
+            sf[S_DQ + r2] = -y
+            par = y * y <= par2 * 2.0 * h
+            pos = y > 0.0
+            rs = r if pos else r2
+            sg = 1.0 if pos else -1.0
             a = I_RIDX + 3 * r
-            si[S_STEP + nfw] = fi[a] * s0 + fi[a + 1] * s1 + fi[a + 2]
-            nfw += 1
-    for i in range(nfw):
-        a = o_vv + nrel * si[S_FW + i]
-        b = S_INC + _SLOTS * i
-        for k in range(nfw):
-            sf[b + k] = fd[a + si[S_FW + k]] * sf[S_IDQ + k]
-    # Empty slots: never the next exit. Their steps keep what an earlier walk left (finite
-    # numbers, zero at first), which moves 1e300 by nothing.
-    for k in range(nfw, _SLOTS):
-        sf[S_T + k] = _NEVER
+            st = fi[a] * s0 + fi[a + 1] * s1 + fi[a + 2]
+            si[S_STEP + j] = st if pos else -st
+            if par:
+                parm |= (np.int64(1) << r) | (np.int64(1) << r2)
+                sg = 0.0
+            else:
+                fwm |= np.int64(1) << rs
+                iy = 1.0 / abs(y)
+                t = h * iy  # exact exit times (no tolerance): ties to rounding
+                gap = max(gap, _GAP * t)
+        si[S_FW + j] = rs
+        sf[S_T + j] = t
+        sf[S_IDQ + j] = iy
+        sf[S_SG + j] = sg
+        sf[S_SY + j] = sg * iy
+    # Rows and columns of the pairs only: the other slots' exit times stay 1e300, which
+    # the finite numbers an earlier walk left there (zero at first) move by nothing.
+    for j in range(npair):
+        sg = sf[S_SG + j]
+        for k in range(npair):
+            sf[S_INC + SLOTS * j + k] = sg * fd[o_gp + SLOTS * j + k] * sf[S_SY + k]
     idx = ((p0 - b0) * d1 + (p1 - b1)) * d2 + (p2 - b2)
     if nrec > 0:
         si[o_rec] = p0
@@ -288,18 +190,82 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
     lookups = 1
     if not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi, p0, p1, p2):
         return False, lookups, True
-    if nfw == 0:  # p == q
+    if fwm == 0:  # p == q
         return True, lookups, True
+    # The reflection through the segment's midpoint, c -> p + q - c, maps the lattice, its
+    # Voronoi cells and the segment onto themselves: the cells the walk steps into from p
+    # mirror those a walk from q would step into. So each fast step from p looks up its
+    # cell and that cell's mirror image (flat index ``mir - idx``), while the two have not
+    # met; then the walk from p goes on to the last mirrored cell (``stop``).
+    stop = ((q0 - b0) * d1 + (q1 - b1)) * d2 + (q2 - b2)
+    mir = idx + stop
+    if nrec > 1:
+        si[o_rec + 3] = q0
+        si[o_rec + 4] = q1
+        si[o_rec + 5] = q2
+    lookups += 1
+    if not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi, q0, q1, q2):
+        return False, lookups, True
+    lim = 1.0 - 4.0 * gap
+    mirroring = True  # stepping from both ends (``stop``: the last mirror image)
     ncur = 0  # cells the segment runs along besides the chain cell (si[S_CUR:][:3 ncur])
     pm = np.int64(0)  # the chain cell's facets the segment runs in
     while True:
-        if pm == 0:
-            code, idx, lookups, m = _run(grid, sf, si, idx, lookups, gap, dense)
-            if code == _END:
+        if mirroring:
+            if dense:
+                code, idx, stop, lookups = run_mirror(grid, sf, si, idx, mir, lookups, gap,
+                                                      lim)
+                if code == BLOCKED:
+                    return False, lookups, True
+            else:
+                code = MET
+                m = _NEVER
+                for k in range(nfw):
+                    m = min(m, sf[S_T + k])
+                while m + m < lim:
+                    code, idx, lookups, _ = run_one(grid, sf, si, idx, lookups, gap, False,
+                                                    stop)
+                    if code != STEPPED:  # a tie
+                        break
+                    code = MET
+                    mn = _NEVER
+                    for k in range(nfw):
+                        mn = min(mn, sf[S_T + k])
+                    for half in range(2):  # the cell stepped into, then its mirror image
+                        if half == 1:
+                            if mn + m >= lim:
+                                break  # its mirror would meet the walk from p: not yet
+                            lookups += 1
+                            stop = mir - idx
+                        c = idx if half == 0 else stop
+                        c2 = c % d2 + b2
+                        c1 = (c // d2) % d1 + b1
+                        c0 = c // s0 + b0
+                        if lookups <= nrec:
+                            si[o_rec + 3 * lookups - 3] = c0
+                            si[o_rec + 3 * lookups - 2] = c1
+                            si[o_rec + 3 * lookups - 1] = c2
+                        if not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi,
+                                         c0, c1, c2):
+                            return False, lookups, True
+                    if stop != mir - idx:
+                        break
+                    m = mn
+            if code != TIE:  # met: from here on from p only
+                mirroring = False
+                if idx == stop:
+                    break
+                continue
+            m = _NEVER
+            for k in range(nfw):
+                m = min(m, sf[S_T + k])
+        elif pm == 0:
+            code, idx, lookups, m = run_one(grid, sf, si, idx, lookups, gap, dense, stop)
+            if code == END or code == MET:
                 break
-            if code == _BLOCKED:
+            if code == BLOCKED:
                 return False, lookups, True
-            if code == _STEPPED:  # the cell stepped into, looked up here (not dense)
+            if code == STEPPED:  # the cell stepped into, looked up here (not dense)
                 c2 = idx % d2 + b2
                 c1 = (idx // d2) % d1 + b1
                 c0 = idx // s0 + b0
@@ -323,7 +289,7 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
         am = pm
         for k in range(nfw):
             r = si[S_FW + k]
-            if sf[S_DQ + r] * (sf[S_T + k] - m) <= _ON * fd[o_rhs + r]:
+            if fwm >> r & 1 and sf[S_DQ + r] * (sf[S_T + k] - m) <= _ON * fd[o_rhs + r]:
                 am |= np.int64(1) << r
         f = fi[fi[I_FMASK] + am]
         if f < 0:
@@ -343,6 +309,8 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
                     if si[b] == c0 and si[b + 1] == c1 and si[b + 2] == c2:
                         seen = True
                         break
+                # the far end's cell: looked up by its walk
+                seen = seen or ((p0 + c0 - b0) * d1 + (p1 + c1 - b1)) * d2 + p2 + c2 - b2 == stop
                 if not seen:
                     if lookups < nrec:
                         si[o_rec + 3 * lookups] = p0 + c0
@@ -376,13 +344,41 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
                     ncur += 1
         pm = fi[o_masks + sm * f + nxt] & parm
         a = o_cells + 3 * (sm * f + nxt)
+        o0, o1, o2 = u0, u1, u2
         u0 += fi[a]
         u1 += fi[a + 1]
         u2 += fi[a + 2]
         idx = ((p0 + u0 - b0) * d1 + (p1 + u1 - b1)) * d2 + (p2 + u2 - b2)
+        if idx == stop:
+            break
         for k in range(nfw):
             r = si[S_FW + k]
             w = o_wv + 3 * r
-            sf[S_T + k] = ((fd[o_rhs + r] + fd[w] * u0 + fd[w + 1] * u1 + fd[w + 2] * u2)
-                           * sf[S_IDQ + k])
+            if fwm >> r & 1:
+                sf[S_T + k] = ((fd[o_rhs + r] + fd[w] * u0 + fd[w + 1] * u1 + fd[w + 2] * u2)
+                               * sf[S_IDQ + k])
+        if mirroring:
+            # The tie's mirror image: its cells' images, when the next chain cell's exit
+            # keeps the two walks apart (the segment in its interior: no facet run along).
+            mn = _NEVER
+            for k in range(nfw):
+                mn = min(mn, sf[S_T + k])
+            if not inner or mn + m >= lim:
+                mirroring = False
+                continue
+            for j in range(ns):
+                a = o_cells + 3 * (sm * f + j)
+                if fi[a] != 0 or fi[a + 1] != 0 or fi[a + 2] != 0:
+                    c0 = q0 - o0 - fi[a]
+                    c1 = q1 - o1 - fi[a + 1]
+                    c2 = q2 - o2 - fi[a + 2]
+                    if lookups < nrec:
+                        si[o_rec + 3 * lookups] = c0
+                        si[o_rec + 3 * lookups + 1] = c1
+                        si[o_rec + 3 * lookups + 2] = c2
+                    lookups += 1
+                    if not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi, c0, c1,
+                                     c2):
+                        return False, lookups, True
+            stop = mir - idx
     return True, lookups, True
