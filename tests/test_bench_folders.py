@@ -269,3 +269,20 @@ def test_a_task_lost_with_its_dask_scheduler_is_one_line(monkeypatch):
     with pytest.raises(PlannerError, match="a task was lost .*--resume"):
         runner._run_dask([{"queries": []}], "tcp://127.0.0.1:1", written.append)
     assert written == []
+
+
+def test_a_group_that_keeps_no_query_is_reported_and_the_rest_runs(tmp_path, capsys):
+    # a 3 m robot fits nowhere in the office: that group keeps no query, the 0.1 m one runs
+    s = tmp_path / "wide.toml"
+    s.write_text(SUITE.replace("radii = [0.1]", "radii = [0.1, 3.0]"))
+    out = tmp_path / "wide"
+    rc = main(["bench", str(s), "--out", str(out), "--no-progress"])
+    err = capsys.readouterr().err
+    assert rc == 0, err
+    warning = [ln for ln in err.splitlines() if ln.startswith("WARNING: no query kept")]
+    assert len(warning) == 1 and "radius 3" in warning[0] and "left out" in warning[0]
+    rows = [json.loads(ln) for ln in (out / "results.jsonl").read_text().splitlines()]
+    assert rows and {r["radius"] for r in rows} == {0.1}
+    assert "0/2" in (out / "report.md").read_text()  # the group's line, with its reasons
+    page = (out / "results_section.md").read_text()
+    assert "Groups that kept no query (1 of 2" in page and "radius 3" in page

@@ -23,7 +23,7 @@ from planner.analysis.tables import format_table
 from planner.bench.paired import common_queries, compare_to_cubic, configs, cost_value, query_key
 
 __all__ = ["delivered_table", "fair_queries_table", "per_map_table", "decision_table",
-           "GOALS"]
+           "empty_group_lines", "GOALS"]
 
 GOALS = (("fewest checks", "cell_checks"), ("fastest plan", "cpu_seconds"),
          ("shortest path", "length_ratio"))
@@ -202,3 +202,14 @@ def decision_table(recs: list[dict]) -> tuple[str, list[str]]:
                        f"{1e3 * nxt[key]:.3g} ms" if nxt else "") + ".")
         lines.append(dict(zip(head, cells, strict=True)))
     return format_table(lines, head, markdown=True), plain
+
+
+def empty_group_lines(record: dict) -> list[str]:
+    """A sentence naming the query groups that kept no query (their candidates count in the
+    tables above; they have no runs), or nothing."""
+    none = [g for g, rec in record.items() if not rec.get("kept")]
+    if not none:
+        return []
+    return [f"Groups that kept no query ({len(none)} of {len(record)}; no start and goal "
+            "pair passed the sampler, see each group's reasons in `report.md`): "
+            + "; ".join(none) + ".", ""]

@@ -16,7 +16,13 @@ from planner.analysis.stats import STATISTICS_NOTE
 from planner.analysis.style import LATTICE_COLORS, OTHER_COLOR
 from planner.analysis.tables import format_table
 from planner.bench import paired
-from planner.bench.answer import decision_table, delivered_table, fair_queries_table, per_map_table
+from planner.bench.answer import (
+    decision_table,
+    delivered_table,
+    empty_group_lines,
+    fair_queries_table,
+    per_map_table,
+)
 from planner.bench.figures import plot_tradeoffs
 from planner.bench.orientation import rotation_spread
 from planner.bench.paired import wilson_interval
@@ -403,6 +409,7 @@ def results_section(suite, rows: list[dict], record: dict, figures: list[Path], 
             lines += [f"![{f.stem}]({fig_prefix}{f.name})", ""]
     lines += ["Queries dropped while sampling (all groups):", "",
               *_query_lines({"all groups": _total_record(record)}), "",
+              *empty_group_lines(record),
               "### Which lattice for which goal", "", parts["maps"], parts["decision"], ""]
     return "\n".join(lines)
 
