@@ -14,7 +14,7 @@ from planner.errors import MapError
 
 BITS = {2: 31, 3: 21}
 __all__ = ["BITS", "build_key_set", "check_range", "in_key_set", "index_limit", "mix64", "pack",
-           "pack3", "unique_keys", "unpack", "unpack3"]
+           "pack3", "step3", "unique_keys", "unpack", "unpack3"]
 
 _EMPTY = -1  # empty slot of a key set
 
@@ -68,6 +68,13 @@ _M3 = (1 << 21) - 1
 def pack3(i, j, k):  # pragma: no cover - compiled
     """Key of one 3D index (no range check: callers stay inside the map's bounds)."""
     return (((i + _L3) << 42) | ((j + _L3) << 21)) | (k + _L3)
+
+
+@njit_cached(_nrt=False)
+def step3(d0, d1, d2):  # pragma: no cover - compiled
+    """The key offset of an index step d: ``pack3(u + d) == pack3(u) + step3(d)`` while
+    both indices stay in range (each field carries its own sign into the next)."""
+    return (d0 << 42) + (d1 << 21) + d2
 
 
 @njit_cached(_nrt=False)

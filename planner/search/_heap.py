@@ -42,7 +42,7 @@ from planner._numba import njit_cached
 
 _U0, _U1, _U2, _U4 = np.uint64(0), np.uint64(1), np.uint64(2), np.uint64(4)
 
-__all__ = ["Heap", "new_heap", "push", "pop", "decrease_key", "change_key", "remove",
+__all__ = ["Heap", "fkey", "new_heap", "push", "pop", "decrease_key", "change_key", "remove",
            "sift_up", "sift_down", "SIDE", "side_index", "pq_push", "pq_pop", "pq_decrease",
            "pq_flush"]
 
@@ -59,6 +59,14 @@ def new_heap(cap: int) -> Heap:
     """Empty heap storage for ``cap`` entries (C-contiguous, writable)."""
     return Heap(np.empty(cap, np.int64), np.empty(cap, np.float64), np.empty(cap, np.float64))
 
+
+
+@njit_cached(_nrt=False)
+def fkey(x, fq, fq_inv):  # pragma: no cover - compiled
+    """``x`` (an f value, m) on the A* loops' f grid of step ``fq`` (1e-9 of the shortest
+    move; ``fq_inv`` its inverse): equal-cost paths tie exactly (float noise would otherwise
+    decide), so the larger-g tie-break can dive; costs stay exact."""
+    return np.floor(x * fq_inv + 0.5) * fq
 
 @njit_cached(inline="always")
 def _put(h, pos, i, x, xf, xg):  # pragma: no cover - compiled

@@ -35,9 +35,9 @@ PB_SHIFT = 2
 PB_MASK = (1 << PB_SHIFT) - 1
 PAGE = 1 << (3 * PB_SHIFT)
 
-#: bytes per node of the node table and heap (9 eight-byte fields) plus the slot map's share
+#: bytes per node of the node table and heap (8 eight-byte fields) plus the slot map's share
 #: (a page of int32 per block, pages about 1/4 full) and the x2 of array doubling.
-BYTES_PER_NODE = 2 * (9 * 8 + 16)
+BYTES_PER_NODE = 2 * (8 * 8 + 16)
 
 
 class NodeTable(NamedTuple):
@@ -45,7 +45,6 @@ class NodeTable(NamedTuple):
 
     key: np.ndarray  # (cap,) int64 packed cell
     g: np.ndarray  # (cap,) float64 cost from the start (m)
-    f: np.ndarray  # (cap,) float64 g + h, rounded (see the kernel)
     h: np.ndarray  # (cap,) float64 heuristic to the goal (m)
     par: np.ndarray  # (cap,) int64 parent slot (the start is its own parent)
     pos: np.ndarray  # (cap,) int64 heap position, -1 closed, -2 generated but not queued
@@ -67,7 +66,7 @@ class SlotMap(NamedTuple):
 def new_nodes(cap: int) -> NodeTable:
     f8, i8 = np.float64, np.int64
     return NodeTable(np.empty(cap, i8), np.empty(cap, f8), np.empty(cap, f8),
-                     np.empty(cap, f8), np.empty(cap, i8), np.empty(cap, i8))
+                     np.empty(cap, i8), np.empty(cap, i8))
 
 
 _NO_DENSE = np.zeros(1, np.int32)

@@ -21,7 +21,7 @@ from typing import NamedTuple
 import numpy as np
 
 from planner._numba import njit_cached
-from planner.occupancy.keys import pack3, unpack3
+from planner.occupancy.keys import pack3, step3, unpack3
 from planner.search import _heap
 from planner.search.heuristic import H_GAUGE, octile
 from planner.search.result import RUN_BUDGET, RUN_EXHAUSTED, RUN_FOUND, RUN_GROW, RUN_LIMIT
@@ -140,7 +140,7 @@ def dense_tables(ms, dims, used):  # pragma: no cover - compiled
     roff, rshift, rmask, ubit, need2, all_u, rows = stencil_rows(ust, ms.need, d1, d2)
     mkey = np.empty(nm, np.int64)
     for m in range(nm):
-        mkey[m] = (moves[m, 0] << 42) + (moves[m, 1] << 21) + moves[m, 2]
+        mkey[m] = step3(moves[m, 0], moves[m, 1], moves[m, 2])
     # The gauge's facets that can hold a new node's maximum: a move changes each facet's
     # value by at most hmd (see dense_astar).
     gauge = ms.hkind == H_GAUGE and ms.octile <= 0.0
@@ -191,7 +191,7 @@ def dense_astar(grid, lo, dims, ms, nodes, heap, dsl, st, max_nodes, max_exp, go
     moves, mcost, ust, hmat = ms.moves, ms.cost, ms.union, ms.hmat
     oct_s = ms.octile
     gauge = ms.hkind == H_GAUGE and oct_s <= 0.0
-    nkey, ng, nf, nh, npar, npos = nodes
+    nkey, ng, nh, npar, npos = nodes
     nfac = hmat.shape[0]
     nu = ust.shape[0]
     nm = moves.shape[0]
@@ -289,8 +289,7 @@ def dense_astar(grid, lo, dims, ms, nodes, heap, dsl, st, max_nodes, max_exp, go
                 if gt >= ng[tu]:
                     continue  # no better
                 ng[tu] = gt
-                f = np.floor((gt + nh[tu]) * fq_inv + 0.5) * fq
-                nf[tu] = f
+                f = _heap.fkey(gt + nh[tu], fq, fq_inv)
                 npar[tu] = s
                 hn, sn = _heap.pq_decrease(heap, npos, hn, sn, fcur, np.int64(v) - 1, f, gt)
                 continue
@@ -326,10 +325,7 @@ def dense_astar(grid, lo, dims, ms, nodes, heap, dsl, st, max_nodes, max_exp, go
                         hv = x
             nh[tn] = hv
             ng[tn] = gt
-            # f on a 1e-9-cell grid: equal-cost paths tie exactly (float noise would
-            # otherwise decide), so the larger-g tie-break can dive; costs stay exact.
-            f = np.floor((gt + hv) * fq_inv + 0.5) * fq
-            nf[tn] = f
+            f = _heap.fkey(gt + hv, fq, fq_inv)
             npar[tn] = s
             hn, sn = _heap.pq_push(heap, npos, hn, sn, fcur, t, f, gt)
     if status != RUN_FOUND:  # the arrays may be copied or the search resumed

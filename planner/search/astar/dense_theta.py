@@ -1,15 +1,17 @@
-"""The Lazy Theta* loop on a dense occupancy grid and the cubic lattice (numba): the A*
-kernel's (:mod:`planner.search.astar.kernel`) any-angle path for its commonest case,
-written for that case alone, as :mod:`planner.search.astar.dense` is for lattice A*.
+"""The Lazy Theta* loop on a dense occupancy grid (numba), every lattice: the A* kernel's
+(:mod:`planner.search.astar.kernel`) any-angle path for its commonest case, written for
+that case alone, as :mod:`planner.search.astar.dense` is for lattice A*.
 
-It runs when the world is a dense bit grid, the cell -> slot map is dense too, the move
-set's union stencil fits a bit mask and the lattice is cubic (its sight lines are the
-integer walk :func:`planner.search._los.dense_walk`, given the grid's arrays: the box's
-longest side at most ``DDA_MAX``). Per expansion it reads the union stencil once into a
+It runs when the world is a dense bit grid, the cell -> slot map is dense too and the move
+set's union stencil fits a bit mask. Per expansion it reads the union stencil once into a
 mask of free cells, verifies the assumed sight line to the parent (falling back to the
 best closed lattice neighbour, SetVertex), and per allowed move finds the target's node
-in one load of the dense slot array. Same expansions, costs, paths and
-lookups as the general loop, which stays its reference (``tests/test_anyangle.py``).
+in one load of the dense slot array. The sight line is the lattice's walk, chosen once per
+call: on the cubic lattice the integer walk on the grid's arrays
+(:func:`planner.search._los.dense_walk`, when the box's longest side is at most
+``DDA_MAX``), on every other lattice the face walk (:func:`planner.search._los.sight`), as
+in the general loop. Same expansions, costs, paths and lookups as the general loop, which
+stays its reference (``tests/test_anyangle.py``).
 """
 
 from __future__ import annotations
@@ -17,9 +19,9 @@ from __future__ import annotations
 import numpy as np
 
 from planner._numba import njit_cached
-from planner.occupancy.keys import pack3, unpack3
+from planner.occupancy.keys import pack3, step3, unpack3
 from planner.search import _heap
-from planner.search._los import dense_walk
+from planner.search._los import DDA_MAX, dense_walk, is_cubic, sight
 from planner.search.astar.dense import grid_offsets
 from planner.search.result import RUN_BUDGET, RUN_EXHAUSTED, RUN_FOUND, RUN_GROW, RUN_LIMIT
 
@@ -27,28 +29,29 @@ __all__ = ["dense_lazy_theta"]
 
 
 @njit_cached
-def dense_lazy_theta(occ, ms, nodes, heap, dsl, st, max_nodes, max_exp, goal, cell, hw):
+def dense_lazy_theta(occ, walk, ms, nodes, heap, dsl, sc, st, max_nodes, max_exp, goal, hw):
     # pragma: no cover - compiled
     """Run Lazy Theta* from the kernel's state ``st`` until it ends or needs room.
 
     Parameters
     ----------
     occ : Occupancy
-        Dense (mode 0), no side of its box longer than ``planner.search._los.DDA_MAX``.
+        Dense (mode 0).
+    walk : Walk
+        The lattice's sight walk data (its generator ``g``, the face walk's table).
     ms : MoveSet
         With ``len(ms.union) <= 63``.
     nodes : NodeTable
     heap : planner.search._heap.Heap
     dsl : (prod(occ.dims),) int32
         Dense cell -> node slot + 1 (0: none) over the grid's box.
+    sc : SightScratch
+        The face walk's scratch (non-cubic lattices).
     st : ``ASTAR_STATE`` record
         The search's counters; the start node is already in place.
     max_nodes, max_exp : int
         Limits (<= 0: none).
     goal : (3,) int64
-    cell : float
-        The cubic generator's cell edge (m, :func:`planner.search._los.cubic_edge`): a
-        move ``e`` between cells is ``cell * |e|`` long, turned generator or not.
     hw : float
         The straight-line heuristic's factor.
 
@@ -62,28 +65,36 @@ def dense_lazy_theta(occ, ms, nodes, heap, dsl, st, max_nodes, max_exp, goal, ce
     uoff, moff, reach = grid_offsets(ms.union, moves, occ.dims[1], occ.dims[2])
     mkey = np.empty(nm, np.int64)
     for m in range(nm):
-        mkey[m] = (moves[m, 0] << 42) + (moves[m, 1] << 21) + moves[m, 2]
-    return _loop(occ, ms, nodes, heap, dsl, st, max_nodes, max_exp, goal, cell, hw, uoff, moff,
-                 reach, mkey, 1e-9 * ms.cost.min())
+        mkey[m] = step3(moves[m, 0], moves[m, 1], moves[m, 2])
+    # the integer walk on the grid's arrays: sight lines between free cells of a dense grid
+    # stay inside its box
+    cubic = is_cubic(walk.g) and occ.dims.max() <= DDA_MAX
+    return _loop(occ, walk, ms, nodes, heap, dsl, sc, st, max_nodes, max_exp, goal, hw, uoff,
+                 moff, reach, mkey, 1e-9 * ms.cost.min(), cubic)
 
 
 # Without the runtime's reference counting, as the dense A* loop (planner.search.astar.dense):
 # each heap operation here would otherwise incref / decref the heap arrays it binds.
 @njit_cached(_nrt=False)
-def _loop(occ, ms, nodes, heap, dsl, st, max_nodes, max_exp, goal, cell, hw, uoff, moff, reach,
-          mkey, fq):  # pragma: no cover - compiled
+def _loop(occ, walk, ms, nodes, heap, dsl, sc, st, max_nodes, max_exp, goal, hw, uoff, moff,
+          reach, mkey, fq, cubic):  # pragma: no cover - compiled
     """:func:`dense_lazy_theta`'s loop, given its tables: ``uoff`` (U,) and ``moff`` (M,) the
     stencil's and the moves' grid offsets and ``reach`` their margin (cells)
     (:func:`planner.search.astar.dense.grid_offsets`), ``mkey`` (M,) each move as an offset
-    of the packed key, ``fq`` the f grid (1e-9 of the shortest move, m)."""
+    of the packed key, ``fq`` the f grid (1e-9 of the shortest move, m), ``cubic`` the
+    sight line by the integer walk on the grid's arrays (else :func:`sight`)."""
     grid, lo, dims = occ.grid, occ.lo, occ.dims
     lo0, lo1, lo2 = lo[0], lo[1], lo[2]
     d0, d1, d2 = dims[0], dims[1], dims[2]
     moves, mcost, ust, need = ms.moves, ms.cost, ms.union, ms.need
-    nkey, ng, nf, nh, npar, npos = nodes
+    nkey, ng, nh, npar, npos = nodes
     nu = ust.shape[0]
     nm = moves.shape[0]
     cap = nkey.shape[0]
+    g = walk.g
+    g00, g01, g02 = g[0, 0], g[0, 1], g[0, 2]
+    g10, g11, g12 = g[1, 0], g[1, 1], g[1, 2]
+    g20, g21, g22 = g[2, 0], g[2, 1], g[2, 2]
     gl0, gl1, gl2 = goal[0], goal[1], goal[2]
     gk = pack3(gl0, gl1, gl2)
     all_u = (np.int64(1) << nu) - 1
@@ -129,7 +140,10 @@ def _loop(occ, ms, nodes, heap, dsl, st, max_nodes, max_exp, goal, cell, hw, uof
             # Verify the assumed sight line, walked from s (a blocked cell is likelier
             # near s: its parent saw s's generator).
             p0, p1, p2 = unpack3(nkey[ps])
-            ok, c = dense_walk(grid, lo, dims, u0, u1, u2, p0, p1, p2)
+            if cubic:
+                ok, c = dense_walk(grid, lo, dims, u0, u1, u2, p0, p1, p2)
+            else:
+                ok, c = sight(occ, walk, sc, st, u0, u1, u2, p0, p1, p2)
             lookups += c
             if not ok:
                 # SetVertex: the best closed neighbour that an allowed move reaches (one
@@ -175,35 +189,35 @@ def _loop(occ, ms, nodes, heap, dsl, st, max_nodes, max_exp, goal, cell, hw, uof
             v0 = u0 + moves[m, 0]
             v1 = u1 + moves[m, 1]
             v2 = u2 + moves[m, 2]
-            # g through s's parent: the general loop's |G (v - p)| with G = cell * I (its
-            # zero off-diagonal terms add exact zeros), so the same floats; a turned cubic
-            # G gives the same length up to rounding
-            x = cell * (v0 - p0)
-            y = cell * (v1 - p1)
-            z = cell * (v2 - p2)
+            # g through s's parent: |G (v - p)|, the general loop's floats
+            e0 = v0 - p0
+            e1 = v1 - p1
+            e2 = v2 - p2
+            x = g00 * e0 + g01 * e1 + g02 * e2
+            y = g10 * e0 + g11 * e1 + g12 * e2
+            z = g20 * e0 + g21 * e1 + g22 * e2
             gt = gp + np.sqrt(x * x + y * y + z * z)
             if t < 0:
                 t = n
                 n += 1
                 dsl[loc] = t + 1
                 nkey[t] = ks + mkey[m]
-                x = cell * (gl0 - v0)
-                y = cell * (gl1 - v1)
-                z = cell * (gl2 - v2)
+                e0 = gl0 - v0
+                e1 = gl1 - v1
+                e2 = gl2 - v2
+                x = g00 * e0 + g01 * e1 + g02 * e2
+                y = g10 * e0 + g11 * e1 + g12 * e2
+                z = g20 * e0 + g21 * e1 + g22 * e2
                 hv = hw * np.sqrt(x * x + y * y + z * z)
                 nh[t] = hv
                 ng[t] = gt
-                # f on a 1e-9-cell grid: equal-cost paths tie exactly (float noise would
-                # otherwise decide), so the larger-g tie-break can dive; costs stay exact.
-                f = np.floor((gt + hv) * fq_inv + 0.5) * fq
-                nf[t] = f
+                f = _heap.fkey(gt + hv, fq, fq_inv)
                 npar[t] = ps
                 hn = _heap.push(heap, npos, hn, t, f, gt)
                 continue
             if gt < ng[tu]:
                 ng[tu] = gt
-                f = np.floor((gt + nh[tu]) * fq_inv + 0.5) * fq
-                nf[tu] = f
+                f = _heap.fkey(gt + nh[tu], fq, fq_inv)
                 npar[tu] = ps
                 _heap.decrease_key(heap, npos, t, f, gt)
     st.nodes = n

@@ -10,12 +10,9 @@ expanded, falling back to its best closed lattice neighbour (SetVertex). Both us
 Euclidean heuristic and the exact walk of :mod:`planner.search._los`.
 
 Lattice A* / Dijkstra on a dense grid runs the loop of :mod:`planner.search.astar.dense`,
-written for that case alone, and Lazy Theta* on a dense cubic grid that of
-:mod:`planner.search.astar.dense_theta`. The general loop here writes out its hot parts
-(the dense lookups, the safe-rule test, the slot lookup, the heuristic of a new node, the
-any-angle g) instead of calling the shared inline helpers (:mod:`planner.search.heuristic`, ...):
-with them the loop compiled to a markedly slower one on cubic-26
-(``benchmarks/search_speed.py``).
+and Lazy Theta* on a dense grid (every lattice) that of :mod:`planner.search.astar.
+dense_theta` (this loop took 1.08-1.2x its time on the same worlds: ``benchmarks/
+search_speed.py --anyangle 20``, cubic-26).
 """
 
 from __future__ import annotations
@@ -28,7 +25,7 @@ from planner._numba import njit_cached
 from planner.occupancy.grid import cell_free, occ_free
 from planner.occupancy.keys import mix64, pack3, unpack3
 from planner.search import _heap
-from planner.search._los import DDA_MAX, cubic_edge, cubic_walk, dense_walk, is_cubic, sight
+from planner.search._los import DDA_MAX, cubic_walk, dense_walk, is_cubic, sight
 from planner.search._nodes import (
     PAGE,
     block_key,
@@ -72,10 +69,9 @@ def search_init(start, goal, ms, g, nodes, heap, slots, st):  # pragma: no cover
     nodes.key[0] = pack3(start[0], start[1], start[2])
     nodes.g[0] = 0.0
     nodes.h[0] = estimate(ms, g, goal[0] - start[0], goal[1] - start[1], goal[2] - start[2])
-    nodes.f[0] = nodes.h[0]
     nodes.par[0] = 0
     st.pages = 0
-    st.queued = _heap.push(heap, nodes.pos, 0, 0, nodes.f[0], 0.0)
+    st.queued = _heap.push(heap, nodes.pos, 0, 0, nodes.h[0], 0.0)
     if slots.dense.shape[0] > 1:
         slots.dense[dense_index(slots, start[0], start[1], start[2])] = 1  # slot 0, + 1
     else:
@@ -144,10 +140,9 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state
         st.status = status
         return status
     if (params.anyangle == LAZY_THETA and occ.mode == 0 and slots.dense.shape[0] > 1
-            and ms.union.shape[0] <= MAX_BITS and is_cubic(walk.g)
-            and occ.dims.max() <= DDA_MAX):
-        status = dense_lazy_theta(occ, ms, nodes, heap, slots.dense, st, params.max_nodes,
-                                  params.max_expansions, goal, cubic_edge(walk.g), params.h_weight)
+            and ms.union.shape[0] <= MAX_BITS):
+        status = dense_lazy_theta(occ, walk, ms, nodes, heap, slots.dense, sc, st,
+                                  params.max_nodes, params.max_expansions, goal, params.h_weight)
         st.status = status
         return status
     # the loop's tables, made here: the loop allocates nothing (see _loop)
@@ -173,7 +168,7 @@ def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, 
     lo0, lo1, lo2 = lo[0], lo[1], lo[2]
     d0, d1, d2 = dims[0], dims[1], dims[2]
     moves, mcost, ust, mptr, midx, hmat, hkind, need, oct_s = ms
-    nkey, ng, nf, nh, npar, npos = nodes
+    nkey, ng, nh, npar, npos = nodes
     pages, btab, bkeys, dsl, _, _ = slots
     dense = dsl.shape[0] > 1 and mode == 0  # the dense slot box is the grid's box
     anyangle, max_nodes, max_exp, hw = params
@@ -196,6 +191,7 @@ def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, 
     nu = ust.shape[0]
     nm = moves.shape[0]
     bits = nu <= MAX_BITS  # one mask test per move instead of its CSR list
+    all_u = (np.int64(1) << nu) - 1 if bits else np.int64(0)
     gk = pack3(goal[0], goal[1], goal[2])
     base = np.int64(0)
     fq_inv = 1.0 / fq
@@ -207,11 +203,13 @@ def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, 
     sn = 0
     fcur = np.nan
     plateau = anyangle == 0
+    lazy = anyangle == LAZY_THETA
     expansions = st.expansions
     lookups = st.lookups
     status = RUN_EXHAUSTED
     while hn + sn > 0:
-        if n + nm > cap or st.pages + nm > pcap or 2 * (st.pages + nm) > bsize:
+        if n + nm > cap or (not dense and (st.pages + nm > pcap
+                                            or 2 * (st.pages + nm) > bsize)):
             status = RUN_GROW
             break
         if max_exp > 0 and expansions >= max_exp:
@@ -223,13 +221,28 @@ def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, 
         npos[s] = -1
         expansions += 1
         u0, u1, u2 = unpack3(nkey[s])
+        blocked = np.int64(0)
         if mode == 0:
-            # Dense bit-grid lookups written out here: numba does not reliably inline the
-            # helper inside this large loop and a call pays reference counting.
             a0, b0, c0 = u0 - lo0, u1 - lo1, u2 - lo2
             base = (a0 * d1 + b0) * d2 + c0
-            if (a0 >= reach and b0 >= reach and c0 >= reach and a0 < d0 - reach
-                    and b0 < d1 - reach and c0 < d2 - reach):
+            inner = (a0 >= reach and b0 >= reach and c0 >= reach and a0 < d0 - reach
+                     and b0 < d1 - reach and c0 < d2 - reach)
+            if bits:  # straight into the mask of free cells
+                free = np.int64(0)
+                if inner:
+                    for j in range(nu):
+                        f = base + uoff[j]
+                        free |= np.int64((grid[np.uint64(f >> 3)] >> (f & 7)) & 1) << j
+                else:
+                    for j in range(nu):
+                        a = a0 + ust[j, 0]
+                        b = b0 + ust[j, 1]
+                        c = c0 + ust[j, 2]
+                        if a >= 0 and b >= 0 and c >= 0 and a < d0 and b < d1 and c < d2:
+                            f = (a * d1 + b) * d2 + c
+                            free |= np.int64((grid[f >> 3] >> (f & 7)) & 1) << j
+                blocked = all_u & ~free
+            elif inner:
                 for j in range(nu):
                     f = base + uoff[j]
                     ufree[j] = (grid[f >> 3] >> (f & 7)) & 1 != 0
@@ -244,16 +257,15 @@ def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, 
         else:
             for j in range(nu):
                 ufree[j] = cell_free(mode, grid, lo, dims, otable, otmask, gg, blo, bhi,
-                                 u0 + ust[j, 0], u1 + ust[j, 1], u2 + ust[j, 2])
-        blocked = np.int64(0)
-        if bits:
-            for j in range(nu):
-                if not ufree[j]:
-                    blocked |= np.int64(1) << j
+                                     u0 + ust[j, 0], u1 + ust[j, 1], u2 + ust[j, 2])
+            if bits:
+                for j in range(nu):
+                    if not ufree[j]:
+                        blocked |= np.int64(1) << j
         lookups += nu
         # Verify the assumed sight line, walked from s: a blocked cell is likelier near s
         # (its parent saw s's generator), so the walk stops sooner.
-        if anyangle == LAZY_THETA and npar[s] != s:
+        if lazy and npar[s] != s:
             p0, p1, p2 = unpack3(nkey[npar[s]])
             if cubic_dense:
                 ok, c = dense_walk(grid, lo, dims, u0, u1, u2, p0, p1, p2)
@@ -264,9 +276,7 @@ def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, 
             lookups += c
             if not ok:
                 # SetVertex: the best closed neighbour that an allowed move reaches (one
-                # exists: the node that generated s). Written out: a call taking the
-                # structs pays reference counting on every failed sight line, and Lazy
-                # Theta* has many of those.
+                # exists: the node that generated s)
                 best = np.inf
                 bp = np.int64(-1)
                 for m in range(nm):
@@ -314,7 +324,7 @@ def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, 
             elif not move_allowed(ufree, mptr, midx, m):
                 continue
             if dense:
-                loc = base + moff[m]
+                loc = np.uint64(base + moff[m])
                 t = np.int64(dsl[loc]) - 1  # stored as slot + 1, 0 none
             else:
                 bk = block_key(v0, v1, v2)
@@ -329,19 +339,19 @@ def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, 
                         q = new_page(slots, st, bk, p)
                     last_bk = bk
                     last_pg = q
-                loc = last_pg * PAGE + local(v0, v1, v2)
+                loc = np.uint64(last_pg * PAGE + local(v0, v1, v2))
                 t = np.int64(pages[loc])
-            if t != _EMPTY and npos[t] == -1:
-                continue  # closed: a consistent heuristic never improves it
-            if t == _EMPTY:
+            new = t == _EMPTY
+            if new:
                 t = n
                 n += 1
                 if dense:
                     dsl[loc] = t + 1
                 else:
                     pages[loc] = t
-                nkey[t] = pack3(v0, v1, v2)
-                ng[t] = np.inf
+                tu = np.uint64(t)  # unsigned: no negative-index fix-up on each access
+                nkey[tu] = pack3(v0, v1, v2)
+                ng[tu] = np.inf
                 e0 = gl0 - v0
                 e1 = gl1 - v1
                 e2 = gl2 - v2
@@ -358,15 +368,20 @@ def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, 
                     y = g10 * e0 + g11 * e1 + g12 * e2
                     z = g20 * e0 + g21 * e1 + g22 * e2
                     hv = hw * np.sqrt(x * x + y * y + z * z)
-                nh[t] = hv
-                npos[t] = -2
+                nh[tu] = hv
+            else:
+                tu = np.uint64(t)
+                if npos[tu] == -1:
+                    continue  # closed: a consistent heuristic never improves it
+                if lazy and npar[tu] == ps:
+                    # its g came through this parent, the sum below to the bit (a closed
+                    # node's g stays): not less, so no square root
+                    continue
             if anyangle == 0:
                 gt = ng[s] + mcost[m]
                 par = s
             else:
-                # Any-angle g through s's parent, written out: numba did not inline a helper
-                # here, and the call's reference counting (once per move) outweighed the
-                # whole A* expansion.
+                # any-angle g through s's parent
                 e0 = v0 - p0
                 e1 = v1 - p1
                 e2 = v2 - p2
@@ -377,7 +392,7 @@ def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, 
                 par = ps
                 if anyangle == THETA and ps != s:
                     g1 = ng[s] + mcost[m]
-                    if gt >= ng[t] and g1 >= ng[t]:
+                    if gt >= ng[tu] and g1 >= ng[tu]:
                         continue  # neither parent improves t: its sight line is moot
                     if cubic_dense:
                         ok, c = dense_walk(grid, lo, dims, v0, v1, v2, p0, p1, p2)
@@ -389,16 +404,14 @@ def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, 
                     if not ok:
                         gt = g1
                         par = s
-            if gt < ng[t]:
-                ng[t] = gt
-                # f on a 1e-9-cell grid: equal-cost paths tie exactly (float noise would
-                # otherwise decide), so the larger-g tie-break can dive; costs stay exact.
-                nf[t] = np.floor((gt + nh[t]) * fq_inv + 0.5) * fq
-                npar[t] = par
-                if npos[t] == -2:
-                    hn, sn = _heap.pq_push(heap, npos, hn, sn, fcur, t, nf[t], gt)
+            if gt < ng[tu]:
+                ng[tu] = gt
+                fv = _heap.fkey(gt + nh[tu], fq, fq_inv)
+                npar[tu] = par
+                if new:
+                    hn, sn = _heap.pq_push(heap, npos, hn, sn, fcur, t, fv, gt)
                 else:
-                    hn, sn = _heap.pq_decrease(heap, npos, hn, sn, fcur, t, nf[t], gt)
+                    hn, sn = _heap.pq_decrease(heap, npos, hn, sn, fcur, t, fv, gt)
     if status != RUN_FOUND:  # the arrays may be copied or the search resumed
         hn = _heap.pq_flush(heap, npos, hn, sn, fcur)
     st.nodes = n
