@@ -184,10 +184,10 @@ def search(
                           probe, job)
     secs = _clock() - t0
     out, peak = got
-    if out[0] == RUN_FOUND:
-        look = out[5]
+    status, cells, cost, exp, gen, look = out
+    if status == RUN_FOUND:
         world.cell_checks += look + 2  # and the two endpoint checks the kernel made
-        return SearchResult(True, out[1], out[2], look + 2, out[3], out[4], secs, peak, "", {},
+        return SearchResult(True, cells, cost, look + 2, exp, gen, secs, peak, "", {},
                             "found", job.guarantee, compile_s)
     res, look = _outcome(world, s, gl, job, out, peak, secs, pocket, compile_s)
     world.cell_checks += look + 2
@@ -226,13 +226,15 @@ def search_points(world: World, coords: tuple[float, ...], *, method: str = "ast
     got = _driver.run_points(chk.occupancy, chk.walk, ms, params, chk, rounding, coords,
                              PROBE_AFTER, (_goal_open, world, ms, pocket))
     secs = _clock() - t0
-    if got is None or got[0][0] == RUN_BAD_START or got[0][0] == RUN_BAD_GOAL:
+    if got is None:
         return None
     out, peak = got
-    if out[0] == RUN_FOUND:
-        look = out[5]
+    status, cells, cost, exp, gen, look = out
+    if status == RUN_BAD_START or status == RUN_BAD_GOAL:
+        return None
+    if status == RUN_FOUND:
         world.cell_checks += look + 4  # the endpoints' lookups and the search's two checks
-        return SearchResult(True, out[1], out[2], look + 2, out[3], out[4], secs, peak, "", {},
+        return SearchResult(True, cells, cost, look + 2, exp, gen, secs, peak, "", {},
                             "found", job.guarantee, 0.0)
     res, look = _outcome(world, None, None, job, out, peak, secs, pocket, 0.0)
     world.cell_checks += look + 4
