@@ -128,7 +128,8 @@ def move_stencils(lattice: Lattice, neighbors: str = "full", corner_cutting: boo
     """
     got = _stencils_cached(lattice.generator.tobytes(), neighbors, bool(corner_cutting),
                            lattice)
-    return (*(_readonly(a) for a in got[:5]), [_readonly(p) for p in got[5]])
+    *arrays, per_move = got
+    return (*(_readonly(a) for a in arrays), [_readonly(p) for p in per_move])
 
 
 @lru_cache(maxsize=64)
@@ -202,8 +203,10 @@ def move_set(lattice: Lattice, neighbors: str, corner_cutting: bool, hkind: int)
     """The kernel's :class:`MoveSet` (cached per lattice, neighbour set, rule, heuristic)."""
     key = (id(lattice), neighbors, bool(corner_cutting), int(hkind))
     hit = _BY_ID.get(key)
-    if hit is not None and hit[0] is lattice:  # a search's common case, without hashing
-        return hit[1]
+    if hit is not None:
+        held, ms = hit
+        if held is lattice:  # a search's common case, without hashing
+            return ms
     ms = _move_set_cached(lattice.generator.tobytes(), neighbors, bool(corner_cutting),
                           int(hkind), lattice)
     if len(_BY_ID) >= 256:

@@ -293,7 +293,7 @@ def _outcome(world: World, s: np.ndarray, gl: np.ndarray, job: Job, out: tuple, 
         world.endpoint_cell(cell, what)  # raises the endpoint's error
         raise PlanError(f"{what} cell {cell.tolist()} is not free")  # pragma: no cover
     if status == RUN_STOPPED:  # the goal is sealed in a small pocket
-        n, probe_look = pocket[0]
+        (n, probe_look), = pocket  # the one probe's answer
         why = f"goal unreachable: its free space is {n} cells, closed off from the start"
         checks, look = checks + probe_look, look + probe_look
     elif status == RUN_EXHAUSTED:
