@@ -420,9 +420,10 @@ class DStarLite:
         self.world.cell_checks += checks
         secs, self._seconds = self._seconds, 0.0
         found = cells is not None
-        return SearchResult(found, cells if found else np.zeros((0, 3), np.int64), cost,
-                            checks, expansions, self.nodes, secs, self.peak_bytes, why,
-                            status=STATUS_OF_RUN[code], guarantee=self.guarantee)
+        return SearchResult(found=found, cells=cells if found else np.zeros((0, 3), np.int64),
+                            cost=cost, cell_checks=checks, expansions=expansions,
+                            generated=self.nodes, seconds=secs, peak_bytes=self.peak_bytes,
+                            reason=why, status=STATUS_OF_RUN[code], guarantee=self.guarantee)
 
 
 class _Memo(NamedTuple):
