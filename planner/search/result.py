@@ -101,9 +101,9 @@ def found_result(*, cells: np.ndarray, cost: float, cell_checks: int, expansions
                  compile_seconds: float = 0.0) -> SearchResult:
     """``SearchResult(found=True, ...)`` (reason "", status "found", no extra) for a
     search's fast path. Calling a class with keywords makes CPython pack them into a dict
-    for ``__init__``: 0.68 us per result against 0.29 us for this keyword-only function,
-    which fills the slots itself (``tests/test_search.py`` checks it sets every field as
-    the class does). ``search()`` costs about 4 us in all."""
+    for ``__init__``, which showed in ``search()``'s fixed cost
+    (``benchmarks/fixed_cost.py``); this keyword-only function fills the slots itself
+    (``tests/test_search.py`` checks it sets every field as the class does)."""
     r = _new(SearchResult)
     r.found, r.cells, r.cost, r.cell_checks = True, cells, cost, cell_checks
     r.expansions, r.generated, r.seconds, r.peak_bytes = expansions, generated, seconds, peak_bytes
