@@ -394,8 +394,11 @@ def test_dense_and_paged_node_maps_agree(name, monkeypatch):
     methods = ("astar", "dijkstra", "lazy-theta")
     dense = [[S.search(world, s, g, method=m) for m in methods] for _ in range(2)]
     monkeypatch.setattr(_driver, "DENSE_SLOT_BUDGET", 0)
-    paged = [S.search(world, s, g, method=m) for m in methods]
+    # the same cells in another world: a grid's dense array, once taken, stays its own
+    other = World(world.lattice, world.blocked, world.bounds)
+    paged = [S.search(other, s, g, method=m) for m in methods]
     for a, b, c in zip(dense[0], dense[1], paged, strict=True):
+        assert c.peak_bytes < a.peak_bytes  # no dense cell -> node array: the paged map
         assert a.cost == b.cost == c.cost
         assert a.expansions == b.expansions == c.expansions
         assert a.generated == b.generated == c.generated
@@ -554,3 +557,23 @@ def test_a_query_loop_gets_what_each_search_gets_alone():
             alone.status, alone.expansions, alone.generated, alone.cell_checks)
         assert r.cost == alone.cost and np.array_equal(r.cells, alone.cells)
     assert any(r.generated > 4096 for *_, r in loop)  # grown past the kept arrays
+
+
+def test_found_result_is_the_keyword_built_result():
+    """search()'s fast path builds its result with found_result (keyword-only, filling the
+    slots itself): every field as SearchResult built by keyword, so a field added to the
+    class and not to found_result fails here (an unset slot raises on reading)."""
+    import dataclasses
+
+    from planner.search.result import SearchResult, found_result
+
+    cells = np.array([[0, 0, 0], [1, 0, 0]], np.int64)
+    kw = dict(cells=cells, cost=1.5, cell_checks=7, expansions=2, generated=26,
+              seconds=3e-6, peak_bytes=4096, guarantee=False, compile_seconds=0.25)
+    got, want = found_result(**kw), SearchResult(found=True, **kw)
+    assert type(got) is SearchResult
+    for f in dataclasses.fields(SearchResult):
+        assert getattr(got, f.name) is getattr(want, f.name) or \
+            getattr(got, f.name) == getattr(want, f.name), f.name
+    with pytest.raises(TypeError):
+        SearchResult(True, cells, 1.5, 7, 2, 26, 3e-6, 4096)  # keyword only

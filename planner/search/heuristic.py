@@ -8,14 +8,17 @@ between two cells from their index difference ``e = b - a`` ((3,) int) alone:
   cubic lattice with 26 neighbours it equals the octile distance, evaluated in closed form
   (:func:`octile`) when ``MoveSet.octile`` holds the cell size.
 - ``H_EUCLID`` (any-angle): the straight-line distance ``|G e|`` (m), ``G`` the lattice
-  generator (3, 3).
+  generator (3, 3) (:func:`length`, also the any-angle loops' step cost).
 - ``H_ZERO`` (Dijkstra): 0.
 
 The numba functions are compiled without reference counting (``_nrt=False``): the A*
 kernel calls them once per generated node, and counting the array arguments' references
-there would cost more than the estimate. The numpy forms
-take (..., 3) arrays of index differences and serve the Python side (D* Lite's key offset
-``km``, the networkx reference); ``tests/test_search.py`` checks the two agree.
+there would cost more than the estimate. The loops' forms (:func:`rows`, :func:`length`,
+:func:`node_estimate`) are inlined into them (``inline="always"``): they take ``G`` as the
+nine floats a loop reads once per search, where a call reading the array each time would
+re-load it after every store to the node table (which numba cannot prove does not alias).
+The numpy forms take (..., 3) arrays of index differences and serve the Python side (D* Lite's
+key offset ``km``, the networkx reference); ``tests/test_search.py`` checks the two agree.
 """
 
 from __future__ import annotations
@@ -24,8 +27,8 @@ import numpy as np
 
 from planner._numba import njit_cached
 
-__all__ = ["H_ZERO", "H_GAUGE", "H_EUCLID", "octile", "gauge", "euclid", "estimate",
-           "octile_np", "gauge_np", "euclid_np", "estimate_np"]
+__all__ = ["H_ZERO", "H_GAUGE", "H_EUCLID", "octile", "gauge", "euclid", "estimate", "rows",
+           "length", "node_estimate", "octile_np", "gauge_np", "euclid_np", "estimate_np"]
 
 H_ZERO, H_GAUGE, H_EUCLID = 0, 1, 2
 
@@ -54,25 +57,52 @@ def gauge(hmat, e0, e1, e2):  # pragma: no cover - compiled
     return hv
 
 
+@njit_cached(_nrt=False, inline="always")
+def rows(g):  # pragma: no cover - compiled
+    """The (3, 3) generator ``g``'s nine entries, row by row (a tuple of floats, read once
+    per search by the loops; module docstring)."""
+    return (g[0, 0], g[0, 1], g[0, 2], g[1, 0], g[1, 1], g[1, 2], g[2, 0], g[2, 1], g[2, 2])
+
+
+@njit_cached(_nrt=False, inline="always")
+def length(gm, e0, e1, e2):  # pragma: no cover - compiled
+    """Straight-line length |G e| (m) of index difference e, ``gm`` = :func:`rows` of G:
+    the one home of the formula (the Euclidean heuristic, any-angle g)."""
+    x = gm[0] * e0 + gm[1] * e1 + gm[2] * e2
+    y = gm[3] * e0 + gm[4] * e1 + gm[5] * e2
+    z = gm[6] * e0 + gm[7] * e1 + gm[8] * e2
+    return np.sqrt(x * x + y * y + z * z)
+
+
 @njit_cached(_nrt=False)
 def euclid(g, e0, e1, e2):  # pragma: no cover - compiled
     """Straight-line length |G e| (m) of index difference e, g the (3, 3) generator."""
-    x = g[0, 0] * e0 + g[0, 1] * e1 + g[0, 2] * e2
-    y = g[1, 0] * e0 + g[1, 1] * e1 + g[1, 2] * e2
-    z = g[2, 0] * e0 + g[2, 1] * e1 + g[2, 2] * e2
-    return np.sqrt(x * x + y * y + z * z)
+    return length(rows(g), e0, e1, e2)
+
+
+@njit_cached(_nrt=False, inline="always")
+def node_estimate(oct_s, hkind, hmat, hw, gm, e0, e1, e2):  # pragma: no cover - compiled
+    """The heuristic (m) of a node at index difference e from the goal, from a move set's
+    fields (``octile``, ``hkind``, ``hmat``) and ``gm`` = :func:`rows` of G, as the loops
+    read them once per search; ``hw`` weighs the Euclidean one (weighted-theta)."""
+    if oct_s > 0.0:
+        return octile(oct_s, e0, e1, e2)
+    if hkind == H_GAUGE:
+        hv = 0.0
+        for f in range(hmat.shape[0]):
+            x = hmat[f, 0] * e0 + hmat[f, 1] * e1 + hmat[f, 2] * e2
+            if x > hv:
+                hv = x
+        return hv
+    if hkind == H_EUCLID:
+        return hw * length(gm, e0, e1, e2)
+    return 0.0
 
 
 @njit_cached(_nrt=False)
 def estimate(ms, g, e0, e1, e2):  # pragma: no cover - compiled
     """The heuristic of move set ``ms`` (its ``hkind``) for index difference e (m)."""
-    if ms.octile > 0.0:
-        return octile(ms.octile, e0, e1, e2)
-    if ms.hkind == H_GAUGE:
-        return gauge(ms.hmat, e0, e1, e2)
-    if ms.hkind == H_EUCLID:
-        return euclid(g, e0, e1, e2)
-    return 0.0
+    return node_estimate(ms.octile, ms.hkind, ms.hmat, 1.0, rows(g), e0, e1, e2)
 
 
 def octile_np(s: float, e: np.ndarray) -> np.ndarray:

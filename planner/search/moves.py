@@ -70,8 +70,9 @@ def _empty_occupancy(g: np.ndarray) -> Occupancy:
     """Everything free (the hash mode with an empty set and unbounded box): the walk then
     only enumerates touched cells."""
     big = np.full(3, np.inf)
-    return Occupancy(1, np.zeros(1, np.uint8), np.zeros(3, np.int64), np.zeros(3, np.int64),
-                     np.full(16, -1, np.int64), 15, g, -big, big.copy())
+    return Occupancy(mode=1, grid=np.zeros(1, np.uint8), lo=np.zeros(3, np.int64),
+                     dims=np.zeros(3, np.int64), table=np.full(16, -1, np.int64), tmask=15,
+                     gmat=g, blo=-big, bhi=big.copy())
 
 
 @lru_cache(maxsize=64)
@@ -128,7 +129,8 @@ def move_stencils(lattice: Lattice, neighbors: str = "full", corner_cutting: boo
     """
     got = _stencils_cached(lattice.generator.tobytes(), neighbors, bool(corner_cutting),
                            lattice)
-    return (*(_readonly(a) for a in got[:5]), [_readonly(p) for p in got[5]])
+    *arrays, per_move = got
+    return (*(_readonly(a) for a in arrays), [_readonly(p) for p in per_move])
 
 
 @lru_cache(maxsize=64)
@@ -191,8 +193,8 @@ def _move_set_cached(gen: bytes, neighbors: str, corner_cutting: bool, hkind: in
     moves, cost, union, ptr, idx, _ = _stencils_cached(gen, neighbors, corner_cutting, lat)
     hmat = _facets_cached(gen, neighbors, lat) if hkind == H_GAUGE else _NO_FACETS
     octile = _octile_step(lat, moves) if hkind == H_GAUGE else 0.0
-    return MoveSet(moves, cost, union, ptr, idx, hmat, hkind, _need_bits(ptr, idx, len(union)),
-                   octile)
+    return MoveSet(moves=moves, cost=cost, union=union, ptr=ptr, idx=idx, hmat=hmat,
+                   hkind=hkind, need=_need_bits(ptr, idx, len(union)), octile=octile)
 
 
 _BY_ID: dict[tuple, tuple[Lattice, MoveSet]] = {}  # lattice identity -> (lattice, move set)
@@ -202,8 +204,10 @@ def move_set(lattice: Lattice, neighbors: str, corner_cutting: bool, hkind: int)
     """The kernel's :class:`MoveSet` (cached per lattice, neighbour set, rule, heuristic)."""
     key = (id(lattice), neighbors, bool(corner_cutting), int(hkind))
     hit = _BY_ID.get(key)
-    if hit is not None and hit[0] is lattice:  # a search's common case, without hashing
-        return hit[1]
+    if hit is not None:
+        held, ms = hit
+        if held is lattice:  # a search's common case, without hashing
+            return ms
     ms = _move_set_cached(lattice.generator.tobytes(), neighbors, bool(corner_cutting),
                           int(hkind), lattice)
     if len(_BY_ID) >= 256:

@@ -55,10 +55,13 @@ def search_networkx(world, s: np.ndarray, gl: np.ndarray, ms, cap: int | None = 
 
     n = graph.number_of_nodes()
     if goal not in graph:
-        return SearchResult(False, np.zeros((0, 3), np.int64), math.inf, checks, 0, n,
-                            time.perf_counter() - t0, 0, f"goal unreachable: explored {n} cells",
+        return SearchResult(found=False, cells=np.zeros((0, 3), np.int64), cost=math.inf,
+                            cell_checks=checks, expansions=0, generated=n,
+                            seconds=time.perf_counter() - t0, peak_bytes=0,
+                            reason=f"goal unreachable: explored {n} cells",
                             status="unreachable")
     path = nx.astar_path(graph, start, goal, heuristic=h, weight="weight")
     cost = float(sum(graph[a][b]["weight"] for a, b in itertools.pairwise(path)))
-    return SearchResult(True, np.array(path, dtype=np.int64).reshape(-1, 3), cost, checks,
-                        0, n, time.perf_counter() - t0, 0)
+    return SearchResult(found=True, cells=np.array(path, dtype=np.int64).reshape(-1, 3),
+                        cost=cost, cell_checks=checks, expansions=0, generated=n,
+                        seconds=time.perf_counter() - t0, peak_bytes=0)

@@ -318,8 +318,10 @@ class AStarReplanner:
             checks += self._lookups
             self._lookups = 0
         secs, self._seconds = self._seconds, 0.0
-        return SearchResult(found, cells if found else _NONE.copy(), cost, checks, expansions,
-                            generated, secs, 0, why, status=status, guarantee=self.guarantee)
+        return SearchResult(found=found, cells=cells if found else _NONE.copy(), cost=cost,
+                            cell_checks=checks, expansions=expansions, generated=generated,
+                            seconds=secs, peak_bytes=0, reason=why, status=status,
+                            guarantee=self.guarantee)
 
 
 _NONE = np.zeros((0, 3), np.int64)

@@ -73,6 +73,7 @@ from planner.search.result import (
     RUN_STOPPED,
     STATUS_OF_RUN,
     SearchResult,
+    found_result,
 )
 from planner.world.world import World
 
@@ -184,11 +185,12 @@ def search(
                           probe, job)
     secs = _clock() - t0
     out, peak = got
-    if out[0] == RUN_FOUND:
-        look = out[5]
+    status, cells, cost, exp, gen, look = out
+    if status == RUN_FOUND:
         world.cell_checks += look + 2  # and the two endpoint checks the kernel made
-        return SearchResult(True, out[1], out[2], look + 2, out[3], out[4], secs, peak, "", {},
-                            "found", job.guarantee, compile_s)
+        return found_result(cells=cells, cost=cost, cell_checks=look + 2, expansions=exp,
+                            generated=gen, seconds=secs, peak_bytes=peak,
+                            guarantee=job.guarantee, compile_seconds=compile_s)
     res, look = _outcome(world, s, gl, job, out, peak, secs, pocket, compile_s)
     world.cell_checks += look + 2
     return res
@@ -226,14 +228,17 @@ def search_points(world: World, coords: tuple[float, ...], *, method: str = "ast
     got = _driver.run_points(chk.occupancy, chk.walk, ms, params, chk, rounding, coords,
                              PROBE_AFTER, (_goal_open, world, ms, pocket))
     secs = _clock() - t0
-    if got is None or got[0][0] == RUN_BAD_START or got[0][0] == RUN_BAD_GOAL:
+    if got is None:
         return None
     out, peak = got
-    if out[0] == RUN_FOUND:
-        look = out[5]
+    status, cells, cost, exp, gen, look = out
+    if status == RUN_BAD_START or status == RUN_BAD_GOAL:
+        return None
+    if status == RUN_FOUND:
         world.cell_checks += look + 4  # the endpoints' lookups and the search's two checks
-        return SearchResult(True, out[1], out[2], look + 2, out[3], out[4], secs, peak, "", {},
-                            "found", job.guarantee, 0.0)
+        return found_result(cells=cells, cost=cost, cell_checks=look + 2, expansions=exp,
+                            generated=gen, seconds=secs, peak_bytes=peak,
+                            guarantee=job.guarantee)
     res, look = _outcome(world, None, None, job, out, peak, secs, pocket, 0.0)
     world.cell_checks += look + 4
     return res
@@ -282,8 +287,9 @@ def _outcome(world: World, s: np.ndarray, gl: np.ndarray, job: Job, out: tuple, 
     is not free."""
     status, cells, cost, exp, gen, look = out
     if status == RUN_FOUND:
-        return SearchResult(True, cells, cost, look + 2, exp, gen, secs, peak, "", {}, "found",
-                            job.guarantee, compile_s), look
+        return found_result(cells=cells, cost=cost, cell_checks=look + 2, expansions=exp,
+                            generated=gen, seconds=secs, peak_bytes=peak,
+                            guarantee=job.guarantee, compile_seconds=compile_s), look
     checks, max_nodes = look + 2, job.max_nodes  # and the two endpoint checks
     if status == RUN_BAD_START or status == RUN_BAD_GOAL:
         what = "start" if status == RUN_BAD_START else "goal"
@@ -291,7 +297,7 @@ def _outcome(world: World, s: np.ndarray, gl: np.ndarray, job: Job, out: tuple, 
         world.endpoint_cell(cell, what)  # raises the endpoint's error
         raise PlanError(f"{what} cell {cell.tolist()} is not free")  # pragma: no cover
     if status == RUN_STOPPED:  # the goal is sealed in a small pocket
-        n, probe_look = pocket[0]
+        (n, probe_look), = pocket  # the one probe's answer
         why = f"goal unreachable: its free space is {n} cells, closed off from the start"
         checks, look = checks + probe_look, look + probe_look
     elif status == RUN_EXHAUSTED:
@@ -300,8 +306,9 @@ def _outcome(world: World, s: np.ndarray, gl: np.ndarray, job: Job, out: tuple, 
         why = f"node limit {max_nodes} reached after {exp} expansions"
     else:
         why = f"search budget exhausted after {exp} expansions ({peak} bytes)"
-    return SearchResult(False, cells, math.inf, checks, exp, gen, secs, peak, why,
-                        status=STATUS_OF_RUN[status], guarantee=job.guarantee,
+    return SearchResult(found=False, cells=cells, cost=math.inf, cell_checks=checks,
+                        expansions=exp, generated=gen, seconds=secs, peak_bytes=peak,
+                        reason=why, status=STATUS_OF_RUN[status], guarantee=job.guarantee,
                         compile_seconds=compile_s), look
 
 

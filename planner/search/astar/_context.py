@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import threading
 import weakref
+from typing import NamedTuple
 
 import numpy as np
 
@@ -29,6 +30,59 @@ KEEP_NODES = 1 << 16
 _CAP, _PCAP = 4096, 64  # initial node and page capacity (powers of 2)
 
 
+class _Fast:
+    """What :func:`~planner.search.astar.driver.run`'s short path needs to repeat a
+    context's last search (set by the driver's ``_run``): the arguments a search must match
+    to take it, and the compiled call with its own arguments. A class with slots, not a
+    tuple read by index: its attributes read as fast (the short path reads ten of them)."""
+
+    __slots__ = ("occ", "ms", "params", "owner", "walk", "pause_at", "no_probe", "bound",
+                 "search", "first", "pausing", "small", "rest", "cells", "tag")
+
+    def __init__(self, occ, ms, params, owner: int, walk, pause_at: int, no_probe: bool,
+                 bound, search, first, pausing: bool, small: int, rest: int, cells, tag):
+        self.occ, self.ms, self.params, self.walk = occ, ms, params, walk
+        self.owner = owner  # id of the structs' owner
+        self.pause_at, self.no_probe = pause_at, no_probe  # no_probe: keep_going was None
+        self.bound, self.search, self.cells = bound, search, cells  # Bound, its entry points
+        self.first, self.pausing = first, pausing  # the settings the kernel runs with
+        self.small, self.rest = small, rest  # peak bytes at the initial capacity; the rest
+        self.tag = tag  # stands for every argument but the cells (see run)
+
+
+class _Memo:
+    """A context's :class:`~planner.search.astar.bound.Bound` and the objects it was made
+    from (compared by identity before it is reused), with its two compiled entry points."""
+
+    __slots__ = ("occ", "walk", "ms", "sc", "dense", "nodes", "slots", "ufree", "params",
+                 "ptypes", "bound", "search", "cells")
+
+    def __init__(self, occ, walk, ms, sc, dense, nodes, slots, ufree, params, ptypes, bound,
+                 search, cells):
+        self.occ, self.walk, self.ms, self.sc, self.dense = occ, walk, ms, sc, dense
+        self.nodes, self.slots, self.ufree = nodes, slots, ufree
+        self.params, self.ptypes = params, ptypes  # the settings and their field types
+        self.bound, self.search, self.cells = bound, search, cells
+
+
+class _Held(NamedTuple):
+    """The dense slot array a context holds for the grid it last searched."""
+
+    grid: object
+    slots: np.ndarray
+    owner: int  # id of the owner of the structs it was taken for
+
+
+class _Points:
+    """The compiled ``search_points`` (``call``) a context last used, for its
+    ``search_bound`` entry point and the rounding's ``ginv`` array (read on every plan)."""
+
+    __slots__ = ("search", "ginv", "call")
+
+    def __init__(self, search, ginv: np.ndarray, call):
+        self.search, self.ginv, self.call = search, ginv, call
+
+
 class _Context:
     """One thread's kernel arrays, reused by its next search (module docstring)."""
 
@@ -45,11 +99,11 @@ class _Context:
         self.end0, self.end1 = self.ends  # its rows: ``row[...] = cell`` is the fastest copy
         self.sc = _no_sight()
         self.sc_key = None
-        self.bound = None  # (its structs..., params, their types, Bound, its two entry points)
+        self.bound: _Memo | None = None  # the Bound of the last world searched
         self.owner = 0  # id of the owner of the bound world (see run)
-        self.held = None  # (grid, its dense slot array, owner id) last searched: _dense
-        self.fast = None  # what run's short path needs to repeat the last search (_run)
-        self.points = None  # (compiled search_bound, rounding's ginv, its search_points)
+        self.held: _Held | None = None  # the dense slot array of the last grid: _dense
+        self.fast: _Fast | None = None  # how run's short path repeats the last search
+        self.points: _Points | None = None  # the last search_points (run_points)
 
     def keep(self) -> None:
         """Drop arrays a long search grew past the kept size (module docstring)."""
@@ -113,7 +167,7 @@ def _settle(ctx: _Context, owner) -> None:
         h = ctx.held
         if h is not None:  # nothing would drop it when the grid is freed: back to the pool
             ctx.held = None
-            give(h[0], h[1])
+            give(h.grid, h.slots)
     else:
         ctx.owner = id(owner)
         if ctx.owner not in _OWNERS:
@@ -131,5 +185,5 @@ def _unbind(owner_id: int) -> None:
         if ctx.owner == owner_id:
             ctx.bound, ctx.fast, ctx.owner = None, None, 0
         h = ctx.held
-        if h is not None and h[2] == owner_id:
+        if h is not None and h.owner == owner_id:
             ctx.held = ctx.fast = None

@@ -23,6 +23,7 @@ from planner.occupancy.keys import pack3, step3, unpack3
 from planner.search import _heap
 from planner.search._los import DDA_MAX, dense_walk, is_cubic, sight
 from planner.search.astar.dense import grid_offsets
+from planner.search.heuristic import length, rows
 from planner.search.result import RUN_BUDGET, RUN_EXHAUSTED, RUN_FOUND, RUN_GROW, RUN_LIMIT
 
 __all__ = ["dense_lazy_theta"]
@@ -92,9 +93,7 @@ def _loop(occ, walk, ms, nodes, heap, dsl, sc, st, max_nodes, max_exp, goal, hw,
     nm = moves.shape[0]
     cap = nkey.shape[0]
     g = walk.g
-    g00, g01, g02 = g[0, 0], g[0, 1], g[0, 2]
-    g10, g11, g12 = g[1, 0], g[1, 1], g[1, 2]
-    g20, g21, g22 = g[2, 0], g[2, 1], g[2, 2]
+    gm = rows(g)
     gl0, gl1, gl2 = goal[0], goal[1], goal[2]
     gk = pack3(gl0, gl1, gl2)
     all_u = (np.int64(1) << nu) - 1
@@ -189,26 +188,13 @@ def _loop(occ, walk, ms, nodes, heap, dsl, sc, st, max_nodes, max_exp, goal, hw,
             v0 = u0 + moves[m, 0]
             v1 = u1 + moves[m, 1]
             v2 = u2 + moves[m, 2]
-            # g through s's parent: |G (v - p)|, the general loop's floats
-            e0 = v0 - p0
-            e1 = v1 - p1
-            e2 = v2 - p2
-            x = g00 * e0 + g01 * e1 + g02 * e2
-            y = g10 * e0 + g11 * e1 + g12 * e2
-            z = g20 * e0 + g21 * e1 + g22 * e2
-            gt = gp + np.sqrt(x * x + y * y + z * z)
+            gt = gp + length(gm, v0 - p0, v1 - p1, v2 - p2)  # through s's parent, as _loop
             if t < 0:
                 t = n
                 n += 1
                 dsl[loc] = t + 1
                 nkey[t] = ks + mkey[m]
-                e0 = gl0 - v0
-                e1 = gl1 - v1
-                e2 = gl2 - v2
-                x = g00 * e0 + g01 * e1 + g02 * e2
-                y = g10 * e0 + g11 * e1 + g12 * e2
-                z = g20 * e0 + g21 * e1 + g22 * e2
-                hv = hw * np.sqrt(x * x + y * y + z * z)
+                hv = hw * length(gm, gl0 - v0, gl1 - v1, gl2 - v2)
                 nh[t] = hv
                 ng[t] = gt
                 f = _heap.fkey(gt + hv, fq, fq_inv)

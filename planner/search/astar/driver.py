@@ -42,7 +42,11 @@ from planner.search.astar._context import (
     KEEP_NODES,
     _Context,
     _context,
+    _Fast,
+    _Held,
+    _Memo,
     _no_sight,
+    _Points,
     _settle,
     _sight,
 )
@@ -68,17 +72,17 @@ def _dense(ctx: _Context, occ, owner) -> np.ndarray | None:
     grid = occ.grid
     h = ctx.held
     if h is not None:
-        if h[0] is grid:
-            return h[1]
+        if h.grid is grid:
+            return h.slots
         ctx.held = ctx.fast = None
-        give(h[0], h[1])
+        give(h.grid, h.slots)
     a = take(grid)
     if a is None:
         cells = int(np.prod(occ.dims))  # the occupancy grid holds one bit per cell
         if occ.mode != 0 or 4 * cells > DENSE_SLOT_BUDGET:
             return None
         a = lazy_zeros(cells)
-    ctx.held = (grid, a, id(owner))
+    ctx.held = _Held(grid, a, id(owner))
     return a
 
 
@@ -120,20 +124,20 @@ def run(occ, walk, ms, start, goal, params, span: float, owner=None, dense: bool
         free = _LOCAL.free = []
     ctx = free.pop() if free else _context()  # this thread's free context
     f = ctx.fast
-    if (f is not None and f[0] is occ and f[1] is ms and f[2] is params and f[3] == id(owner)
-            and f[4] is walk and dense and span <= 0 and f[5] == pause_at
-            and (keep_going is None) is f[6]):
+    if (f is not None and f.occ is occ and f.ms is ms and f.params is params
+            and f.owner == id(owner) and f.walk is walk and dense and span <= 0
+            and f.pause_at == pause_at and (keep_going is None) is f.no_probe):
         # the short path (module docstring): the context's arrays, bound and dense slot
         # array are those of its last search, which was like this one
         try:
-            out = f[13](f[7], f[9], f[10], *start.tolist(), *goal.tolist())
+            out = f.cells(f.bound, f.first, f.pausing, *start.tolist(), *goal.tolist())
         except SystemError as exc:  # as entry_point's wrapper, which this call saves
             raise signal_cause(exc) from None  # the context, left mid-search, is dropped
-        status = out[0]
-        if status != RUN_GROW and not (f[10] and status == RUN_BUDGET):
+        status, _, _, _, n, _ = out
+        if status != RUN_GROW and not (f.pausing and status == RUN_BUDGET):
             if len(free) < 2:
                 free.append(ctx)  # _release
-            return out, (f[11] if out[4] <= _CAP else _fresh_bytes(out[4], 0) + f[12])
+            return out, (f.small if n <= _CAP else _fresh_bytes(n, 0) + f.rest)
         out = _run(ctx, occ, walk, ms, start, goal, params, span, owner, dense, pause_at,
                    keep_going, out, tag)
     else:
@@ -153,20 +157,20 @@ def repeat(owner, tag, start, goal, keep_going=None):
     if not free:
         return None
     f = free[-1].fast
-    if f is None or f[14] is not tag or f[3] != id(owner) or tag is None:
+    if f is None or f.tag is not tag or f.owner != id(owner) or tag is None:
         return None
     ctx = free.pop()  # taken while it searches: a search started meanwhile takes another
     try:
-        out = f[13](f[7], f[9], f[10], *start.tolist(), *goal.tolist())
+        out = f.cells(f.bound, f.first, f.pausing, *start.tolist(), *goal.tolist())
     except SystemError as exc:  # as entry_point's wrapper, which this call saves
         raise signal_cause(exc) from None  # the context, left mid-search, is dropped
-    status = out[0]
-    if status != RUN_GROW and not (f[10] and status == RUN_BUDGET):
+    status, _, _, _, n, _ = out
+    if status != RUN_GROW and not (f.pausing and status == RUN_BUDGET):
         if len(free) < 2:
             free.append(ctx)  # _release
-        return out, (f[11] if out[4] <= _CAP else _fresh_bytes(out[4], 0) + f[12])
-    out = _run(ctx, f[0], f[4], f[1], start, goal, f[2], 0.0, owner, True, f[5], keep_going,
-               out, tag)
+        return out, (f.small if n <= _CAP else _fresh_bytes(n, 0) + f.rest)
+    out = _run(ctx, f.occ, f.walk, f.ms, start, goal, f.params, 0.0, owner, True, f.pause_at,
+               keep_going, out, tag)
     _settle(ctx, owner)
     return out
 
@@ -179,7 +183,7 @@ def run_points(occ, walk, ms, params, owner, rounding, pts, pause_at: int = 0,
     ginv, reach)`` of :meth:`planner.lattice.Lattice.point_rounding`; ``pts``: the two
     points' coordinates ``(x0, x1, x2, y0, y1, y2)`` (m, Python floats).
 
-    Returns :func:`run`'s ``(out, peak)`` (``out[0]`` RUN_BAD_START or RUN_BAD_GOAL, and
+    Returns :func:`run`'s ``(out, peak)`` (``out``'s status RUN_BAD_START or RUN_BAD_GOAL, and
     nothing searched, when that cell is out of bounds or blocked or a point past
     ``reach``), or None when this
     thread's context did not last run a search like this one (only :func:`run`'s short path
@@ -190,32 +194,30 @@ def run_points(occ, walk, ms, params, owner, rounding, pts, pause_at: int = 0,
         return None
     ctx = free[-1]
     f = ctx.fast
-    if not (f is not None and f[0] is occ and f[1] is ms and f[2] is params
-            and f[3] == id(owner) and f[4] is walk and f[5] == pause_at
-            and (keep_going is None) is f[6]):
+    if not (f is not None and f.occ is occ and f.ms is ms and f.params is params
+            and f.owner == id(owner) and f.walk is walk and f.pause_at == pause_at
+            and (keep_going is None) is f.no_probe):
         return None
-    ginv = rounding[3]
+    _, _, _, ginv, _ = rounding
     p = ctx.points
-    if p is not None and p[0] is f[8] and p[1] is ginv:
-        call = p[2]
+    if p is not None and p.search is f.search and p.ginv is ginv:
+        call = p.call
     else:  # one search_points per compiled search_bound (its argument types) and rounding
-        key = (f[8], id(ginv))
-        hit = _POINTS.get(key)
-        if hit is not None and hit[0] is ginv:
-            call = hit[1]
-        else:
+        key = (f.search, id(ginv))
+        held, call = _POINTS.get(key, (None, None))
+        if held is not ginv:
             if len(_POINTS) >= 256:
                 _POINTS.clear()
-            call = entry_point(search_points, (f[7], f[9], f[10], *rounding, *pts))
+            call = entry_point(search_points, (f.bound, f.first, f.pausing, *rounding, *pts))
             _POINTS[key] = (ginv, call)  # holds the array: its id stays its own
-        ctx.points = (f[8], ginv, call)  # no world's arrays: nothing outlives a world
+        ctx.points = _Points(f.search, ginv, call)  # no world's arrays: none outlives a world
     free.pop()
-    out = call(f[7], f[9], f[10], *rounding, *pts)
-    status = out[0]
-    if status != RUN_GROW and not (f[10] and status == RUN_BUDGET):
+    out = call(f.bound, f.first, f.pausing, *rounding, *pts)
+    status, _, _, _, n, _ = out
+    if status != RUN_GROW and not (f.pausing and status == RUN_BUDGET):
         if len(free) < 2:
             free.append(ctx)  # _release
-        return out, (f[11] if out[4] <= _CAP else _fresh_bytes(out[4], 0) + f[12])
+        return out, (f.small if n <= _CAP else _fresh_bytes(n, 0) + f.rest)
     # it needs room or paused: go on as run does (the cells are in the context's ends)
     out = _run(ctx, occ, walk, ms, None, None, params, 0.0, owner, True, pause_at, keep_going,
                out)
@@ -247,14 +249,16 @@ def _run(ctx, occ, walk, ms, start, goal, params, span, owner, dense, pause_at, 
         first = _paused(params, pause_at)
     pausing = first is not params
     out = _loop(ctx, occ, walk, ms, sc, dslot, first, pausing, out)
-    if pausing and out[0] == RUN_BUDGET:
-        if keep_going[0](*keep_going[1:], ctx.ends[0].copy(), ctx.ends[1].copy()):
+    status, *_ = out
+    if pausing and status == RUN_BUDGET:
+        ask, *args = keep_going
+        if ask(*args, ctx.end0.copy(), ctx.end1.copy()):
             out = _loop(ctx, occ, walk, ms, sc, dslot, params, False)
         else:
             nodes, state, slots = ctx.nodes, ctx.state, _slots(ctx, occ, dslot)
             out = (RUN_STOPPED, *_helper(finish, nodes, slots, state, False)(
                 nodes, slots, state, False))
-    n = out[4]
+    _, _, _, _, n, _ = out
     # finish cleared the touched cells of the dense array (the context keeps it for reuse)
     # and zeroed the state's page count: the paged map's bytes are those of _PCAP pages
     rest = (0 if dslot is None else dslot.nbytes) + max(nu, 64) + _STATE_BYTES
@@ -262,9 +266,10 @@ def _run(ctx, occ, walk, ms, start, goal, params, span, owner, dense, pause_at, 
     if len(ctx.nodes.key) > KEEP_NODES or len(ctx.slots.bkeys) > KEEP_NODES // 8:
         ctx.keep()
     bd = ctx.bound
-    if bd is not None and owner is not None and sc is nos and dense and bd[8] is first:
-        ctx.fast = (occ, ms, params, id(owner), walk, pause_at, keep_going is None, bd[10], bd[11],
-                    first, pausing, _fresh_bytes(0, 0) + rest, rest, bd[12], tag)
+    if bd is not None and owner is not None and sc is nos and dense and bd.params is first:
+        ctx.fast = _Fast(occ, ms, params, id(owner), walk, pause_at, keep_going is None,
+                         bd.bound, bd.search, first, pausing, _fresh_bytes(0, 0) + rest, rest,
+                         bd.cells, tag)
     else:
         ctx.fast = None
     return out, _fresh_bytes(n, 0) + rest
@@ -277,8 +282,10 @@ def _paused(params, pause_at: int):
     """``params`` stopping at ``pause_at`` expansions (remembered: made once per settings
     object; keyed by identity, since hashing the settings costs more than the lookup)."""
     hit = _PAUSED.get((id(params), pause_at))
-    if hit is not None and hit[0] is params:
-        return hit[1]
+    if hit is not None:
+        held, paused = hit
+        if held is params:
+            return paused
     if len(_PAUSED) >= 256:
         _PAUSED.clear()
     p = params._replace(max_expansions=pause_at)
@@ -318,15 +325,15 @@ def _bound(ctx: _Context, occ, walk, ms, sc, dslot, params):
     grown arrays)."""
     dense = _NO_DENSE if dslot is None else dslot
     bd = ctx.bound
-    if (bd is not None and bd[0] is occ and bd[1] is walk and bd[2] is ms and bd[3] is sc
-            and bd[4] is dense and bd[5] is ctx.nodes and bd[6] is ctx.slots
-            and bd[7] is ctx.ufree):
-        if bd[8] is params:  # the same settings object: no need to compare their types
-            return bd[10], bd[11]
+    if (bd is not None and bd.occ is occ and bd.walk is walk and bd.ms is ms and bd.sc is sc
+            and bd.dense is dense and bd.nodes is ctx.nodes and bd.slots is ctx.slots
+            and bd.ufree is ctx.ufree):
+        if bd.params is params:  # the same settings object: no need to compare their types
+            return bd.bound, bd.search
         ptypes = tuple(map(type, params))  # the entry point takes exactly these
-        if bd[9] == ptypes:
-            ctx.bound = (*bd[:8], params, *bd[9:])
-            return bd[10], bd[11]
+        if bd.ptypes == ptypes:
+            bd.params = params
+            return bd.bound, bd.search
     else:
         ptypes = tuple(map(type, params))
     b = new_bound(occ, walk, ms, ctx.nodes, ctx.heap, _slots(ctx, occ, dslot), sc, ctx.ufree,
@@ -337,15 +344,17 @@ def _bound(ctx: _Context, occ, walk, ms, sc, dslot, params):
         calls = _CALLS[key] = (entry_point(search_bound, (b, params, False)),
                                raw_entry_point(search_cells, (b, params, False, 0, 0, 0, 0,
                                                               0, 0)))
-    ctx.bound = (occ, walk, ms, sc, dense, ctx.nodes, ctx.slots, ctx.ufree, params, ptypes, b,
-                 *calls)
-    return b, calls[0]
+    search, cells = calls
+    ctx.bound = _Memo(occ, walk, ms, sc, dense, ctx.nodes, ctx.slots, ctx.ufree, params,
+                      ptypes, b, search, cells)
+    return b, search
 
 
 def _slots(ctx: _Context, occ, dslot) -> SlotMap:
     """The context's slot map, on the dense slot array ``dslot`` of ``occ``'s box when one
     was taken."""
-    return ctx.slots if dslot is None else SlotMap(*ctx.slots[:3], dslot, occ.lo, occ.dims)
+    return ctx.slots if dslot is None else ctx.slots._replace(dense=dslot, lo=occ.lo,
+                                                              dims=occ.dims)
 
 
 def _helper(disp, *args):
@@ -365,7 +374,8 @@ def _loop(ctx: _Context, occ, walk, ms, sc, dslot, params, pausing, out=None):
         if out is None:
             b, call = _bound(ctx, occ, walk, ms, sc, dslot, params)
             out = call(b, params, pausing)
-        if out[0] != RUN_GROW:
+        status, *_ = out
+        if status != RUN_GROW:
             return out
         out = ctx.fast = None  # the arrays grow: the short path's bound is stale
         state, nodes, slots = ctx.state, ctx.nodes, ctx.slots
@@ -379,5 +389,5 @@ def _loop(ctx: _Context, occ, walk, ms, sc, dslot, params, pausing, out=None):
             pcap *= 2
             ctx.slots = SlotMap(grown(slots.pages, pcap * PAGE, npg * PAGE),
                                 np.full(2 * pcap, -1, np.int64), grown(slots.bkeys, pcap, npg),
-                                *slots[3:])
+                                slots.dense, slots.lo, slots.dims)
             rehash(ctx.slots, npg)

@@ -37,7 +37,7 @@ from planner.search._nodes import (
 )
 from planner.search.astar.dense import dense_astar, grid_offsets
 from planner.search.astar.dense_theta import dense_lazy_theta
-from planner.search.heuristic import H_EUCLID, H_GAUGE, estimate, octile
+from planner.search.heuristic import H_EUCLID, estimate, length, node_estimate, rows
 from planner.search.moves import MAX_BITS, move_allowed
 from planner.search.result import (
     RUN_BAD_GOAL,
@@ -178,10 +178,7 @@ def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, 
     # grid's arrays
     cubic_dense = cubic and mode == 0 and max(d0, max(d1, d2)) <= DDA_MAX
     gl0, gl1, gl2 = goal[0], goal[1], goal[2]
-    g00, g01, g02 = g[0, 0], g[0, 1], g[0, 2]
-    g10, g11, g12 = g[1, 0], g[1, 1], g[1, 2]
-    g20, g21, g22 = g[2, 0], g[2, 1], g[2, 2]
-    nfac = hmat.shape[0]
+    gm = rows(g)
     cap = nkey.shape[0]
     pcap = bkeys.shape[0]
     bsize = btab.shape[0]
@@ -352,23 +349,7 @@ def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, 
                 tu = np.uint64(t)  # unsigned: no negative-index fix-up on each access
                 nkey[tu] = pack3(v0, v1, v2)
                 ng[tu] = np.inf
-                e0 = gl0 - v0
-                e1 = gl1 - v1
-                e2 = gl2 - v2
-                hv = 0.0
-                if oct_s > 0.0:
-                    hv = octile(oct_s, e0, e1, e2)
-                elif hkind == H_GAUGE:  # written out for the same reason as the lookups
-                    for f in range(nfac):
-                        x = hmat[f, 0] * e0 + hmat[f, 1] * e1 + hmat[f, 2] * e2
-                        if x > hv:
-                            hv = x
-                elif hkind == H_EUCLID:
-                    x = g00 * e0 + g01 * e1 + g02 * e2
-                    y = g10 * e0 + g11 * e1 + g12 * e2
-                    z = g20 * e0 + g21 * e1 + g22 * e2
-                    hv = hw * np.sqrt(x * x + y * y + z * z)
-                nh[tu] = hv
+                nh[tu] = node_estimate(oct_s, hkind, hmat, hw, gm, gl0 - v0, gl1 - v1, gl2 - v2)
             else:
                 tu = np.uint64(t)
                 if npos[tu] == -1:
@@ -381,14 +362,7 @@ def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, 
                 gt = ng[s] + mcost[m]
                 par = s
             else:
-                # any-angle g through s's parent
-                e0 = v0 - p0
-                e1 = v1 - p1
-                e2 = v2 - p2
-                x = g00 * e0 + g01 * e1 + g02 * e2
-                y = g10 * e0 + g11 * e1 + g12 * e2
-                z = g20 * e0 + g21 * e1 + g22 * e2
-                gt = ng[ps] + np.sqrt(x * x + y * y + z * z)
+                gt = ng[ps] + length(gm, v0 - p0, v1 - p1, v2 - p2)  # through s's parent
                 par = ps
                 if anyangle == THETA and ps != s:
                     g1 = ng[s] + mcost[m]

@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import math
 import time
+from typing import NamedTuple
 
 import numpy as np
 
@@ -123,7 +124,7 @@ class DStarLite:
         self._pending: list[tuple[np.ndarray, np.ndarray | bool]] = []  # since then
         self._kept: list[tuple[np.ndarray, bool]] = []  # blocked, not repaired (_keep)
         self._kept_n = 0  # cells in _kept
-        self._state = None  # (occupancy, its ReplanState, entry point): see _call
+        self._state: _Memo | None = None  # the ReplanState of the arrays: see _call
         self._keep_call = None  # keep_state's entry point (_keep)
         self._phase_call = None  # replan_phase_state's entry point (_phases)
         self._fl = {True: np.ones(1024, np.bool_), False: np.zeros(1024, np.bool_)}
@@ -402,24 +403,36 @@ class DStarLite:
         dispatcher would type the arguments on every call; here they are fixed:
         :meth:`plan` passes C-contiguous (K, 3) int64 cells and (K,) bool states)."""
         occ = self.world.occupancy
-        if self._state is not None and self._state[0] is occ and self._state[3] is self.start:
-            return self._state[2], self._state[1]
+        memo = self._state
+        if memo is not None and memo.occ is occ and memo.start is self.start:
+            return memo.call, memo.state
         state = dr.new_state(occ, self._ms, self._bx, self._nd, self._heap, self._sc,
                              self._state_array, self._fs, self.start)
         call = entry_point(dr.replan_state, (state, _NONE, _NONE_B))
-        self._state = (occ, state, call, self.start)
-        return self._state[2], state
+        self._state = _Memo(occ, state, call, self.start)
+        return call, state
 
     def _result(self, cells, cost, why, code) -> SearchResult:
         look, exp = int(self._sv[_LOOKUPS]), int(self._sv[_EXPANSIONS])
-        checks, expansions = look - self._mark[0], exp - self._mark[1]
+        look0, exp0 = self._mark
+        checks, expansions = look - look0, exp - exp0
         self._mark = (look, exp)
         self.world.cell_checks += checks
         secs, self._seconds = self._seconds, 0.0
         found = cells is not None
-        return SearchResult(found, cells if found else np.zeros((0, 3), np.int64), cost,
-                            checks, expansions, self.nodes, secs, self.peak_bytes, why,
-                            status=STATUS_OF_RUN[code], guarantee=self.guarantee)
+        return SearchResult(found=found, cells=cells if found else np.zeros((0, 3), np.int64),
+                            cost=cost, cell_checks=checks, expansions=expansions,
+                            generated=self.nodes, seconds=secs, peak_bytes=self.peak_bytes,
+                            reason=why, status=STATUS_OF_RUN[code], guarantee=self.guarantee)
+
+
+class _Memo(NamedTuple):
+    """The planner's ReplanState, its entry point, and what they were made for (_call)."""
+
+    occ: object  # the world's occupancy struct
+    state: object  # dr.ReplanState of the planner's arrays
+    call: object  # the compiled dr.replan_state for its type
+    start: np.ndarray
 
 
 _NONE = np.zeros((0, 3), np.int64)
