@@ -105,13 +105,22 @@ class _Context:
         self.fast: _Fast | None = None  # how run's short path repeats the last search
         self.points: _Points | None = None  # the last search_points (run_points)
 
-    def keep(self) -> None:
-        """Drop arrays a long search grew past the kept size (module docstring)."""
-        if len(self.nodes.key) > KEEP_NODES:
+    def keep(self, room: int = 0) -> None:
+        """Drop arrays a long search grew past the kept size: :data:`KEEP_NODES` node slots,
+        or ``room`` bytes of node table and heap (the dense slot array the context holds for
+        its grid anyway). A query loop on one grid then grows them once, not per long query
+        (the regrowth, its copies and first-touch page faults were a fifth of a long
+        query's time); the bound stays unless an array goes."""
+        dropped = False
+        if (len(self.nodes.key) > KEEP_NODES
+                and sum(a.nbytes for a in (*self.nodes, *self.heap)) > room):
             self.nodes, self.heap = new_nodes(_CAP), new_heap(_CAP)
+            dropped = True
         if len(self.slots.bkeys) > KEEP_NODES // 8:
             self.slots = new_slots(_PCAP)
-        self.bound = self.fast = None
+            dropped = True
+        if dropped:
+            self.bound = self.fast = None
 
 
 _LOCAL = threading.local()

@@ -5,8 +5,9 @@ A search's fixed cost is what it pays outside the expansions, so nothing here is
 per call: each thread keeps a :class:`_Context` (node table, heap, paged slot map, state,
 scratch) whose arrays the next search on that thread reuses, and a dense grid's cell -> slot
 array is held by the context that last searched the grid (pooled per grid when it moves on).
-Arrays grown past :data:`KEEP_NODES` for a long search are dropped afterwards, so an idle
-thread never holds more than a short search's memory.
+Arrays grown past :data:`KEEP_NODES` for a long search are dropped afterwards, unless they
+fit in the bytes of the dense grid's slot array the context keeps anyway, so an idle thread
+holds at most a short search's memory or twice that array.
 
 A search like the context's last one (same structs, settings and owner: the usual query
 loop) takes :func:`run`'s short path: one compiled call, given the end cells as six
@@ -264,7 +265,7 @@ def _run(ctx, occ, walk, ms, start, goal, params, span, owner, dense, pause_at, 
     rest = (0 if dslot is None else dslot.nbytes) + max(nu, 64) + _STATE_BYTES
     rest += 0 if sc is nos else _nbytes(sc)
     if len(ctx.nodes.key) > KEEP_NODES or len(ctx.slots.bkeys) > KEEP_NODES // 8:
-        ctx.keep()
+        ctx.keep(0 if dslot is None else dslot.nbytes)
     bd = ctx.bound
     if bd is not None and owner is not None and sc is nos and dense and bd.params is first:
         ctx.fast = _Fast(occ, ms, params, id(owner), walk, pause_at, keep_going is None,
