@@ -26,7 +26,7 @@ from planner.search import _heap
 from planner.search.heuristic import H_GAUGE, octile
 from planner.search.result import RUN_BUDGET, RUN_EXHAUSTED, RUN_FOUND, RUN_GROW, RUN_LIMIT
 
-__all__ = ["DenseTables", "dense_astar", "dense_tables"]
+__all__ = ["DenseTables", "dense_astar", "dense_tables", "stencil_mask"]
 
 
 @njit_cached
@@ -43,6 +43,33 @@ def grid_offsets(ust, moves, d1, d2):  # pragma: no cover - compiled
     for m in range(moves.shape[0]):
         moff[m] = (moves[m, 0] * d1 + moves[m, 1]) * d2 + moves[m, 2]
     return uoff, moff, reach
+
+
+@njit_cached(_nrt=False, inline="always")
+def stencil_mask(grid, a0, b0, c0, d0, d1, d2, base, reach, ust, uoff, bit):  # pragma: no cover
+    """The union stencil around grid cell (a0, b0, c0) read into a mask of its free cells:
+    the one home of that read for the A* loops (dense, dense Lazy Theta*, general).
+
+    ``grid`` the bit grid (uint8, C order, dims (d0, d1, d2)), ``base`` the cell's offset
+    in it, ``ust`` (U, 3) the stencil, ``uoff`` (U,) and ``reach`` its offsets and margin
+    (:func:`grid_offsets`), ``bit`` (U,) each stencil cell's bit in the mask. Inside the
+    margin the cells are read without bounds tests; a cell outside the box reads as
+    blocked. Returns the mask (int64)."""
+    free = np.int64(0)
+    if (a0 >= reach and b0 >= reach and c0 >= reach and a0 < d0 - reach
+            and b0 < d1 - reach and c0 < d2 - reach):
+        for j in range(ust.shape[0]):
+            f = base + uoff[j]
+            free |= np.int64((grid[np.uint64(f >> 3)] >> (f & 7)) & 1) << bit[j]
+    else:
+        for j in range(ust.shape[0]):
+            a = a0 + ust[j, 0]
+            b = b0 + ust[j, 1]
+            c = c0 + ust[j, 2]
+            if a >= 0 and b >= 0 and c >= 0 and a < d0 and b < d1 and c < d2:
+                f = (a * d1 + b) * d2 + c
+                free |= np.int64((grid[f >> 3] >> (f & 7)) & 1) << bit[j]
+    return free
 
 
 @njit_cached
@@ -239,29 +266,18 @@ def dense_astar(grid, lo, dims, ms, nodes, heap, dsl, st, max_nodes, max_exp, go
         # closed: the slot map holds -(slot + 1), so a neighbour's one load of it tells
         # closed from open (no load of its heap position)
         dsl[np.uint64(base)] = -(s + 1)
-        free = np.int64(0)
-        if (a0 >= reach and b0 >= reach and c0 >= reach and a0 < d0 - reach
-                and b0 < d1 - reach and c0 < d2 - reach):
-            if rows:
-                # each row of stencil cells along the fastest axis as one window of the
-                # bit grid: two byte loads instead of a load per cell
-                for r in range(nr):
-                    f = np.uint64(base + roff[r])
-                    i = f >> np.uint64(3)
-                    w = np.int64(grid[i]) | (np.int64(grid[min(i + np.uint64(1), last)]) << 8)
-                    free |= ((w >> np.int64(f & np.uint64(7))) & rmask[r]) << rshift[r]
-            else:
-                for j in range(nu):
-                    f = base + uoff[j]
-                    free |= np.int64((grid[np.uint64(f >> 3)] >> (f & 7)) & 1) << j
+        if rows and (a0 >= reach and b0 >= reach and c0 >= reach and a0 < d0 - reach
+                     and b0 < d1 - reach and c0 < d2 - reach):
+            # each row of stencil cells along the fastest axis as one window of the
+            # bit grid: two byte loads instead of a load per cell
+            free = np.int64(0)
+            for r in range(nr):
+                f = np.uint64(base + roff[r])
+                i = f >> np.uint64(3)
+                w = np.int64(grid[i]) | (np.int64(grid[min(i + np.uint64(1), last)]) << 8)
+                free |= ((w >> np.int64(f & np.uint64(7))) & rmask[r]) << rshift[r]
         else:
-            for j in range(nu):
-                a = a0 + ust[j, 0]
-                b = b0 + ust[j, 1]
-                c = c0 + ust[j, 2]
-                if a >= 0 and b >= 0 and c >= 0 and a < d0 and b < d1 and c < d2:
-                    f = (a * d1 + b) * d2 + c
-                    free |= np.int64((grid[f >> 3] >> (f & 7)) & 1) << ubit[j]
+            free = stencil_mask(grid, a0, b0, c0, d0, d1, d2, base, reach, ust, uoff, ubit)
         blocked = all_u & ~free
         lookups += nu
         if ks == gk:

@@ -22,7 +22,7 @@ from planner._numba import njit_cached
 from planner.occupancy.keys import pack3, step3, unpack3
 from planner.search import _heap
 from planner.search._los import DDA_MAX, dense_walk, is_cubic, sight
-from planner.search.astar.dense import grid_offsets
+from planner.search.astar.dense import grid_offsets, stencil_mask
 from planner.search.heuristic import length, rows
 from planner.search.result import RUN_BUDGET, RUN_EXHAUSTED, RUN_FOUND, RUN_GROW, RUN_LIMIT
 
@@ -64,6 +64,7 @@ def dense_lazy_theta(occ, walk, ms, nodes, heap, dsl, sc, st, max_nodes, max_exp
     moves = ms.moves
     nm = moves.shape[0]
     uoff, moff, reach = grid_offsets(ms.union, moves, occ.dims[1], occ.dims[2])
+    ubit = np.arange(ms.union.shape[0])  # each stencil cell's bit: the stencil's order
     mkey = np.empty(nm, np.int64)
     for m in range(nm):
         mkey[m] = step3(moves[m, 0], moves[m, 1], moves[m, 2])
@@ -71,19 +72,21 @@ def dense_lazy_theta(occ, walk, ms, nodes, heap, dsl, sc, st, max_nodes, max_exp
     # stay inside its box
     cubic = is_cubic(walk.g) and occ.dims.max() <= DDA_MAX
     return _loop(occ, walk, ms, nodes, heap, dsl, sc, st, max_nodes, max_exp, goal, hw, uoff,
-                 moff, reach, mkey, 1e-9 * ms.cost.min(), cubic)
+                 ubit, moff, reach, mkey, 1e-9 * ms.cost.min(), cubic)
 
 
 # Without the runtime's reference counting, as the dense A* loop (planner.search.astar.dense):
 # each heap operation here would otherwise incref / decref the heap arrays it binds.
 @njit_cached(_nrt=False)
-def _loop(occ, walk, ms, nodes, heap, dsl, sc, st, max_nodes, max_exp, goal, hw, uoff, moff,
+def _loop(occ, walk, ms, nodes, heap, dsl, sc, st, max_nodes, max_exp, goal, hw, uoff, ubit, moff,
           reach, mkey, fq, cubic):  # pragma: no cover - compiled
     """:func:`dense_lazy_theta`'s loop, given its tables: ``uoff`` (U,) and ``moff`` (M,) the
     stencil's and the moves' grid offsets and ``reach`` their margin (cells)
-    (:func:`planner.search.astar.dense.grid_offsets`), ``mkey`` (M,) each move as an offset
-    of the packed key, ``fq`` the f grid (1e-9 of the shortest move, m), ``cubic`` the
-    sight line by the integer walk on the grid's arrays (else :func:`sight`)."""
+    (:func:`planner.search.astar.dense.grid_offsets`), ``ubit`` (U,) each stencil cell's
+    bit in the free mask (:func:`planner.search.astar.dense.stencil_mask`),
+    ``mkey`` (M,) each move as an offset of the packed key, ``fq`` the f grid (1e-9 of the
+    shortest move, m), ``cubic`` the sight line by the integer walk on the grid's arrays
+    (else :func:`sight`)."""
     grid, lo, dims = occ.grid, occ.lo, occ.dims
     lo0, lo1, lo2 = lo[0], lo[1], lo[2]
     d0, d1, d2 = dims[0], dims[1], dims[2]
@@ -117,20 +120,7 @@ def _loop(occ, walk, ms, nodes, heap, dsl, sc, st, max_nodes, max_exp, goal, hw,
         u0, u1, u2 = unpack3(ks)
         a0, b0, c0 = u0 - lo0, u1 - lo1, u2 - lo2
         base = (a0 * d1 + b0) * d2 + c0
-        free = np.int64(0)
-        if (a0 >= reach and b0 >= reach and c0 >= reach and a0 < d0 - reach
-                and b0 < d1 - reach and c0 < d2 - reach):
-            for j in range(nu):
-                f = base + uoff[j]
-                free |= np.int64((grid[np.uint64(f >> 3)] >> (f & 7)) & 1) << j
-        else:
-            for j in range(nu):
-                a = a0 + ust[j, 0]
-                b = b0 + ust[j, 1]
-                c = c0 + ust[j, 2]
-                if a >= 0 and b >= 0 and c >= 0 and a < d0 and b < d1 and c < d2:
-                    f = (a * d1 + b) * d2 + c
-                    free |= np.int64((grid[f >> 3] >> (f & 7)) & 1) << j
+        free = stencil_mask(grid, a0, b0, c0, d0, d1, d2, base, reach, ust, uoff, ubit)
         blocked = all_u & ~free
         lookups += nu
         ps = npar[s]

@@ -35,7 +35,7 @@ from planner.search._nodes import (
     local,
     new_page,
 )
-from planner.search.astar.dense import dense_astar, grid_offsets
+from planner.search.astar.dense import dense_astar, grid_offsets, stencil_mask
 from planner.search.astar.dense_theta import dense_lazy_theta
 from planner.search.heuristic import H_EUCLID, estimate, length, node_estimate, rows
 from planner.search.moves import MAX_BITS, move_allowed
@@ -147,8 +147,9 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state
         return status
     # the loop's tables, made here: the loop allocates nothing (see _loop)
     uoff, moff, reach = grid_offsets(ms.union, ms.moves, occ.dims[1], occ.dims[2])
-    status = _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, moff,
-                   reach, 1e-9 * ms.cost.min())
+    ubit = np.arange(ms.union.shape[0])  # each stencil cell's bit in the mask: its order
+    status = _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, ubit,
+                   moff, reach, 1e-9 * ms.cost.min())
     st.status = status
     return status
 
@@ -158,12 +159,14 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state
 # Its rare allocating paths (the sight walk on fresh arrays, the float clipping of very
 # long cubic lines) are separate compiled functions, which keep theirs.
 @njit_cached(_nrt=False)
-def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, moff, reach,
-          fq):  # pragma: no cover - compiled
+def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, ubit, moff,
+          reach, fq):  # pragma: no cover - compiled
     """:func:`search_run`'s general loop, given its tables: ``uoff`` (U,) and ``moff`` (M,)
     the stencil's and the moves' grid offsets and ``reach`` their margin (cells)
-    (:func:`planner.search.astar.dense.grid_offsets`), ``fq`` the f grid (1e-9 of the
-    shortest move, m). Returns the run code (see :func:`search_run`)."""
+    (:func:`planner.search.astar.dense.grid_offsets`), ``ubit`` (U,) each stencil cell's
+    bit in the free mask (:func:`planner.search.astar.dense.stencil_mask`),
+    ``fq`` the f grid (1e-9 of the shortest move, m). Returns the run code (see
+    :func:`search_run`)."""
     mode, grid, lo, dims, otable, otmask, gg, blo, bhi = occ
     lo0, lo1, lo2 = lo[0], lo[1], lo[2]
     d0, d1, d2 = dims[0], dims[1], dims[2]
@@ -225,19 +228,8 @@ def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, 
             inner = (a0 >= reach and b0 >= reach and c0 >= reach and a0 < d0 - reach
                      and b0 < d1 - reach and c0 < d2 - reach)
             if bits:  # straight into the mask of free cells
-                free = np.int64(0)
-                if inner:
-                    for j in range(nu):
-                        f = base + uoff[j]
-                        free |= np.int64((grid[np.uint64(f >> 3)] >> (f & 7)) & 1) << j
-                else:
-                    for j in range(nu):
-                        a = a0 + ust[j, 0]
-                        b = b0 + ust[j, 1]
-                        c = c0 + ust[j, 2]
-                        if a >= 0 and b >= 0 and c >= 0 and a < d0 and b < d1 and c < d2:
-                            f = (a * d1 + b) * d2 + c
-                            free |= np.int64((grid[f >> 3] >> (f & 7)) & 1) << j
+                free = stencil_mask(grid, a0, b0, c0, d0, d1, d2, base, reach, ust, uoff,
+                                    ubit)
                 blocked = all_u & ~free
             elif inner:
                 for j in range(nu):
