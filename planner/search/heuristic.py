@@ -88,12 +88,7 @@ def node_estimate(oct_s, hkind, hmat, hw, gm, e0, e1, e2):  # pragma: no cover -
     if oct_s > 0.0:
         return octile(oct_s, e0, e1, e2)
     if hkind == H_GAUGE:
-        hv = 0.0
-        for f in range(hmat.shape[0]):
-            x = hmat[f, 0] * e0 + hmat[f, 1] * e1 + hmat[f, 2] * e2
-            if x > hv:
-                hv = x
-        return hv
+        return gauge(hmat, e0, e1, e2)
     if hkind == H_EUCLID:
         return hw * length(gm, e0, e1, e2)
     return 0.0
