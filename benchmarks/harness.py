@@ -175,15 +175,19 @@ def paired(x, y, seed: int = 0) -> Ratio:
 def ratio_line(what: str, x, y, *, goal: str = "", note: str = "",
                overall: float | None = None) -> str:
     """``ratio WHAT: median M [95% CI L, H], overall T, n N`` of the paired ``x / y``
-    (one line, the form every script prints its ratios in; ``goal`` e.g. ``">= 0.9"``).
+    (one line, the form every script prints its ratios in; ``[no 95% CI: too few pairs]``
+    under 6 pairs; ``goal`` e.g. ``">= 0.9"``).
     ``overall`` is ``sum(x) / sum(y)`` unless given (e.g. a ratio of rates over all
     items)."""
     r = paired(x, y)
     if r.n == 0:
         return f"ratio {what}: no pairs" + (f" ({note})" if note else "")
     total = r.total if overall is None else overall
-    line = (f"ratio {what}: median {r.median:.3g} [95% CI {r.low:.3g}, {r.high:.3g}], "
-            f"overall {total:.3g}, n {r.n}")
+    # too few pairs for a 95% signed-rank interval (n < 6): the paired statistic returns
+    # [0, inf], which reads like a measured range
+    ci = (f"[95% CI {r.low:.3g}, {r.high:.3g}]" if r.low > 0 and math.isfinite(r.high)
+          else "[no 95% CI: too few pairs]")
+    line = f"ratio {what}: median {r.median:.3g} {ci}, overall {total:.3g}, n {r.n}"
     if goal:
         line += f" (goal {goal})"
     if note:

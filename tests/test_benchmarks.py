@@ -99,13 +99,21 @@ def test_interleaved_takes_turns_and_keeps_each_items_fastest_round(bench_module
 
 
 def test_ratio_line_reads_like_the_scripts_print_it(bench_modules):
-    x = [2.0, 4.0, 6.0, 8.0]
-    y = [1.0, 2.0, 3.0, 2.0]
+    x = [2.0, 4.0, 6.0, 8.0, 2.0, 4.0]
+    y = [1.0, 2.0, 3.0, 2.0, 1.0, 2.0]
     line = bench_modules.ratio_line("ours/floor", x, y, goal=">= 0.9")
     assert RATIO.match(line)
-    assert line.startswith("ratio ours/floor: median 2 [95% CI ")
-    assert "overall 2.5, n 4 (goal >= 0.9)" in line
+    assert line.startswith("ratio ours/floor: median 2 [95% CI 2, ")
+    assert line.endswith("overall 2.36, n 6 (goal >= 0.9)")
     assert bench_modules.single_ratio("x", 3.0, 2.0) == "ratio x: 1.5"
+
+
+def test_ratio_line_says_when_there_are_too_few_pairs_for_an_interval(bench_modules):
+    # under 6 pairs the signed-rank interval is [0, inf]: printed as such it would read
+    # like a measured range
+    line = bench_modules.ratio_line("ours/floor", [2.0, 4.0, 6.0, 8.0], [1.0, 2.0, 3.0, 2.0])
+    assert line == ("ratio ours/floor: median 2 [no 95% CI: too few pairs], overall 2.5, "
+                    "n 4")
 
 
 def test_traced_peak_sees_an_array_made_in_the_call(bench_modules):
