@@ -13,9 +13,9 @@ Usage::
     python benchmarks/explore_profile.py --smoke              # office, cubic, coarse sensor
 
 Counts only (no timing): they explain the times of ``benchmarks/explore_speed.py``. The
-counts are read from the planner's state after each :meth:`DStarLite.plan` (wrapped for
-the run): what a replan collected and which rest-map lines its check reads are internal
-to D* Lite, with no public counter. On the benchmark harness (``benchmarks/harness.py``):
+counts are read after each :meth:`DStarLite.plan` (wrapped for the run) from the
+planner's profiling counters (:attr:`DStarLite.last_repair`,
+:meth:`DStarLite.pending_check_lines`). On the benchmark harness (``benchmarks/harness.py``):
 its header (machine, load, versions, commit), and per lattice two ``ratio`` lines: the
 first plan's expansions, D* Lite / A* forwards on the same map state, and the cache lines
 a kept replan's check reads, with the block map / the cell map alone (medians).
@@ -47,17 +47,16 @@ def profile(name: str, lattice: str, query: int, resolution: float = 3.0) -> dic
     plan = DStarLite.plan
 
     def counted_plan(self):
-        lines = _rest_lines(self)  # before the plan takes the pending cells
+        lines = self.pending_check_lines()  # before the plan takes the pending cells
         if not any(x is self for x in planners):  # its first plan: A* backwards
             planners.append(self)
             back = search(self.world, self.goal, self.start, method="astar",
                           neighbors=NEIGHBORS)
             first["backward"] = back.expansions  # the explorer's planner's last
         r = plan(self)
-        kept = r.cell_checks == 0  # kept the stored path: nothing collected (a repair
-        n = 0 if kept else int(self._st["collected"])  # looks the start's cell up)
-        dead = int((self._nd.mask[self._sc.ss[:n]] == 0).sum()) if n else 0
-        rows.append((id(self), n, dead, kept, *lines))
+        kept = r.cell_checks == 0  # kept the stored path (a repair looks the start's cell up)
+        rep = self.last_repair
+        rows.append((id(self), rep.collected, rep.died, kept, lines.cell_map, lines.block_map))
         return r
 
     DStarLite.plan = counted_plan
@@ -77,24 +76,6 @@ def profile(name: str, lattice: str, query: int, resolution: float = 3.0) -> dic
             "collected": _median(rep[:, 0]), "died": _median(rep[:, 1]),
             "dstar_first": int(r.replan_expansions[0]),
             "forward": int(r.astar_expansions[0]), **first}
-
-
-def _rest_lines(planner: DStarLite) -> tuple[int, int]:
-    """Cache lines (64 bytes) a kept replan's check of the pending cells reads: of the
-    per-cell rest map alone, and of the 4x4x4-block map plus the cell map's lines of the
-    cells whose block is marked (:mod:`planner.search.dstar.rest`)."""
-    pend = [c for c, _ in planner._pending if len(c)]
-    if not pend:
-        return 0, 0
-    bx = planner._bx
-    d = bx.dims
-    a = np.concatenate(pend) - bx.lo
-    a = a[((a >= 0) & (a < d)).all(axis=1)]
-    k = (a[:, 0] * d[1] + a[:, 1]) * d[2] + a[:, 2]
-    q = ((a[:, 0] >> 2) * ((d[1] + 3) >> 2) + (a[:, 1] >> 2)) * ((d[2] + 3) >> 2) + (a[:, 2] >> 2)
-    marked = ((bx.rest_blocks[q >> 3] >> (q & 7)) & 1).astype(bool)
-    return (len(np.unique(k >> 9)),  # 512 bits a line
-            len(np.unique(q >> 9)) + len(np.unique(k[marked] >> 9)))
 
 
 def _median(x: np.ndarray) -> float:

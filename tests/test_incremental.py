@@ -260,3 +260,25 @@ def test_plan_phases_plans_as_plan_does_and_times_each_phase_it_ran():
             elif batch % 3 == 1:
                 p.update(w.set_cells(far, False), blocked=False)
     assert ran["repair"] >= 3 and ran["grew"] >= 1, ran
+
+
+def test_profiling_counters_say_what_a_replan_read_and_repaired():
+    # pending_check_lines: the cache lines a kept replan's check of the pending cells
+    # reads, with the per-cell rest map alone and with the 4x4x4 block map first (one
+    # line of blocks, plus the cell line of a cell whose block holds the path).
+    # last_repair: the nodes the last plan collected and those that lost every edge.
+    world = World(Lattice.named("cubic", 1.0), [], [[0, 0, 0], [12, 6, 2]])
+    d = DStarLite(world, [0, 3, 1], [12, 3, 1])
+    assert d.pending_check_lines() == (0, 0) and d.last_repair == (0, 0)
+    d.plan()
+    d.update(world.set_cells([[12, 6, 2]], True), blocked=True)  # far from the path
+    assert d.pending_check_lines() == (1, 1)
+    d.plan()
+    assert d.last_repair == (0, 0)  # kept the stored path: nothing repaired
+    d.update(world.set_cells([[6, 3, 1]], True), blocked=True)  # under the path
+    assert d.pending_check_lines() == (1, 2)
+    d.plan()
+    rep = d.last_repair
+    assert rep.collected >= 2 and 1 <= rep.died <= rep.collected  # the cell's own node
+    d.update(np.array([[100, 100, 100]]), blocked=True)  # outside the box: reads nothing
+    assert d.pending_check_lines() == (0, 0)

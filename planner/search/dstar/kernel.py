@@ -33,7 +33,7 @@ import numpy as np
 
 from planner._numba import njit_cached
 from planner.occupancy.grid import occ_free
-from planner.occupancy.keys import pack3, unpack3
+from planner.occupancy.keys import pack3, unpack, unpack3
 from planner.search import _heap
 from planner.search._state import state_dtype
 from planner.search.heuristic import gauge
@@ -121,6 +121,36 @@ def new_nodes(cap: int, keep: DNodes | None = None, n: int = 0) -> DNodes:
         for a, b in zip(nd, keep, strict=True):
             a[:n] = b[:n]
     return nd
+
+
+def box_ordered(nd: DNodes, bx: DBox, heap, st) -> tuple[DNodes, int]:
+    """The node table renumbered in the order of the nodes' cells in the box, without the
+    rows of nodes that left the node map (:func:`planner.search.dstar.replan._settle`);
+    the heap's slots, the box's cell -> node map and the state record's ``goal`` and
+    ``nodes`` are renumbered in place. Returns the new table and its node count.
+
+    Searches create nodes in expansion order, scattered in memory; a scan's repair then
+    reads the rows of the nodes next to its cells, neighbours in space. In box order they
+    share pages and neighbouring cache lines. O(n log n) numpy."""
+    n = int(st["nodes"])
+    d = bx.dims
+    a = unpack(nd.key[:n], 3) - bx.lo
+    b = (a[:, 0] * d[1] + a[:, 1]) * d[2] + a[:, 2]
+    ids = np.arange(n)
+    old = ids[bx.slot[b] == ids]  # rows still in the node map
+    old = old[np.argsort(b[old], kind="stable")]
+    m = len(old)
+    new_id = np.full(n, -1, np.int64)
+    new_id[old] = np.arange(m)
+    table = new_nodes(len(nd.key))
+    for dst, src in zip(table, nd, strict=True):
+        dst[:m] = src[old]
+    hn = int(st["queued"])
+    heap.slot[:hn] = new_id[heap.slot[:hn]]
+    bx.slot[b[old]] = np.arange(m, dtype=np.int32)
+    st["goal"] = new_id[st["goal"]]
+    st["nodes"] = m
+    return table, m
 
 
 @njit_cached(_nrt=False)

@@ -42,13 +42,13 @@ import numpy as np
 
 from planner._entry import entry_point, raw_entry_point, signal_cause
 from planner.errors import PlanError
-from planner.occupancy.keys import unpack
 from planner.occupancy.walk import as_cells
 from planner.search._grow import grown
 from planner.search._heap import Heap, new_heap
 from planner.search._state import new_state
 from planner.search.dstar import kernel as dk
 from planner.search.dstar import replan as dr
+from planner.search.dstar.rest import CheckLines, check_lines
 from planner.search.heuristic import H_GAUGE, gauge_np
 from planner.search.moves import carries_guarantee, move_set
 from planner.search.result import RUN_FOUND, RUN_GROW, STATUS_OF_RUN, SearchResult
@@ -129,6 +129,7 @@ class DStarLite:
         self._phase_call = None  # replan_phase_state's entry point (_phases)
         self._fl = {True: np.ones(1024, np.bool_), False: np.zeros(1024, np.bool_)}
         self._peak = 0
+        self._repair = RepairCounts(0, 0)
         self._ordered = 0  # node count at the last renumbering (_compact)
         self._sized()
 
@@ -175,6 +176,18 @@ class DStarLite:
         """Bytes of the planner's own arrays (they only grow)."""
         return self._peak
 
+    @property
+    def last_repair(self) -> RepairCounts:
+        """What the last :meth:`plan` repaired (zeros before the first and for a plan that
+        kept the stored path or was told no change): for profiling."""
+        return self._repair
+
+    def pending_check_lines(self) -> CheckLines:
+        """The cache lines a kept replan's check of the changes told since the last
+        :meth:`plan` reads (:func:`planner.search.dstar.rest.check_lines`): for profiling."""
+        pend = [c for c, _ in self._pending if len(c)]
+        return check_lines(self._bx, np.concatenate(pend) if pend else _NONE)
+
     def _sized(self) -> None:
         """Recount :attr:`peak_bytes` (after arrays grew); the replan state is remade."""
         self._state = None
@@ -183,35 +196,9 @@ class DStarLite:
                             for a in part))
 
     def _compact(self) -> None:
-        """Renumber the nodes in the order of their cells in the box, dropping the rows of
-        nodes that left the node map (:func:`dr._settle`).
-
-        Searches create nodes in expansion order, scattered in memory; a scan's repair
-        then reads the rows of the nodes next to its cells, neighbours in space. In box
-        order they share pages and neighbouring cache lines. Run after a plan that at
-        least doubled the node count (the first one mostly): O(n log n) numpy, counted
-        in that plan's time."""
-        st, nd, bx = self._st, self._nd, self._bx
-        n = int(st["nodes"])
-        d = bx.dims
-        a = unpack(nd.key[:n], 3) - bx.lo
-        b = (a[:, 0] * d[1] + a[:, 1]) * d[2] + a[:, 2]
-        ids = np.arange(n)
-        old = ids[bx.slot[b] == ids]  # rows still in the node map
-        old = old[np.argsort(b[old], kind="stable")]
-        m = len(old)
-        new_id = np.full(n, -1, np.int64)
-        new_id[old] = np.arange(m)
-        table = dk.new_nodes(len(nd.key))
-        for dst, src in zip(table, nd, strict=True):
-            dst[:m] = src[old]
-        hn = int(st["queued"])
-        self._heap.slot[:hn] = new_id[self._heap.slot[:hn]]
-        bx.slot[b[old]] = np.arange(m, dtype=np.int32)
-        st["goal"] = new_id[st["goal"]]
-        st["nodes"] = m
-        self._nd = table
-        self._ordered = m
+        """Renumber the nodes in box order (:func:`dk.box_ordered`), after a plan that at
+        least doubled the node count (the first one mostly); counted in that plan's time."""
+        self._nd, self._ordered = dk.box_ordered(self._nd, self._bx, self._heap, self._st)
         self._sized()
 
     # -- the three operations ------------------------------------------------------------
@@ -299,6 +286,7 @@ class DStarLite:
         if self._sv[_PATH_VALID] and self._blocks_only(pend):
             kept = self._keep(pend)
             if kept is not None:
+                self._repair = RepairCounts(0, 0)
                 return kept
         if self._kept:  # repaired now, before the new changes
             pend = self._kept + pend
@@ -328,6 +316,8 @@ class DStarLite:
                 self._room(int(st["need_nodes"]))
                 call, arg = self._call()
             done = call(arg, cells, state)
+        n = int(st["collected"]) if len(cells) else 0  # before _compact renumbers them
+        self._repair = RepairCounts(n, int((self._nd.mask[self._sc.ss[:n]] == 0).sum()))
         if int(st["nodes"]) >= max(_COMPACT_MIN, 2 * self._ordered):
             self._compact()
         self._seconds += time.perf_counter() - t0
@@ -424,6 +414,13 @@ class DStarLite:
                             cost=cost, cell_checks=checks, expansions=expansions,
                             generated=self.nodes, seconds=secs, peak_bytes=self.peak_bytes,
                             reason=why, status=STATUS_OF_RUN[code], guarantee=self.guarantee)
+
+
+class RepairCounts(NamedTuple):
+    """A plan's repair (:attr:`DStarLite.last_repair`)."""
+
+    collected: int  # nodes whose stencil holds a changed cell, repaired
+    died: int  # of those, left without edges (their own cell blocked, or walled in)
 
 
 class _Memo(NamedTuple):

@@ -20,6 +20,8 @@ map is 64 times smaller (fewer cache lines to fetch).
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from planner._numba import njit_cached
@@ -118,3 +120,27 @@ def keep_path(bx, counts, fs, start, path, step, cells):  # pragma: no cover
             return True
     return False
 
+
+
+class CheckLines(NamedTuple):
+    """Cache lines (64 bytes) a kept replan's check of some cells reads
+    (:func:`check_lines`)."""
+
+    cell_map: int  # with the per-cell rest map alone
+    block_map: int  # with the block map first, then the cell map's lines of marked blocks
+
+
+def check_lines(bx, cells: np.ndarray) -> CheckLines:
+    """The cache lines a kept replan's check of ``cells`` ((K, 3) int64 lattice indices)
+    reads on box ``bx`` (``DBox``), with the cell map alone and with the block map
+    (module docstring); cells outside the box read nothing. For profiling
+    (``benchmarks/explore_profile.py``)."""
+    d = bx.dims
+    a = np.asarray(cells, np.int64).reshape(-1, 3) - bx.lo
+    a = a[((a >= 0) & (a < d)).all(axis=1)]
+    k = (a[:, 0] * d[1] + a[:, 1]) * d[2] + a[:, 2]
+    q = ((a[:, 0] >> 2) * ((d[1] + 3) >> 2) + (a[:, 1] >> 2)) * ((d[2] + 3) >> 2) + (a[:, 2] >> 2)
+    marked = ((bx.rest_blocks[q >> 3] >> (q & 7)) & 1).astype(bool)
+    line = 9  # 512 bits a line
+    return CheckLines(cell_map=len(np.unique(k >> line)),
+                      block_map=len(np.unique(q >> line)) + len(np.unique(k[marked] >> line)))
