@@ -146,9 +146,9 @@ class Sensor:
             size *= 2
         big = np.full(3, np.inf)
         g = np.array(lattice.generator, dtype=float, order="C")
-        self.occ = Occupancy(1, np.zeros(1, np.uint8), np.zeros(3, np.int64),
-                             np.zeros(3, np.int64), build_key_set(uniq, size), size - 1, g,
-                             -big, big.copy())
+        self.occ = Occupancy(mode=1, grid=np.zeros(1, np.uint8), lo=np.zeros(3, np.int64),
+                             dims=np.zeros(3, np.int64), table=build_key_set(uniq, size),
+                             tmask=size - 1, gmat=g, blo=-big, bhi=big.copy())
         self.walk, self.dirs, self.reach = walk, dirs, float(reach)
         self.lattice = lattice
         self.hits = np.zeros((len(dirs), 3), np.int64)

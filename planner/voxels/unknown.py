@@ -393,8 +393,9 @@ def ray_free_keys(points: np.ndarray, origins: np.ndarray, point_origin: np.ndar
     dims = both.max(axis=0) + 2 - lo + 1
     grid = np.ones(int(np.prod(dims)), dtype=np.uint8)  # 0: crossed by a ray
     g = c_array(lattice.generator, float)
-    dummy = wk.Occupancy(0, np.ones(1, np.uint8), np.zeros(3, np.int64), np.ones(3, np.int64),
-                         np.full(1, -1, np.int64), 0, g, np.zeros(3), np.zeros(3))
+    dummy = wk.Occupancy(mode=0, grid=np.ones(1, np.uint8), lo=np.zeros(3, np.int64),
+                         dims=np.ones(3, np.int64), table=np.full(1, -1, np.int64), tmask=0,
+                         gmat=g, blo=np.zeros(3), bhi=np.zeros(3))
     _mark_rays(dummy, walk_of(lattice), a, b, s, grid, lo.astype(np.int64),
                dims.astype(np.int64))
     grid[(ends - lo) @ grid_strides(dims)] = 1  # a point's own cell is occupied, not free

@@ -239,14 +239,16 @@ class World(CellSets, UnknownSpace, LocalFrame):
         blo, bhi = (c_array(x, float) for x in self._tol_bounds())
         if self._free is not None:
             f = self._free
-            return Occupancy(0, f.bits, f.lo, f.dims, np.full(1, -1, np.int64), 0, g, blo, bhi)
+            return Occupancy(mode=0, grid=f.bits, lo=f.lo, dims=f.dims,
+                             table=np.full(1, -1, np.int64), tmask=0, gmat=g, blo=blo, bhi=bhi)
         keys = np.unique(pack(self._blocked))
         size = 16
         while size < 2 * len(keys):
             size *= 2
         table = build_key_set(keys, size)
-        return Occupancy(1, np.zeros(1, np.uint8), np.zeros(3, np.int64),
-                         np.zeros(3, np.int64), table, size - 1, g, blo, bhi)
+        return Occupancy(mode=1, grid=np.zeros(1, np.uint8), lo=np.zeros(3, np.int64),
+                         dims=np.zeros(3, np.int64), table=table, tmask=size - 1, gmat=g,
+                         blo=blo, bhi=bhi)
 
     # -- queries ----------------------------------------------------------------------
     def in_bounds(self, indices: np.ndarray) -> np.ndarray:

@@ -45,6 +45,10 @@ from planner.search.result import RUN_BLOCKED, RUN_FOUND, RUN_GROW
 #: the start's row in it), the replan's phase, its collected nodes, the room it asks for
 #: (nodes, repair scratch), whether the start's own cell is still to be checked, the
 #: replan's path: rows [path_from, path_to) of the path buffer
+#: the slots of a planner's (2,) float64 ``fs`` array, which the compiled replan reads and
+#: writes: the key modifier km (m, the heuristic's drift as the start moves) and the stored
+#: path's cost (m)
+KM, PATH_COST = 0, 1
 REPLAN_STATE = state_dtype("path_id", "path_valid", "path_len", "path_at", "phase",
                            "collected", "need_nodes", "need_scratch", "check_start",
                            "path_from", "path_to")

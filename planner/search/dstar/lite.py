@@ -106,14 +106,14 @@ class DStarLite:
         self._nd = dk.new_nodes(4096)
         self._heap = new_heap(4096)
         i8 = np.int64
-        self._sc = dr.DScratch(np.empty(len(self._ms.union), np.bool_), affect,
-                               np.empty(1024, i8), np.empty(1024, i8),
-                               np.empty(1024, np.bool_), np.empty(1024, i8),
-                               np.empty((4097, 3), i8), np.empty(4097, np.float64))
+        self._sc = dr.DScratch(ufree=np.empty(len(self._ms.union), np.bool_), affect=affect,
+                               ss=np.empty(1024, i8), old=np.empty(1024, i8),
+                               redo=np.empty(1024, np.bool_), touched=np.empty(1024, i8),
+                               path=np.empty((4097, 3), i8), step=np.empty(4097, np.float64))
         self._state_array = new_state(dk.REPLAN_STATE)  # (1,): what the compiled call takes
         self._st = self._state_array[0]  # its record: a view, read and written from here
         self._sv = self._state_array.view(np.int64)  # the same by field index (_NODES...)
-        self._fs = np.zeros(2)  # km, the last path's cost
+        self._fs = np.zeros(2)  # slots dk.KM and dk.PATH_COST
         self._last = self.start.copy()
         g = dk.node(self._bx, self._nd, self._st, *(int(x) for x in self.goal), True)
         self._st["goal"] = g
@@ -205,7 +205,7 @@ class DStarLite:
     def move_start(self, cell) -> None:
         """The robot moved to ``cell`` ((3,) int): keys stay valid through ``km``."""
         c = as_cells(cell)[0]
-        self._fs[0] += float(gauge_np(self._ms.hmat, c - self._last))
+        self._fs[dk.KM] += float(gauge_np(self._ms.hmat, c - self._last))
         self._last = c.copy()
         self.start[:] = c  # in place: the replan's entry point is keyed on this array
 
@@ -323,7 +323,7 @@ class DStarLite:
         self._seconds += time.perf_counter() - t0
         if done == RUN_FOUND:
             j, k = int(st["path_from"]), int(st["path_to"])
-            return self._result(self._sc.path[j:k].copy(), float(self._fs[1]), "", done)
+            return self._result(self._sc.path[j:k].copy(), float(self._fs[dk.PATH_COST]), "", done)
         why = ("start cell is blocked" if STATUS_OF_RUN[done] == "blocked"
                else f"goal unreachable: explored {self.nodes} cells")
         return self._result(None, math.inf, why, done)
@@ -365,7 +365,7 @@ class DStarLite:
             self._kept.append((cells.copy() if cells is pend[0][0] else cells, True))
             self._kept_n += len(cells)
         return self._result(self._sc.path[sv[_PATH_FROM]:sv[_PATH_TO]].copy(),
-                            float(self._fs[1]), "", RUN_FOUND)
+                            float(self._fs[dk.PATH_COST]), "", RUN_FOUND)
 
     def _blocks_only(self, pend: list) -> bool:
         """Whether the changes ``pend`` only block cells, few enough to keep pending."""
@@ -396,8 +396,8 @@ class DStarLite:
         memo = self._state
         if memo is not None and memo.occ is occ and memo.start is self.start:
             return memo.call, memo.state
-        state = dr.new_state(occ, self._ms, self._bx, self._nd, self._heap, self._sc,
-                             self._state_array, self._fs, self.start)
+        state = dr.new_state(occ=occ, ms=self._ms, bx=self._bx, nd=self._nd, heap=self._heap,
+                             sc=self._sc, st=self._state_array, fs=self._fs, start=self.start)
         call = entry_point(dr.replan_state, (state, _NONE, _NONE_B))
         self._state = _Memo(occ, state, call, self.start)
         return call, state

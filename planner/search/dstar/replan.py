@@ -21,6 +21,8 @@ from planner._numba import borrow_fields, njit_cached
 from planner.occupancy.keys import unpack3
 from planner.search.astar.dense import grid_offsets
 from planner.search.dstar.kernel import (
+    KM,
+    PATH_COST,
     _box,
     _near_path,
     _remove,
@@ -106,7 +108,8 @@ def replan(occ, ms, bx, nd, heap, sc, st, fs, start, cells, blocked):
     """One replan, resumable: collect the changed cells' nodes (``cells`` (K, 3),
     ``blocked`` (K,) what each became), repair their edges, ComputeShortestPath, extract
     the path. ``st``: the planner's state record
-    (:data:`~planner.search.dstar.kernel.REPLAN_STATE`); ``fs``: [km, path cost]. The caller
+    (:data:`~planner.search.dstar.kernel.REPLAN_STATE`); ``fs``: (2,) km and the path's
+    cost (slots :data:`~planner.search.dstar.kernel.KM` and ``PATH_COST``). The caller
     sets ``st.phase`` (PH_COLLECT, or PH_SEARCH without changes) and ``st.check_start``;
     on RUN_GROW it makes room for ``st.need_nodes`` nodes, ``st.need_scratch`` repair scratch
     and a path of every node, and calls again.
@@ -160,12 +163,12 @@ def _phase(occ, ms, bx, nd, heap, sc, st, fs, start, cells, blocked):
             st.need_nodes = n * nm + 1
             st.need_scratch = 2 * n * nm + 1
             return RUN_GROW
-        apply_changes(occ, ms, sc.ufree, bx, nd, heap, st, fs[0], start, sc.ss, sc.old,
+        apply_changes(occ, ms, sc.ufree, bx, nd, heap, st, fs[KM], start, sc.ss, sc.old,
                       sc.redo, n, sc.touched)
         st.phase = PH_SEARCH
         return RUN_NEXT
     if st.phase == PH_SEARCH:
-        r = compute_path(occ, ms, sc.ufree, bx, nd, heap, st, fs[0], start, st.check_start == 1)
+        r = compute_path(occ, ms, sc.ufree, bx, nd, heap, st, fs[KM], start, st.check_start == 1)
         st.check_start = 0
         if r == RUN_GROW:
             st.need_nodes = nm + 1
@@ -179,7 +182,7 @@ def _phase(occ, ms, bx, nd, heap, sc, st, fs, start, cells, blocked):
     j, k, cost = extract(occ, ms, sc.ufree, bx, nd, st, start, sc.path, sc.step)
     st.path_from = j
     st.path_to = k
-    fs[1] = cost
+    fs[PATH_COST] = cost
     return RUN_FOUND if k > j else RUN_EXHAUSTED
 
 

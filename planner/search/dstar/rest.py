@@ -25,7 +25,7 @@ from typing import NamedTuple
 import numpy as np
 
 from planner._numba import njit_cached
-from planner.search.dstar.kernel import _box
+from planner.search.dstar.kernel import PATH_COST, _box
 
 
 @njit_cached(_nrt=False)
@@ -96,7 +96,7 @@ def keep_path(bx, counts, fs, start, path, step, cells):  # pragma: no cover
     """True when the stored path from ``start`` on is still a shortest path after the
     cells ``cells`` ((K, 3) int64), all of them blocked (the caller knows), were blocked
     and the planner has not repaired them (module docstring): then the replan's path is set (rows
-    ``[st.path_from, st.path_to)`` of ``path``, cost ``fs[1]``; ``st`` is ``counts[0]``,
+    ``[st.path_from, st.path_to)`` of ``path``, cost ``fs[PATH_COST]``; ``st`` is ``counts[0]``,
     the planner's state record). Reads one or two bits per cell, no lookup.
 
     A kept replan is this function alone, called through
@@ -116,7 +116,7 @@ def keep_path(bx, counts, fs, start, path, step, cells):  # pragma: no cover
             st.path_at = j
             st.path_from = j
             st.path_to = k
-            fs[1] = cost
+            fs[PATH_COST] = cost
             return True
     return False
 
