@@ -15,14 +15,16 @@ from __future__ import annotations
 import numpy as np
 
 from planner._numba import njit_cached
-from planner.occupancy.keys import pack3
+from planner.occupancy.keys import BITS, index_limit, pack3, step3
 
-_LIM = 1 << 20  # packable index range per axis
+_LIM = index_limit(3)  # packable index range per axis
 _GOLD = np.uint64(0x9E3779B97F4A7C15)  # Fibonacci hashing
 _MIX = np.uint64(0xD6E8FEB86659FD93)  # the bitmap's hash
 
 
-_LOW = np.int64((3 << 42) | (3 << 21) | 3)  # the low two bits of each packed index
+_LOW = np.int64(step3(3, 3, 3))  # the low two bits of each axis's field of a key
+_B3 = BITS[3]  # pack3's field of one axis
+_B2 = 2 * _B3
 
 
 @njit_cached(_nrt=False)
@@ -31,7 +33,7 @@ def _bit(key, shift):  # pragma: no cover - compiled
     4 x 4 x 4 cells (hashed), one bit per cell of the block, so that the cells a query
     probes, neighbours of one another, share a few words."""
     block = key & ~_LOW
-    local = (((key >> 42) & 3) << 4) | (((key >> 21) & 3) << 2) | (key & 3)
+    local = (((key >> _B2) & 3) << 4) | (((key >> _B3) & 3) << 2) | (key & 3)
     word = np.int64((np.uint64(block) * _MIX) >> np.uint64(shift))
     return word, np.uint64(1) << np.uint64(local)
 

@@ -59,27 +59,29 @@ def unpack(keys: np.ndarray, dim: int) -> np.ndarray:
     return out
 
 
-_B3 = 21
-_L3 = 1 << 20
-_M3 = (1 << 21) - 1
+# pack3's layout, pack's for d = 3: x in the top field, z in the lowest
+_B3 = BITS[3]
+_B2 = 2 * _B3
+_L3 = 1 << (_B3 - 1)
+_M3 = (1 << _B3) - 1
 
 
 @njit_cached(_nrt=False)
 def pack3(i, j, k):  # pragma: no cover - compiled
     """Key of one 3D index (no range check: callers stay inside the map's bounds)."""
-    return (((i + _L3) << 42) | ((j + _L3) << 21)) | (k + _L3)
+    return (((i + _L3) << _B2) | ((j + _L3) << _B3)) | (k + _L3)
 
 
 @njit_cached(_nrt=False)
 def step3(d0, d1, d2):  # pragma: no cover - compiled
     """The key offset of an index step d: ``pack3(u + d) == pack3(u) + step3(d)`` while
     both indices stay in range (each field carries its own sign into the next)."""
-    return (d0 << 42) + (d1 << 21) + d2
+    return (d0 << _B2) + (d1 << _B3) + d2
 
 
 @njit_cached(_nrt=False)
 def unpack3(key):  # pragma: no cover - compiled
-    return ((key >> 42) & _M3) - _L3, ((key >> 21) & _M3) - _L3, (key & _M3) - _L3
+    return ((key >> _B2) & _M3) - _L3, ((key >> _B3) & _M3) - _L3, (key & _M3) - _L3
 
 
 def unique_keys(keys: np.ndarray) -> np.ndarray:
