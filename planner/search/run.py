@@ -58,7 +58,7 @@ from planner.search._job import (
     limit,
     prepare,
 )
-from planner.search._los import new_scratch, shortcut_kernel
+from planner.search._los import is_cubic, new_scratch, reach, shortcut_kernel
 from planner.search._nodes import new_slots, rehash
 from planner.search.astar import driver as _driver
 from planner.search.astar.kernel import SearchParams
@@ -415,12 +415,11 @@ def _span(world: World) -> float:
 
 
 def shortcut(world: World, cells: np.ndarray) -> np.ndarray:
-    """Greedy line-of-sight shortcutting of a cell path.
-
-    From each kept cell, jump to the farthest later cell that is still in sight (every cell
-    the centre-to-centre segment touches is free, the safe rule), scanning forward until
-    the first cell out of sight. The result keeps the first and last cell, is a
-    subsequence of the input, and each consecutive pair is in sight (or was consecutive in
+    """Line-of-sight shortcutting of a cell path, by galloping then bisecting from each
+    kept cell to a later one in sight whose successor is not (:func:`~planner.search._los.
+    shortcut_kernel`; in sight: every cell the centre-to-centre segment touches is free,
+    the safe rule). The result keeps the first and last cell, is a subsequence of the
+    input, no longer than it, and each consecutive pair is in sight (or was consecutive in
     the input). Lookups are added to ``world.cell_checks``.
 
     Parameters
@@ -435,8 +434,16 @@ def shortcut(world: World, cells: np.ndarray) -> np.ndarray:
     if len(c) <= 2:
         return c.copy()
     chk = world.checker
-    # Longest possible sight line: from the first cell to the farthest one (x2 headroom).
-    span = 2.0 * float(np.linalg.norm((c - c[0]) @ chk.walk.g.T, axis=1).max())
-    keep, n = shortcut_kernel(chk.occupancy, chk.walk, c, new_scratch(span, chk.walk))
+    walk = chk.walk
+    if is_cubic(walk.g):  # the integer walk never touches the scratch: one shared
+        if not _NO_SCRATCH:
+            _NO_SCRATCH.append(new_scratch(0.0, walk))
+        sc = _NO_SCRATCH[0]
+    else:
+        sc = new_scratch(reach(walk.g, c), walk)
+    keep, n = shortcut_kernel(chk.occupancy, walk, c, sc)
     world.cell_checks += int(n)
     return c[keep]
+
+
+_NO_SCRATCH: list = []  # shortcut's scratch on the cubic lattice, built once
