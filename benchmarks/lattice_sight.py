@@ -106,7 +106,7 @@ def sight_table(n: int, repeat: int) -> None:
                                      note=f"per batch of {batch} lines"))
 
 
-def _worlds(map_name: str, data: Path) -> dict[str, World]:
+def map_worlds(map_name: str, data: Path) -> dict[str, World]:
     """The map on every lattice."""
     if map_name == "geb079":
         src, kw = geb079_path(data), dict(cell_volume=0.08 ** 3, radius=0.2)
@@ -151,7 +151,7 @@ def query_points(worlds: dict[str, World], n: int, seed: int = 0) -> np.ndarray:
 
 
 def plan_table(map_name: str, n: int, repeat: int, data: Path) -> None:
-    worlds = _worlds(map_name, data)
+    worlds = map_worlds(map_name, data)
     pts = query_points(worlds, n)
     cv = worlds["cubic"].lattice.cell_volume
     print(f"\n{map_name}: cell volume {cv:.3g} m^3, {len(pts)} queries solved on every lattice; "
