@@ -140,3 +140,26 @@ def test_a_straight_stretch_costs_k_log_k_cells_walked(name):
     assert np.array_equal(cut, r.cells[[0, -1]])
     per_cell = looked / _sight(world, r.cells[0], r.cells[-1])[1]  # walks of the whole line
     assert k > 100 and per_cell < 4
+
+
+@pytest.mark.parametrize("name", NAMED_LATTICES)
+def test_the_scratch_kept_between_calls_answers_as_a_fresh_one(name):
+    """Calls on one thread reuse the sight scratch (fresh generation stamps each time): the
+    same kept cells and lookups as the kernel on a new scratch, call after call, and on a
+    second world of the lattice (its own walk: a scratch of its own)."""
+    from planner.search._los import new_scratch, reach, shortcut_kernel
+
+    lat = Lattice.named(name, 1.0)
+    rng = np.random.default_rng(11)
+    bounds = np.array([[0.0, 0, 0], [10, 10, 5]])
+    for _ in range(2):
+        blocked = np.unique(lat.quantize(rng.uniform(bounds[0], bounds[1], (150, 3))), axis=0)
+        world = World(lat, blocked, bounds)
+        chk = world.checker
+        for r in _paths(world, 5, seed=int(rng.integers(1000))):
+            before = world.cell_checks
+            cut = S.shortcut(world, r.cells)
+            fresh = new_scratch(reach(chk.walk.g, r.cells), chk.walk)
+            keep, looked, _ = shortcut_kernel(chk.occupancy, chk.walk, r.cells, fresh, 0)
+            assert np.array_equal(cut, r.cells[keep])
+            assert world.cell_checks - before == looked

@@ -334,7 +334,7 @@ def sight(occ, walk, sc, st, p0, p1, p2, q0, q1, q2):  # pragma: no cover - comp
 
 
 @njit_cached
-def shortcut_kernel(occ, walk, cells, sc):  # pragma: no cover - compiled
+def shortcut_kernel(occ, walk, cells, sc, gen):  # pragma: no cover - compiled
     """Shortcutting by galloping, then one pass dropping kept cells. O(log k) sight tests
     for a jump of k cells (a forward scan, one test per later cell, walks O(k^2) cells).
 
@@ -349,11 +349,12 @@ def shortcut_kernel(occ, walk, cells, sc):  # pragma: no cover - compiled
     Every kept pair is in sight (or consecutive in the input): the path is as free as a
     sight line, and no longer than the input (triangle inequality).
 
-    Returns ``(kept indices into cells, lookups)``."""
+    ``gen``: the last generation stamped in ``sc`` (0 when new). Returns ``(kept indices
+    into cells, lookups, last generation stamped)``."""
     n = cells.shape[0]
     keep = np.empty(n, dtype=np.int64)
     keep[0] = 0
-    nk, lookups, gen, i = 1, 0, 0, 0
+    nk, lookups, i = 1, 0, 0
     while i < n - 1:
         lo, hi, d = i + 1, n, 2  # lo in sight of i (or next to it); hi: first not (n: none)
         while lo < n - 1:  # gallop
@@ -388,7 +389,7 @@ def shortcut_kernel(occ, walk, cells, sc):  # pragma: no cover - compiled
     if nk > 1:
         keep[out] = keep[nk - 1]
         out += 1
-    return keep[:out].copy(), lookups
+    return keep[:out].copy(), lookups, gen
 
 
 @njit_cached(_nrt=False)

@@ -1,6 +1,5 @@
 """Running a search: :func:`search` and :func:`search_many` (A*, Dijkstra, Theta*, Lazy
-Theta*, weighted Lazy Theta*) and :func:`shortcut`, over the kernel of
-:mod:`planner.search.astar`.
+Theta*, weighted Lazy Theta*), over the kernel of :mod:`planner.search.astar`.
 
 Nodes are lattice cells, edges the offsets ``lattice.neighbors(neighbors)``, edge cost the
 Euclidean distance between cell centres (m). The movement rule, the radius guarantee and
@@ -58,7 +57,6 @@ from planner.search._job import (
     limit,
     prepare,
 )
-from planner.search._los import is_cubic, new_scratch, reach, shortcut_kernel
 from planner.search._nodes import new_slots, rehash
 from planner.search.astar import driver as _driver
 from planner.search.astar.kernel import SearchParams
@@ -77,7 +75,7 @@ from planner.search.result import (
 )
 from planner.world.world import World
 
-__all__ = ["SearchResult", "search", "search_many", "search_points", "shortcut", "warm_up",
+__all__ = ["SearchResult", "search", "search_many", "search_points", "warm_up",
            "move_stencils", "move_heuristic", "METHODS", "carries_guarantee",
            "default_memory_budget", "default_max_expansions", "H_WEIGHT", "MEMORY_SHARE"]
 
@@ -412,38 +410,3 @@ def _span(world: World) -> float:
     step = math.sqrt(2.0 * float(walk.rhs.min()))
     steps = _budget.memory_budget() / 16 / 72 / (len(walk.full) + 1)
     return min(float(np.linalg.norm(world.bounds[1] - world.bounds[0])), steps * step)
-
-
-def shortcut(world: World, cells: np.ndarray) -> np.ndarray:
-    """Line-of-sight shortcutting of a cell path, by galloping then bisecting from each
-    kept cell to a later one in sight whose successor is not (:func:`~planner.search._los.
-    shortcut_kernel`; in sight: every cell the centre-to-centre segment touches is free,
-    the safe rule). The result keeps the first and last cell, is a subsequence of the
-    input, no longer than it, and each consecutive pair is in sight (or was consecutive in
-    the input). Lookups are added to ``world.cell_checks``.
-
-    Parameters
-    ----------
-    cells : array_like of int, shape (K, 3)
-
-    Returns
-    -------
-    ndarray, shape (K', 3), int64
-    """
-    c = as_cells(cells)
-    if len(c) <= 2:
-        return c.copy()
-    chk = world.checker
-    walk = chk.walk
-    if is_cubic(walk.g):  # the integer walk never touches the scratch: one shared
-        if not _NO_SCRATCH:
-            _NO_SCRATCH.append(new_scratch(0.0, walk))
-        sc = _NO_SCRATCH[0]
-    else:
-        sc = new_scratch(reach(walk.g, c), walk)
-    keep, n = shortcut_kernel(chk.occupancy, walk, c, sc)
-    world.cell_checks += int(n)
-    return c[keep]
-
-
-_NO_SCRATCH: list = []  # shortcut's scratch on the cubic lattice, built once
