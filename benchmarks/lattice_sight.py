@@ -205,7 +205,7 @@ def plan_table(map_name: str, n: int, repeat: int, data: Path) -> None:
         a, lz = best[name, "astar"], best[name, "lazy"]
         found = sum(info[i, "astar"][0] and info[i, "lazy"][0] for i in range(len(q)))
         sm_s, sm_look = (sum(info[i, "smooth"][k] for i in range(len(q))) for k in (0, 1))
-        print(f"{name:8s} {found:5d} {a.sum():8.3f} {a.sum() / ba.sum():8.2f} "
+        print(f"{name:8s} {found:5d} {a.sum():8.4f} {a.sum() / ba.sum():8.2f} "
               f"{np.median(a / ba):6.2f} {sum(info[i, 'astar'][1] for i in range(len(q))):9d} "
               f"{sm_s:6.4f} {sm_look:7d} {lz.sum():8.3f} {lz.sum() / bl.sum():8.2f} "
               f"{np.median(lz / bl):6.2f} {sum(info[i, 'lazy'][1] for i in range(len(q))):9d}")
