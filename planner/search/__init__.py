@@ -2,7 +2,8 @@
 
 :func:`search` / :func:`search_many` (:mod:`~planner.search.run`), :class:`SearchResult` and
 its statuses (:mod:`~planner.search.result`), the move sets and the heuristic
-(:mod:`~planner.search.moves`), the A* family's kernel (:mod:`~planner.search.astar`), D* Lite
+(:mod:`~planner.search.moves`), shortcutting a cell path (:mod:`~planner.search.smoothing`),
+the A* family's kernel (:mod:`~planner.search.astar`), D* Lite
 (:mod:`~planner.search.dstar`, :class:`DStarLite`), replanning by A* when a change touches
 the path (:mod:`~planner.search.replanner`, :class:`AStarReplanner`), the heap
 (:mod:`~planner.search._heap`), line of sight (:mod:`~planner.search._los`;
@@ -20,10 +21,10 @@ from planner.search.run import (
     default_memory_budget,
     search,
     search_many,
-    shortcut,
     warm_up,
 )
 from planner.search.sight import Sight, sight_many
+from planner.search.smoothing import shortcut
 
 __all__ = ["AStarReplanner", "DStarLite", "METHODS", "STATUSES", "SearchResult", "Sight",
            "carries_guarantee", "default_max_expansions", "default_memory_budget",

@@ -1,5 +1,5 @@
 """Line of sight between cell centres (numba): the exact segment walk of the validity
-checker (:mod:`planner.occupancy.walk`) on reusable scratch, and greedy path shortcutting.
+checker (:mod:`planner.occupancy.walk`) on reusable scratch, and path shortcutting.
 
 Two cells see each other iff every cell whose closed Voronoi cell the centre-to-centre
 segment touches is free (the same test as a motion check of :class:`planner.world.
@@ -334,32 +334,62 @@ def sight(occ, walk, sc, st, p0, p1, p2, q0, q1, q2):  # pragma: no cover - comp
 
 
 @njit_cached
-def shortcut_kernel(occ, walk, cells, sc):  # pragma: no cover - compiled
-    """Greedy shortcutting: from each kept cell go to the farthest later cell still in
-    sight (scanning forward, stopping at the first cell out of sight). Consecutive input
-    cells that are not in sight of each other (corner-cutting paths) are kept as they are.
-    Returns ``(kept indices into cells, lookups)``."""
+def shortcut_kernel(occ, walk, cells, sc, gen):  # pragma: no cover - compiled
+    """Shortcutting by galloping, then one pass dropping kept cells. O(log k) sight tests
+    for a jump of k cells (a forward scan, one test per later cell, walks O(k^2) cells).
+
+    Gallop from each kept cell i: test sight to i + 2, i + 4, i + 8, ... (capped at the last
+    cell) until a test fails or the last cell is in sight; then bisect between the last
+    cell found in sight (``lo``; at first i + 1, kept untested: consecutive input cells
+    not in sight of each other, a corner-cutting path's, stay) and the first out of sight
+    (``hi``) until they are neighbours, and keep ``lo``. Sight along a path is not
+    monotone, so ``lo`` need not be the farthest cell in sight; it is never nearer than
+    the forward scan's (``hi`` is out of sight: at or past the first cell that is).
+    Drop pass: a kept cell goes when the last cell kept before it sees the next one.
+    Every kept pair is in sight (or consecutive in the input): the path is as free as a
+    sight line, and no longer than the input (triangle inequality).
+
+    ``gen``: the last generation stamped in ``sc`` (0 when new). Returns ``(kept indices
+    into cells, lookups, last generation stamped)``."""
     n = cells.shape[0]
     keep = np.empty(n, dtype=np.int64)
-    nk = 0
-    lookups = 0
-    gen = 0
-    i = 0
-    keep[nk] = 0
-    nk += 1
+    keep[0] = 0
+    nk, lookups, i = 1, 0, 0
     while i < n - 1:
-        j = i + 1
-        while j + 1 < n:
+        lo, hi, d = i + 1, n, 2  # lo in sight of i (or next to it); hi: first not (n: none)
+        while lo < n - 1:  # gallop
+            j = min(i + d, n - 1)
             gen += 1
-            ok, c = los(occ, walk, cells[i], cells[j + 1], sc, gen)
+            ok, c = los(occ, walk, cells[i], cells[j], sc, gen)
             lookups += c
             if not ok:
+                hi = j
                 break
-            j += 1
-        keep[nk] = j
+            lo, d = j, 2 * d
+        while hi - lo > 1:  # bisect (hi < n here)
+            m = (lo + hi) // 2
+            gen += 1
+            ok, c = los(occ, walk, cells[i], cells[m], sc, gen)
+            lookups += c
+            if ok:
+                lo = m
+            else:
+                hi = m
+        keep[nk] = lo
         nk += 1
-        i = j
-    return keep[:nk].copy(), lookups
+        i = lo
+    out = 1  # drop pass, in place: keep[:out] is decided
+    for k in range(1, nk - 1):
+        gen += 1
+        ok, c = los(occ, walk, cells[keep[out - 1]], cells[keep[k + 1]], sc, gen)
+        lookups += c
+        if not ok:
+            keep[out] = keep[k]
+            out += 1
+    if nk > 1:
+        keep[out] = keep[nk - 1]
+        out += 1
+    return keep[:out].copy(), lookups, gen
 
 
 @njit_cached(_nrt=False)
@@ -392,3 +422,20 @@ def longest_segment(g, ps, qs):  # pragma: no cover - compiled
             s += x * x
         best = max(best, s)
     return math.sqrt(best)
+
+
+@njit_cached(_nrt=False)
+def reach(g, cells):  # pragma: no cover - compiled
+    """Twice the farthest centre of ``cells`` ((K, 3) int64) from the first's (m; ``g`` the
+    (3, 3) generator): no sight line between two of them is longer. Sizes
+    :func:`new_scratch` for :func:`shortcut_kernel` in one pass."""
+    best = 0.0
+    for i in range(1, cells.shape[0]):
+        s = 0.0
+        for r in range(3):
+            x = 0.0
+            for k in range(3):
+                x += g[r, k] * (cells[i, k] - cells[0, k])
+            s += x * x
+        best = max(best, s)
+    return 2.0 * math.sqrt(best)

@@ -1,6 +1,5 @@
 """Running a search: :func:`search` and :func:`search_many` (A*, Dijkstra, Theta*, Lazy
-Theta*, weighted Lazy Theta*) and :func:`shortcut`, over the kernel of
-:mod:`planner.search.astar`.
+Theta*, weighted Lazy Theta*), over the kernel of :mod:`planner.search.astar`.
 
 Nodes are lattice cells, edges the offsets ``lattice.neighbors(neighbors)``, edge cost the
 Euclidean distance between cell centres (m). The movement rule, the radius guarantee and
@@ -58,7 +57,6 @@ from planner.search._job import (
     limit,
     prepare,
 )
-from planner.search._los import new_scratch, shortcut_kernel
 from planner.search._nodes import new_slots, rehash
 from planner.search.astar import driver as _driver
 from planner.search.astar.kernel import SearchParams
@@ -77,7 +75,7 @@ from planner.search.result import (
 )
 from planner.world.world import World
 
-__all__ = ["SearchResult", "search", "search_many", "search_points", "shortcut", "warm_up",
+__all__ = ["SearchResult", "search", "search_many", "search_points", "warm_up",
            "move_stencils", "move_heuristic", "METHODS", "carries_guarantee",
            "default_memory_budget", "default_max_expansions", "H_WEIGHT", "MEMORY_SHARE"]
 
@@ -412,31 +410,3 @@ def _span(world: World) -> float:
     step = math.sqrt(2.0 * float(walk.rhs.min()))
     steps = _budget.memory_budget() / 16 / 72 / (len(walk.full) + 1)
     return min(float(np.linalg.norm(world.bounds[1] - world.bounds[0])), steps * step)
-
-
-def shortcut(world: World, cells: np.ndarray) -> np.ndarray:
-    """Greedy line-of-sight shortcutting of a cell path.
-
-    From each kept cell, jump to the farthest later cell that is still in sight (every cell
-    the centre-to-centre segment touches is free, the safe rule), scanning forward until
-    the first cell out of sight. The result keeps the first and last cell, is a
-    subsequence of the input, and each consecutive pair is in sight (or was consecutive in
-    the input). Lookups are added to ``world.cell_checks``.
-
-    Parameters
-    ----------
-    cells : array_like of int, shape (K, 3)
-
-    Returns
-    -------
-    ndarray, shape (K', 3), int64
-    """
-    c = as_cells(cells)
-    if len(c) <= 2:
-        return c.copy()
-    chk = world.checker
-    # Longest possible sight line: from the first cell to the farthest one (x2 headroom).
-    span = 2.0 * float(np.linalg.norm((c - c[0]) @ chk.walk.g.T, axis=1).max())
-    keep, n = shortcut_kernel(chk.occupancy, chk.walk, c, new_scratch(span, chk.walk))
-    world.cell_checks += int(n)
-    return c[keep]
