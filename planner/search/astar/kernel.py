@@ -9,21 +9,27 @@ Lazy Theta* (``anyangle`` 2) assumes the sight line and verifies it once, when t
 expanded, falling back to its best closed lattice neighbour (SetVertex). Both use the
 Euclidean heuristic and the exact walk of :mod:`planner.search._los`.
 
-Lattice A* / Dijkstra on a dense grid runs the loop of :mod:`planner.search.astar.dense`,
-and Lazy Theta* on a dense grid (every lattice) that of :mod:`planner.search.astar.
-dense_theta` (this loop took 1.08-1.2x its time on the same worlds: ``benchmarks/
-search_speed.py --anyangle 20``, cubic-26).
+One loop (:func:`_loop`) serves every method on every world; it is compiled once per
+*variant*, a compile-time constant that fixes the tests the general case makes on every
+expansion, so that each variant is the code a copy written for its case would be:
+``GENERAL`` reads the method, the node map (dense or paged), the occupancy (dense or hashed)
+and the stencil test (bit mask or move lists) from its arguments; ``DENSE_LAZY`` is Lazy
+Theta* on a dense grid with the dense node array and the bit mask, the case a copy of this
+loop (``dense_theta.py``) used to serve (``benchmarks/loop_speed.py`` measures it against
+the paged map; ``tests/test_anyangle.py`` checks it against ``GENERAL``). Lattice A* / Dijkstra on a dense grid still runs its own loop,
+:mod:`planner.search.astar.dense`.
 """
 
 from __future__ import annotations
 
 from typing import NamedTuple
 
+import numba
 import numpy as np
 
 from planner._numba import njit_cached
 from planner.occupancy.grid import cell_free, occ_free
-from planner.occupancy.keys import mix64, pack3, unpack3
+from planner.occupancy.keys import mix64, pack3, step3, unpack3
 from planner.search import _heap
 from planner.search._los import DDA_MAX, cubic_walk, dense_walk, is_cubic, sight
 from planner.search._nodes import (
@@ -36,7 +42,6 @@ from planner.search._nodes import (
     new_page,
 )
 from planner.search.astar.dense import dense_astar, grid_offsets, stencil_mask
-from planner.search.astar.dense_theta import dense_lazy_theta
 from planner.search.heuristic import H_EUCLID, estimate, length, node_estimate, rows
 from planner.search.moves import MAX_BITS, move_allowed
 from planner.search.result import (
@@ -51,6 +56,8 @@ from planner.search.result import (
 
 _EMPTY = -1
 THETA, LAZY_THETA = 1, 2  # SearchParams.anyangle
+#: :func:`_loop`'s variants (compile-time constants, see there)
+GENERAL, DENSE_LAZY = 0, 1
 
 
 class SearchParams(NamedTuple):
@@ -139,17 +146,21 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state
                              params.max_nodes, params.max_expansions, goal, dt)
         st.status = status
         return status
-    if (params.anyangle == LAZY_THETA and occ.mode == 0 and slots.dense.shape[0] > 1
-            and ms.union.shape[0] <= MAX_BITS):
-        status = dense_lazy_theta(occ, walk, ms, nodes, heap, slots.dense, sc, st,
-                                  params.max_nodes, params.max_expansions, goal, params.h_weight)
-        st.status = status
-        return status
     # the loop's tables, made here: the loop allocates nothing (see _loop)
     uoff, moff, reach = grid_offsets(ms.union, ms.moves, occ.dims[1], occ.dims[2])
     ubit = np.arange(ms.union.shape[0])  # each stencil cell's bit in the mask: its order
-    status = _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, ubit,
-                   moff, reach, 1e-9 * ms.cost.min())
+    nm = ms.moves.shape[0]
+    mkey = np.empty(nm, np.int64)
+    for m in range(nm):
+        mkey[m] = step3(ms.moves[m, 0], ms.moves[m, 1], ms.moves[m, 2])
+    fq = 1e-9 * ms.cost.min()
+    if (params.anyangle == LAZY_THETA and occ.mode == 0 and slots.dense.shape[0] > 1
+            and ms.union.shape[0] <= MAX_BITS and ms.hkind == H_EUCLID and ms.octile <= 0.0):
+        status = _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff,
+                       ubit, moff, reach, mkey, fq, DENSE_LAZY)
+    else:
+        status = _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff,
+                       ubit, moff, reach, mkey, fq, GENERAL)
     st.status = status
     return status
 
@@ -160,26 +171,40 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state
 # long cubic lines) are separate compiled functions, which keep theirs.
 @njit_cached(_nrt=False)
 def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, ubit, moff,
-          reach, fq):  # pragma: no cover - compiled
-    """:func:`search_run`'s general loop, given its tables: ``uoff`` (U,) and ``moff`` (M,)
+          reach, mkey, fq, variant):  # pragma: no cover - compiled
+    """:func:`search_run`'s loop, given its tables: ``uoff`` (U,) and ``moff`` (M,)
     the stencil's and the moves' grid offsets and ``reach`` their margin (cells)
     (:func:`planner.search.astar.dense.grid_offsets`), ``ubit`` (U,) each stencil cell's
-    bit in the free mask (:func:`planner.search.astar.dense.stencil_mask`),
-    ``fq`` the f grid (1e-9 of the shortest move, m). Returns the run code (see
-    :func:`search_run`)."""
+    bit in the free mask (:func:`planner.search.astar.dense.stencil_mask`), ``mkey`` (M,)
+    each move as an offset of the packed key, ``fq`` the f grid (1e-9 of the shortest
+    move, m). Returns the run code (see :func:`search_run`).
+
+    ``variant`` (a compile-time constant: one compiled loop each) fixes what the loop
+    would otherwise read from its arguments on every expansion: :data:`GENERAL` reads
+    everything (method, dense or paged node map, dense or hashed occupancy, bit mask or
+    move lists); :data:`DENSE_LAZY` is Lazy Theta* on a dense grid with the dense node
+    array and the bit mask, where those tests fold away and the loop is the code a copy
+    written for that case would be (``benchmarks/loop_speed.py`` measures it)."""
+    numba.literally(variant)
+    fixed = variant == DENSE_LAZY
     mode, grid, lo, dims, otable, otmask, gg, blo, bhi = occ
     lo0, lo1, lo2 = lo[0], lo[1], lo[2]
     d0, d1, d2 = dims[0], dims[1], dims[2]
     moves, mcost, ust, mptr, midx, hmat, hkind, need, oct_s = ms
     nkey, ng, nh, npar, npos = nodes
     pages, btab, bkeys, dsl, _, _ = slots
-    dense = dsl.shape[0] > 1 and mode == 0  # the dense slot box is the grid's box
+    gridded = fixed or mode == 0
+    dense = fixed or (dsl.shape[0] > 1 and mode == 0)  # the dense slot box is the grid's box
     anyangle, max_nodes, max_exp, hw = params
+    if fixed:
+        anyangle = LAZY_THETA
+    lazy = anyangle == LAZY_THETA
+    theta = anyangle == THETA
     g = walk.g
     cubic = is_cubic(g)
     # sight lines between free cells of a dense grid stay inside its box: the walk on the
     # grid's arrays
-    cubic_dense = cubic and mode == 0 and max(d0, max(d1, d2)) <= DDA_MAX
+    cubic_dense = cubic and gridded and max(d0, max(d1, d2)) <= DDA_MAX
     gl0, gl1, gl2 = goal[0], goal[1], goal[2]
     gm = rows(g)
     cap = nkey.shape[0]
@@ -190,7 +215,7 @@ def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, 
     last_pg = np.int64(0)
     nu = ust.shape[0]
     nm = moves.shape[0]
-    bits = nu <= MAX_BITS  # one mask test per move instead of its CSR list
+    bits = fixed or nu <= MAX_BITS  # one mask test per move instead of its CSR list
     all_u = (np.int64(1) << nu) - 1 if bits else np.int64(0)
     gk = pack3(goal[0], goal[1], goal[2])
     base = np.int64(0)
@@ -198,12 +223,10 @@ def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, 
     n = st.nodes
     hn = st.queued
     # The f plateau's side heap (planner.search._heap) for lattice A* / Dijkstra; the
-    # any-angle methods keep the one heap (fcur stays NaN: nothing equals it), as the dense
-    # Lazy Theta* loop does, so that the two loops tie-break alike.
+    # any-angle methods keep the one heap (plain push / pop: the side heap stays empty).
     sn = 0
     fcur = np.nan
     plateau = anyangle == 0
-    lazy = anyangle == LAZY_THETA
     expansions = st.expansions
     lookups = st.lookups
     status = RUN_EXHAUSTED
@@ -215,23 +238,24 @@ def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, 
         if max_exp > 0 and expansions >= max_exp:
             status = RUN_BUDGET
             break
-        s, hn, sn, fc = _heap.pq_pop(heap, npos, hn, sn, fcur)
         if plateau:
-            fcur = fc
+            s, hn, sn, fcur = _heap.pq_pop(heap, npos, hn, sn, fcur)
+        else:
+            s, hn = _heap.pop(heap, npos, hn)
         npos[s] = -1
         expansions += 1
-        u0, u1, u2 = unpack3(nkey[s])
+        ks = nkey[s]
+        u0, u1, u2 = unpack3(ks)
         blocked = np.int64(0)
-        if mode == 0:
+        if gridded:
             a0, b0, c0 = u0 - lo0, u1 - lo1, u2 - lo2
             base = (a0 * d1 + b0) * d2 + c0
-            inner = (a0 >= reach and b0 >= reach and c0 >= reach and a0 < d0 - reach
-                     and b0 < d1 - reach and c0 < d2 - reach)
             if bits:  # straight into the mask of free cells
                 free = stencil_mask(grid, a0, b0, c0, d0, d1, d2, base, reach, ust, uoff,
                                     ubit)
                 blocked = all_u & ~free
-            elif inner:
+            elif (a0 >= reach and b0 >= reach and c0 >= reach and a0 < d0 - reach
+                    and b0 < d1 - reach and c0 < d2 - reach):
                 for j in range(nu):
                     f = base + uoff[j]
                     ufree[j] = (grid[f >> 3] >> (f & 7)) & 1 != 0
@@ -252,13 +276,16 @@ def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, 
                     if not ufree[j]:
                         blocked |= np.int64(1) << j
         lookups += nu
+        ps = npar[s]
+        p0, p1, p2 = u0, u1, u2
+        if anyangle != 0 and ps != s:
+            p0, p1, p2 = unpack3(nkey[ps])
         # Verify the assumed sight line, walked from s: a blocked cell is likelier near s
         # (its parent saw s's generator), so the walk stops sooner.
-        if lazy and npar[s] != s:
-            p0, p1, p2 = unpack3(nkey[npar[s]])
+        if lazy and ps != s:
             if cubic_dense:
                 ok, c = dense_walk(grid, lo, dims, u0, u1, u2, p0, p1, p2)
-            elif cubic:
+            elif cubic and not fixed:  # (a box too long for it: the face walk)
                 ok, c = cubic_walk(occ, u0, u1, u2, p0, p1, p2)
             else:
                 ok, c = sight(occ, walk, sc, st, u0, u1, u2, p0, p1, p2)
@@ -274,14 +301,12 @@ def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, 
                             continue
                     elif not move_allowed(ufree, mptr, midx, m):
                         continue
-                    v0 = u0 + moves[m, 0]
-                    v1 = u1 + moves[m, 1]
-                    v2 = u2 + moves[m, 2]
                     if dense:  # an allowed move's target is free, hence inside the box
-                        t = np.int64(dsl[base + moff[m]]) - 1
+                        t = np.int64(dsl[np.uint64(base + moff[m])]) - 1
                     else:
-                        t = find_slot(slots, v0, v1, v2)
-                    if t == _EMPTY or npos[t] != -1:
+                        t = find_slot(slots, u0 + moves[m, 0], u1 + moves[m, 1],
+                                      u2 + moves[m, 2])
+                    if t < 0 or npos[t] != -1:
                         continue
                     gv = ng[t] + mcost[m]
                     if gv < best:
@@ -289,22 +314,18 @@ def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, 
                         bp = t
                 npar[s] = bp
                 ng[s] = best
-        if nkey[s] == gk:
+                ps = bp
+                p0, p1, p2 = unpack3(nkey[ps])
+        if ks == gk:
             status = RUN_FOUND
             st.goal = s
             break
         if max_nodes > 0 and n >= max_nodes:
             status = RUN_LIMIT
             break
-        ps = npar[s]
-        if anyangle != 0 and ps != s:
-            p0, p1, p2 = unpack3(nkey[ps])
-        else:
-            p0, p1, p2 = u0, u1, u2
+        gs = ng[s]
+        gp = ng[ps]
         for m in range(nm):
-            v0 = u0 + moves[m, 0]
-            v1 = u1 + moves[m, 1]
-            v2 = u2 + moves[m, 2]
             # Safe rule first: with the bitmask it is one test, and an allowed move's target
             # is free, hence inside the dense box.
             if bits:
@@ -312,6 +333,9 @@ def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, 
                     continue
             elif not move_allowed(ufree, mptr, midx, m):
                 continue
+            v0 = u0 + moves[m, 0]
+            v1 = u1 + moves[m, 1]
+            v2 = u2 + moves[m, 2]
             if dense:
                 loc = np.uint64(base + moff[m])
                 t = np.int64(dsl[loc]) - 1  # stored as slot + 1, 0 none
@@ -330,20 +354,8 @@ def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, 
                     last_pg = q
                 loc = np.uint64(last_pg * PAGE + local(v0, v1, v2))
                 t = np.int64(pages[loc])
-            new = t == _EMPTY
-            if new:
-                t = n
-                n += 1
-                if dense:
-                    dsl[loc] = t + 1
-                else:
-                    pages[loc] = t
-                tu = np.uint64(t)  # unsigned: no negative-index fix-up on each access
-                nkey[tu] = pack3(v0, v1, v2)
-                ng[tu] = np.inf
-                nh[tu] = node_estimate(oct_s, hkind, hmat, hw, gm, gl0 - v0, gl1 - v1, gl2 - v2)
-            else:
-                tu = np.uint64(t)
+            tu = np.uint64(t)  # unsigned: no negative-index fix-up on each access
+            if t >= 0:
                 if npos[tu] == -1:
                     continue  # closed: a consistent heuristic never improves it
                 if lazy and npar[tu] == ps:
@@ -351,14 +363,14 @@ def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, 
                     # node's g stays): not less, so no square root
                     continue
             if anyangle == 0:
-                gt = ng[s] + mcost[m]
+                gt = gs + mcost[m]
                 par = s
             else:
-                gt = ng[ps] + length(gm, v0 - p0, v1 - p1, v2 - p2)  # through s's parent
+                gt = gp + length(gm, v0 - p0, v1 - p1, v2 - p2)  # through s's parent
                 par = ps
-                if anyangle == THETA and ps != s:
-                    g1 = ng[s] + mcost[m]
-                    if gt >= ng[tu] and g1 >= ng[tu]:
+                if theta and ps != s:
+                    g1 = gs + mcost[m]
+                    if t >= 0 and gt >= ng[tu] and g1 >= ng[tu]:
                         continue  # neither parent improves t: its sight line is moot
                     if cubic_dense:
                         ok, c = dense_walk(grid, lo, dims, v0, v1, v2, p0, p1, p2)
@@ -370,14 +382,37 @@ def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, 
                     if not ok:
                         gt = g1
                         par = s
-            if gt < ng[tu]:
+            if t < 0:  # a new node
+                t = n
+                tu = np.uint64(t)
+                n += 1
+                if dense:
+                    dsl[loc] = t + 1
+                    nkey[tu] = ks + mkey[m]  # keys are linear inside the grid's box
+                else:
+                    pages[loc] = t
+                    nkey[tu] = pack3(v0, v1, v2)
+                if fixed:  # its move set's heuristic is the straight line (search_run)
+                    hv = hw * length(gm, gl0 - v0, gl1 - v1, gl2 - v2)
+                else:
+                    hv = node_estimate(oct_s, hkind, hmat, hw, gm, gl0 - v0, gl1 - v1,
+                                       gl2 - v2)
+                nh[tu] = hv
+                ng[tu] = gt
+                npar[tu] = par
+                fv = _heap.fkey(gt + hv, fq, fq_inv)
+                if plateau:
+                    hn, sn = _heap.pq_push(heap, npos, hn, sn, fcur, t, fv, gt)
+                else:
+                    hn = _heap.push(heap, npos, hn, t, fv, gt)
+            elif gt < ng[tu]:
                 ng[tu] = gt
                 fv = _heap.fkey(gt + nh[tu], fq, fq_inv)
                 npar[tu] = par
-                if new:
-                    hn, sn = _heap.pq_push(heap, npos, hn, sn, fcur, t, fv, gt)
-                else:
+                if plateau:
                     hn, sn = _heap.pq_decrease(heap, npos, hn, sn, fcur, t, fv, gt)
+                else:
+                    _heap.decrease_key(heap, npos, t, fv, gt)
     if status != RUN_FOUND:  # the arrays may be copied or the search resumed
         hn = _heap.pq_flush(heap, npos, hn, sn, fcur)
     st.nodes = n
