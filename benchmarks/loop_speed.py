@@ -1,20 +1,19 @@
-"""What the dense node array and the loops fixed for it buy: each search on a dense grid
-against the same search on the paged node map, on the same queries.
+"""What the dense node array and the search loop's variants fixed for it buy: each search
+on a dense grid against the same search on the paged node map, on the same queries.
 
-A search on a dense grid whose cell -> node array fits
-:data:`planner.search.astar.driver.DENSE_SLOT_BUDGET` finds its nodes in that array, and runs
-a loop fixed for that case at compile time: A* and Dijkstra the dense-grid loop
-``planner/search/astar/dense.py:dense_astar``, Lazy Theta* the one search loop
-``planner/search/astar/kernel.py:_loop`` compiled as its ``DENSE_LAZY`` variant (the dense
-array, the stencil's bit mask and the method fixed, so their tests fold away). With the
-budget at 0 (the switch ``tests/test_search.py`` uses to check the two agree) the same
-search runs ``_loop``'s ``GENERAL`` variant on the paged node map: that is the other side
-here. Each side searches its own copy of the world (the dense node array is held per grid,
-so the budget only decides for a grid that holds none), with the same queries, and the
-answers must agree (cost and expansions; a disagreement is printed and makes the exit code
-1). The ratio is what the dense node array buys together with the fixed loop: the paged
-map's lookups, and for A* also ``dense_astar``'s own code (its row windows, closed marks
-in the dense array, gauge facets kept per expansion).
+Every search runs the one search loop, ``planner/search/astar/loop.py:search_loop``,
+compiled per variant. A search on a dense grid whose cell -> node array fits
+:data:`planner.search.astar.driver.DENSE_SLOT_BUDGET` finds its nodes in that array and runs
+the variant fixed for that case at compile time (the dense array, the stencil's bit mask and
+the method fixed, so their tests fold away): A* ``DENSE_ASTAR`` (which also marks closed
+nodes in the dense array), Lazy Theta* ``DENSE_LAZY``. With the budget at 0 (the switch
+``tests/test_search.py`` uses to check the two agree) the same search runs the ``GENERAL``
+variant on the paged node map: that is the other side here. Each side searches its own copy
+of the world (the dense node array is held per grid, so the budget only decides for a grid
+that holds none), with the same queries, and the answers must agree (cost and expansions; a
+disagreement is printed and makes the exit code 1). The ratio is what the dense node array
+buys together with the variant that folds its tests: the paged map's lookups and the
+general variant's per-expansion tests.
 
 Usage::
 
@@ -43,7 +42,7 @@ from planner import search as S  # noqa: E402
 from planner.search.astar import driver  # noqa: E402
 from planner.world import World  # noqa: E402
 
-METHODS = {"astar": "dense.py:dense_astar", "lazy-theta": "kernel.py:_loop DENSE_LAZY"}
+METHODS = {"astar": "DENSE_ASTAR", "lazy-theta": "DENSE_LAZY"}
 
 
 def _search_general(world: World, s, g, method: str):

@@ -261,9 +261,6 @@ def search_loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, 
                     continue
             elif not move_allowed(ufree, ms.ptr, ms.idx, m):
                 continue
-            v0 = u0 + moves[m, 0]
-            v1 = u1 + moves[m, 1]
-            v2 = u2 + moves[m, 2]
             if dense:
                 loc = np.uint64(base + moff[m])
                 v = dsl[loc]  # slot + 1, 0 none (-(slot + 1) closed, with marks)
@@ -271,6 +268,9 @@ def search_loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, 
                     continue  # closed: a consistent heuristic never improves it
                 t = np.int64(v) - 1
             else:
+                v0 = u0 + moves[m, 0]
+                v1 = u1 + moves[m, 1]
+                v2 = u2 + moves[m, 2]
                 bk = block_key(v0, v1, v2)
                 if bk != last_bk:
                     p = mix64(bk) & bmask
@@ -293,6 +293,9 @@ def search_loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, 
                     # its g came through this parent, the sum below to the bit (a closed
                     # node's g stays): not less, so no square root
                     continue
+            v0 = u0 + moves[m, 0]  # (after the tests above: most moves stop there)
+            v1 = u1 + moves[m, 1]
+            v2 = u2 + moves[m, 2]
             if anyangle == 0:
                 gt = gs + mcost[m]
                 par = s
