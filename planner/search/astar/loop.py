@@ -104,8 +104,11 @@ def search_loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, 
     lazy = anyangle == LAZY_THETA
     theta = anyangle == THETA
     # The f plateau's side heap (planner.search._heap) for lattice A* / Dijkstra; the
-    # any-angle methods keep the one heap (plain push / pop: the side heap stays empty).
+    # any-angle methods keep the one heap (fcur stays NaN: nothing equals it, the side heap
+    # stays empty). DENSE_LAZY calls the one heap's own operations, the others the pq_*
+    # ones for both cases: one heap's code in each variant.
     plateau = anyangle == 0
+    plain = lazy_v
     gauge = hkind == H_GAUGE and oct_s <= 0.0
     g = walk.g
     cubic = is_cubic(g)
@@ -150,10 +153,12 @@ def search_loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, 
         if max_exp > 0 and expansions >= max_exp:
             status = RUN_BUDGET
             break
-        if plateau:
-            s, hn, sn, fcur = _heap.pq_pop(heap, npos, hn, sn, fcur)
-        else:
+        if plain:
             s, hn = _heap.pop(heap, npos, hn)
+        else:
+            s, hn, sn, fc = _heap.pq_pop(heap, npos, hn, sn, fcur)
+            if plateau:
+                fcur = fc
         su = np.uint64(s)  # unsigned node indices: no negative-index fix-up on each access
         npos[su] = -1
         expansions += 1
@@ -321,10 +326,10 @@ def search_loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, 
                     ng[tu] = gt
                     fv = _heap.fkey(gt + nh[tu], fq, fq_inv)
                     npar[tu] = par
-                    if plateau:
-                        hn, sn = _heap.pq_decrease(heap, npos, hn, sn, fcur, t, fv, gt)
-                    else:
+                    if plain:
                         _heap.decrease_key(heap, npos, t, fv, gt)
+                    else:
+                        hn, sn = _heap.pq_decrease(heap, npos, hn, sn, fcur, t, fv, gt)
                 continue
             t = n  # a new node
             tn = np.uint64(t)
@@ -369,10 +374,10 @@ def search_loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, 
             ng[tn] = gt
             npar[tn] = par
             fv = _heap.fkey(gt + hv, fq, fq_inv)
-            if plateau:
-                hn, sn = _heap.pq_push(heap, npos, hn, sn, fcur, t, fv, gt)
-            else:
+            if plain:
                 hn = _heap.push(heap, npos, hn, t, fv, gt)
+            else:
+                hn, sn = _heap.pq_push(heap, npos, hn, sn, fcur, t, fv, gt)
     if status != RUN_FOUND:  # the arrays may be copied or the search resumed
         hn = _heap.pq_flush(heap, npos, hn, sn, fcur)
     st.nodes = n
