@@ -1,17 +1,19 @@
-"""The specialised A* loops against the general loop on the same queries: what each copy
-that stays buys.
+"""What the dense node array and the search loop's variants fixed for it buy: each search
+on a dense grid against the same search on the paged node map, on the same queries.
 
-A search on a dense grid whose cell -> node array fits
-:data:`planner.search.astar.driver.DENSE_SLOT_BUDGET` runs a loop written for it: A* and
-Dijkstra ``planner/search/astar/dense.py``, Lazy Theta* ``dense_theta.py``. With the budget
-at 0 (the switch ``tests/test_search.py`` uses to check the loops agree) the same search
-runs the general loop (``kernel.py:_loop``) on the paged node map: that is the other side
-here. Each side searches its own copy of the world (the dense node array is held per grid,
-so the budget only decides for a grid that holds none), with the same queries, and the
-answers must agree (cost and expansions; a disagreement is printed and makes the exit code
-1). The general side also pays the paged map's lookups, which the general loop would not
-pay on the dense array: its ratio is what deleting the copy and its dense array would
-cost, an upper bound on what the loop's code alone buys.
+Every search runs the one search loop, ``planner/search/astar/loop.py:search_loop``,
+compiled per variant. A search on a dense grid whose cell -> node array fits
+:data:`planner.search.astar.driver.DENSE_SLOT_BUDGET` finds its nodes in that array and runs
+the variant fixed for that case at compile time (the dense array, the stencil's bit mask and
+the method fixed, so their tests fold away): A* ``DENSE_ASTAR`` (which also marks closed
+nodes in the dense array), Lazy Theta* ``DENSE_LAZY``. With the budget at 0 (the switch
+``tests/test_search.py`` uses to check the two agree) the same search runs the ``GENERAL``
+variant on the paged node map: that is the other side here. Each side searches its own copy
+of the world (the dense node array is held per grid, so the budget only decides for a grid
+that holds none), with the same queries, and the answers must agree (cost and expansions; a
+disagreement is printed and makes the exit code 1). The ratio is what the dense node array
+buys together with the variant that folds its tests: the paged map's lookups and the
+general variant's per-expansion tests.
 
 Usage::
 
@@ -21,7 +23,7 @@ Usage::
 
 Timing (``benchmarks/harness.py``): thread CPU time per ``search()`` call, the two sides
 taking turns query by query, each query its fastest of ``--repeat`` rounds; ``ratio`` lines
-give the median per-query ratio general / specialised with its 95% interval.
+give the median per-query ratio paged / dense with its 95% interval.
 """
 
 from __future__ import annotations
@@ -40,7 +42,7 @@ from planner import search as S  # noqa: E402
 from planner.search.astar import driver  # noqa: E402
 from planner.world import World  # noqa: E402
 
-METHODS = {"astar": "dense.py:dense_astar", "lazy-theta": "dense_theta.py"}
+METHODS = {"astar": "DENSE_ASTAR", "lazy-theta": "DENSE_LAZY"}
 
 
 def _search_general(world: World, s, g, method: str):
@@ -78,8 +80,8 @@ def compare(name: str, world: World, qs: np.ndarray, method: str, repeat: int) -
     row = (f"{name:8s} {method:10s} {len(qs):7d} {1e3 * np.median(ts):8.2f} "
            f"{1e3 * np.median(tg):8.2f} {np.median(tg / ts):7.2f} "
            f"{tg.sum() / ts.sum():7.2f} {dense_bytes / 2**20:9.1f} {'yes' if agree else 'NO':>6s}")
-    line = harness.ratio_line(f"general loop / {METHODS[method]}, {name}", tg, ts,
-                              note="per query; > 1: the specialised loop is faster")
+    line = harness.ratio_line(f"paged general / dense {METHODS[method]}, {name}", tg, ts,
+                              note="per query; > 1: the dense side is faster")
     return row, line, agree
 
 
@@ -92,14 +94,15 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--methods", nargs="+", choices=list(METHODS), default=list(METHODS))
     a = ap.parse_args(argv)
     n, maps = (3, ["Simple"]) if a.smoke else (a.queries, a.maps)
-    with harness.session("specialised A* loops vs the general loop", smoke=a.smoke):
+    with harness.session("dense node array and its loops vs the paged map", smoke=a.smoke):
         present = [m for m in maps if (a.data / "warframe" / f"{m}.3dmap").is_file()]
         if not present:
             return harness.skip(f"no Warframe maps under {a.data / 'warframe'}")
         print("cubic-26, safe rule; thread CPU time per search() call, the sides taking turns "
-              f"per query, fastest of {a.repeat}; general = DENSE_SLOT_BUDGET 0 (paged map)")
-        print(f"{'map':8s} {'method':10s} {'queries':>7s} {'spec ms':>8s} {'gen ms':>8s} "
-              f"{'med gen/spec':>7s} {'sum':>7s} {'dense MiB':>9s} {'agree':>6s}")
+              f"per query, fastest of {a.repeat}; paged = DENSE_SLOT_BUDGET 0; median, sum: "
+              "paged / dense time")
+        print(f"{'map':8s} {'method':10s} {'queries':>7s} {'dense ms':>8s} {'paged ms':>8s} "
+              f"{'median':>7s} {'sum':>7s} {'dense MiB':>9s} {'agree':>6s}")
         lines, ok = [], True
         for name in present:
             world, scen = load_warframe(name, a.data)
@@ -111,7 +114,7 @@ def main(argv: list[str] | None = None) -> int:
                 ok &= agree
         for line in lines:
             print(line)
-        print("dense MiB: median extra peak bytes of the specialised side (its dense node "
+        print("dense MiB: median extra peak bytes of the dense side (its dense node "
               "array), which also shows each side ran the loop it names")
     return 0 if ok else 1
 

@@ -129,11 +129,12 @@ def test_cli_plans_with_it(tmp_path, capsys):
 @pytest.mark.parametrize("name", NAMED_LATTICES)
 @pytest.mark.parametrize("method", ["lazy-theta", "weighted-theta", "theta"])
 def test_dense_loop_matches_the_general_loop(method, name):
-    """Lazy Theta* on a dense grid runs its own loop (planner.search.astar.dense_theta) on
-    every lattice, with the lattice's sight walk (the integer walk on cubic, the face walk
-    elsewhere); Theta* the general loop with the dense grid's walk; the same world stored
-    as a hash set runs the general loop with the general walk: same path, cost,
-    expansions, nodes and lookups, with sight lines that fail among them."""
+    """Lazy Theta* on a dense grid runs the search loop's variant fixed for it (kernel.py
+    ``_loop``, ``DENSE_LAZY``) on every lattice, with the lattice's sight walk (the integer
+    walk on cubic, the face walk elsewhere); Theta* the general variant with the dense
+    grid's walk; the same world stored as a hash set runs the general variant with the
+    general walk: same path, cost, expansions, nodes and lookups, with sight lines that
+    fail among them."""
     for seed in range(30 if name == "cubic" else 12):
         world, s, g = _random_world(name, seed, n=14, frac=0.2)
         hashed = World(world.lattice, world.blocked, world.bounds, dense_budget=0)

@@ -10,7 +10,7 @@ Inside compiled code every call to a function that is not inlined counts a refer
 each array of its arguments on entry and releases it on return: passing the 13 structs
 down :func:`search_bound` -> ``search_call`` -> ``search_run`` cost more than a
 one-expansion search itself. The commonest case (lattice A* / Dijkstra on a dense grid)
-therefore goes from :func:`search_bound` to the dense loop directly, and counts no
+therefore goes from :func:`search_bound` to the search loop directly, and counts no
 references at all: reading a field of :class:`Bound` counts one for each array of the
 field's struct, so the dense search runs in kernels compiled without reference counting
 (``_nrt=False``) that read the fields through :func:`planner._numba.borrow_fields`, and
@@ -26,8 +26,9 @@ from numba.experimental import structref
 from planner._numba import borrow_fields, njit_cached
 from planner.occupancy.grid import occ_free, point_cells
 from planner.search._nodes import end_search, path_length
-from planner.search.astar.dense import dense_astar, dense_tables
+from planner.search.astar.dense import dense_tables
 from planner.search.astar.kernel import search_call, search_init
+from planner.search.astar.loop import DENSE_ASTAR, search_loop
 from planner.search.heuristic import H_EUCLID
 from planner.search.moves import MAX_BITS
 from planner.search.result import RUN_BAD_GOAL, RUN_BAD_START, RUN_BUDGET, RUN_FOUND, RUN_GROW
@@ -54,11 +55,10 @@ structref.define_proxy(Bound, _BoundType,
 @njit_cached
 def new_bound(occ, walk, ms, nodes, heap, slots, sc, ufree, ends, state):
     # pragma: no cover - compiled
-    """:class:`Bound` of these structs (their arrays shared, not copied), with the dense
-    loop's tables of ``ms`` on ``occ``'s grid when that loop may run on them."""
-    used = occ.mode == 0 and ms.union.shape[0] <= MAX_BITS and ms.hkind != H_EUCLID
+    """:class:`Bound` of these structs (their arrays shared, not copied), with the search
+    loop's tables of ``ms`` on ``occ``'s grid."""
     return Bound(occ, walk, ms, nodes, heap, slots, sc, ufree, ends, state,
-                 dense_tables(ms, occ.dims, used))
+                 dense_tables(ms, occ.dims))
 
 
 _NOT_DENSE = -1  # _dense_run: not a lattice A* / Dijkstra search on a dense grid
@@ -73,7 +73,7 @@ def _dense_run(b, params, pausing):  # pragma: no cover - compiled
     if not (params.anyangle == 0 and occ.mode == 0 and slots.dense.shape[0] > 1
             and ms.union.shape[0] <= MAX_BITS and ms.hkind != H_EUCLID):
         return _NOT_DENSE, 0
-    # search_run's first steps and its dense branch, written out
+    # search_run's first steps and its DENSE_ASTAR branch, written out
     st = counts[0]
     goal = ends[1]
     if st.nodes == 0:
@@ -87,8 +87,8 @@ def _dense_run(b, params, pausing):  # pragma: no cover - compiled
             st.status = status
             return status, 0
         search_init(start, goal, ms, walk.g, nodes, heap, slots, st)
-    status = dense_astar(occ.grid, occ.lo, occ.dims, ms, nodes, heap, slots.dense, st,
-                         params.max_nodes, params.max_expansions, goal, dt)
+    status = search_loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, dt,
+                         DENSE_ASTAR)
     st.status = status
     return status, path_length(nodes, st.goal) if status == RUN_FOUND else 0
 

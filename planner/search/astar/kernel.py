@@ -9,10 +9,10 @@ Lazy Theta* (``anyangle`` 2) assumes the sight line and verifies it once, when t
 expanded, falling back to its best closed lattice neighbour (SetVertex). Both use the
 Euclidean heuristic and the exact walk of :mod:`planner.search._los`.
 
-Lattice A* / Dijkstra on a dense grid runs the loop of :mod:`planner.search.astar.dense`,
-and Lazy Theta* on a dense grid (every lattice) that of :mod:`planner.search.astar.
-dense_theta` (this loop took 1.08-1.2x its time on the same worlds: ``benchmarks/
-search_speed.py --anyangle 20``, cubic-26).
+Every search runs the one search loop, :func:`planner.search.astar.loop.search_loop`,
+compiled per variant: :func:`search_run` picks ``DENSE_ASTAR`` (lattice A* / Dijkstra) or
+``DENSE_LAZY`` (Lazy Theta*) on a dense grid with the dense node array and a stencil that
+fits the bit mask, else ``GENERAL``.
 """
 
 from __future__ import annotations
@@ -22,35 +22,23 @@ from typing import NamedTuple
 import numpy as np
 
 from planner._numba import njit_cached
-from planner.occupancy.grid import cell_free, occ_free
-from planner.occupancy.keys import mix64, pack3, unpack3
+from planner.occupancy.grid import occ_free
+from planner.occupancy.keys import mix64, pack3
 from planner.search import _heap
-from planner.search._los import DDA_MAX, cubic_walk, dense_walk, is_cubic, sight
-from planner.search._nodes import (
-    PAGE,
-    block_key,
-    dense_index,
-    find_slot,
-    finish,
-    local,
-    new_page,
+from planner.search._nodes import PAGE, block_key, dense_index, finish, local, new_page
+from planner.search.astar.loop import (
+    DENSE_ASTAR,
+    DENSE_LAZY,
+    GENERAL,
+    LAZY_THETA,
+    THETA,
+    search_loop,
 )
-from planner.search.astar.dense import dense_astar, grid_offsets, stencil_mask
-from planner.search.astar.dense_theta import dense_lazy_theta
-from planner.search.heuristic import H_EUCLID, estimate, length, node_estimate, rows
-from planner.search.moves import MAX_BITS, move_allowed
-from planner.search.result import (
-    RUN_BAD_GOAL,
-    RUN_BAD_START,
-    RUN_BUDGET,
-    RUN_EXHAUSTED,
-    RUN_FOUND,
-    RUN_GROW,
-    RUN_LIMIT,
-)
+from planner.search.heuristic import H_EUCLID, estimate
+from planner.search.moves import MAX_BITS
+from planner.search.result import RUN_BAD_GOAL, RUN_BAD_START, RUN_BUDGET, RUN_FOUND, RUN_GROW
 
-_EMPTY = -1
-THETA, LAZY_THETA = 1, 2  # SearchParams.anyangle
+__all__ = ["LAZY_THETA", "THETA", "SearchParams", "search_call", "search_init", "search_run"]
 
 
 class SearchParams(NamedTuple):
@@ -88,8 +76,8 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state
 
     The node arrays are fixed-size inside the kernel: before each expansion it checks that
     the arrays and the slot map (load <= 0.5) can take every possible new node, else it
-    returns ``RUN_GROW`` and the driver doubles them and calls again. Not reassigning arrays
-    inside the loop lets numba drop per-iteration reference counting.
+    returns ``RUN_GROW`` and the driver doubles them and calls again (the loop then
+    allocates nothing and counts no references).
 
     Parameters
     ----------
@@ -113,8 +101,8 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state
         The search's counters (:mod:`planner.search._state`); the code returned is also
         left in ``status``.
     dt : planner.search.astar.dense.DenseTables
-        The dense loop's tables of ``ms`` on ``occ``'s grid (made once per move set and
-        world, not per search).
+        The loop's tables of ``ms`` on ``occ``'s grid (made once per move set and world,
+        not per search).
 
     Returns
     -------
@@ -133,257 +121,18 @@ def search_run(occ, walk, ms, nodes, heap, slots, sc, ufree, params, ends, state
             st.status = RUN_BAD_GOAL
             return RUN_BAD_GOAL
         search_init(start, goal, ms, walk.g, nodes, heap, slots, st)
-    if (params.anyangle == 0 and occ.mode == 0 and slots.dense.shape[0] > 1
-            and ms.union.shape[0] <= MAX_BITS and ms.hkind != H_EUCLID):
-        status = dense_astar(occ.grid, occ.lo, occ.dims, ms, nodes, heap, slots.dense, st,
-                             params.max_nodes, params.max_expansions, goal, dt)
-        st.status = status
-        return status
-    if (params.anyangle == LAZY_THETA and occ.mode == 0 and slots.dense.shape[0] > 1
-            and ms.union.shape[0] <= MAX_BITS):
-        status = dense_lazy_theta(occ, walk, ms, nodes, heap, slots.dense, sc, st,
-                                  params.max_nodes, params.max_expansions, goal, params.h_weight)
-        st.status = status
-        return status
-    # the loop's tables, made here: the loop allocates nothing (see _loop)
-    uoff, moff, reach = grid_offsets(ms.union, ms.moves, occ.dims[1], occ.dims[2])
-    ubit = np.arange(ms.union.shape[0])  # each stencil cell's bit in the mask: its order
-    status = _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, ubit,
-                   moff, reach, 1e-9 * ms.cost.min())
+    dense = occ.mode == 0 and slots.dense.shape[0] > 1 and ms.union.shape[0] <= MAX_BITS
+    if dense and params.anyangle == 0 and ms.hkind != H_EUCLID:
+        status = search_loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st,
+                             dt, DENSE_ASTAR)
+    elif (dense and params.anyangle == LAZY_THETA and ms.hkind == H_EUCLID
+            and ms.octile <= 0.0):
+        status = search_loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st,
+                             dt, DENSE_LAZY)
+    else:
+        status = search_loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st,
+                             dt, GENERAL)
     st.status = status
-    return status
-
-
-# Without the runtime's reference counting, as the dense loops (planner.search.astar.dense):
-# each heap operation here would otherwise incref / decref the heap arrays it binds.
-# Its rare allocating paths (the sight walk on fresh arrays, the float clipping of very
-# long cubic lines) are separate compiled functions, which keep theirs.
-@njit_cached(_nrt=False)
-def _loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, uoff, ubit, moff,
-          reach, fq):  # pragma: no cover - compiled
-    """:func:`search_run`'s general loop, given its tables: ``uoff`` (U,) and ``moff`` (M,)
-    the stencil's and the moves' grid offsets and ``reach`` their margin (cells)
-    (:func:`planner.search.astar.dense.grid_offsets`), ``ubit`` (U,) each stencil cell's
-    bit in the free mask (:func:`planner.search.astar.dense.stencil_mask`),
-    ``fq`` the f grid (1e-9 of the shortest move, m). Returns the run code (see
-    :func:`search_run`)."""
-    mode, grid, lo, dims, otable, otmask, gg, blo, bhi = occ
-    lo0, lo1, lo2 = lo[0], lo[1], lo[2]
-    d0, d1, d2 = dims[0], dims[1], dims[2]
-    moves, mcost, ust, mptr, midx, hmat, hkind, need, oct_s = ms
-    nkey, ng, nh, npar, npos = nodes
-    pages, btab, bkeys, dsl, _, _ = slots
-    dense = dsl.shape[0] > 1 and mode == 0  # the dense slot box is the grid's box
-    anyangle, max_nodes, max_exp, hw = params
-    g = walk.g
-    cubic = is_cubic(g)
-    # sight lines between free cells of a dense grid stay inside its box: the walk on the
-    # grid's arrays
-    cubic_dense = cubic and mode == 0 and max(d0, max(d1, d2)) <= DDA_MAX
-    gl0, gl1, gl2 = goal[0], goal[1], goal[2]
-    gm = rows(g)
-    cap = nkey.shape[0]
-    pcap = bkeys.shape[0]
-    bsize = btab.shape[0]
-    bmask = bsize - 1
-    last_bk = np.int64(-1)
-    last_pg = np.int64(0)
-    nu = ust.shape[0]
-    nm = moves.shape[0]
-    bits = nu <= MAX_BITS  # one mask test per move instead of its CSR list
-    all_u = (np.int64(1) << nu) - 1 if bits else np.int64(0)
-    gk = pack3(goal[0], goal[1], goal[2])
-    base = np.int64(0)
-    fq_inv = 1.0 / fq
-    n = st.nodes
-    hn = st.queued
-    # The f plateau's side heap (planner.search._heap) for lattice A* / Dijkstra; the
-    # any-angle methods keep the one heap (fcur stays NaN: nothing equals it), as the dense
-    # Lazy Theta* loop does, so that the two loops tie-break alike.
-    sn = 0
-    fcur = np.nan
-    plateau = anyangle == 0
-    lazy = anyangle == LAZY_THETA
-    expansions = st.expansions
-    lookups = st.lookups
-    status = RUN_EXHAUSTED
-    while hn + sn > 0:
-        if n + nm > cap or (not dense and (st.pages + nm > pcap
-                                            or 2 * (st.pages + nm) > bsize)):
-            status = RUN_GROW
-            break
-        if max_exp > 0 and expansions >= max_exp:
-            status = RUN_BUDGET
-            break
-        s, hn, sn, fc = _heap.pq_pop(heap, npos, hn, sn, fcur)
-        if plateau:
-            fcur = fc
-        npos[s] = -1
-        expansions += 1
-        u0, u1, u2 = unpack3(nkey[s])
-        blocked = np.int64(0)
-        if mode == 0:
-            a0, b0, c0 = u0 - lo0, u1 - lo1, u2 - lo2
-            base = (a0 * d1 + b0) * d2 + c0
-            inner = (a0 >= reach and b0 >= reach and c0 >= reach and a0 < d0 - reach
-                     and b0 < d1 - reach and c0 < d2 - reach)
-            if bits:  # straight into the mask of free cells
-                free = stencil_mask(grid, a0, b0, c0, d0, d1, d2, base, reach, ust, uoff,
-                                    ubit)
-                blocked = all_u & ~free
-            elif inner:
-                for j in range(nu):
-                    f = base + uoff[j]
-                    ufree[j] = (grid[f >> 3] >> (f & 7)) & 1 != 0
-            else:
-                for j in range(nu):
-                    a = a0 + ust[j, 0]
-                    b = b0 + ust[j, 1]
-                    c = c0 + ust[j, 2]
-                    f = (a * d1 + b) * d2 + c
-                    ufree[j] = (a >= 0 and b >= 0 and c >= 0 and a < d0 and b < d1
-                                and c < d2 and (grid[f >> 3] >> (f & 7)) & 1 != 0)
-        else:
-            for j in range(nu):
-                ufree[j] = cell_free(mode, grid, lo, dims, otable, otmask, gg, blo, bhi,
-                                     u0 + ust[j, 0], u1 + ust[j, 1], u2 + ust[j, 2])
-            if bits:
-                for j in range(nu):
-                    if not ufree[j]:
-                        blocked |= np.int64(1) << j
-        lookups += nu
-        # Verify the assumed sight line, walked from s: a blocked cell is likelier near s
-        # (its parent saw s's generator), so the walk stops sooner.
-        if lazy and npar[s] != s:
-            p0, p1, p2 = unpack3(nkey[npar[s]])
-            if cubic_dense:
-                ok, c = dense_walk(grid, lo, dims, u0, u1, u2, p0, p1, p2)
-            elif cubic:
-                ok, c = cubic_walk(occ, u0, u1, u2, p0, p1, p2)
-            else:
-                ok, c = sight(occ, walk, sc, st, u0, u1, u2, p0, p1, p2)
-            lookups += c
-            if not ok:
-                # SetVertex: the best closed neighbour that an allowed move reaches (one
-                # exists: the node that generated s)
-                best = np.inf
-                bp = np.int64(-1)
-                for m in range(nm):
-                    if bits:
-                        if need[m] & blocked:
-                            continue
-                    elif not move_allowed(ufree, mptr, midx, m):
-                        continue
-                    v0 = u0 + moves[m, 0]
-                    v1 = u1 + moves[m, 1]
-                    v2 = u2 + moves[m, 2]
-                    if dense:  # an allowed move's target is free, hence inside the box
-                        t = np.int64(dsl[base + moff[m]]) - 1
-                    else:
-                        t = find_slot(slots, v0, v1, v2)
-                    if t == _EMPTY or npos[t] != -1:
-                        continue
-                    gv = ng[t] + mcost[m]
-                    if gv < best:
-                        best = gv
-                        bp = t
-                npar[s] = bp
-                ng[s] = best
-        if nkey[s] == gk:
-            status = RUN_FOUND
-            st.goal = s
-            break
-        if max_nodes > 0 and n >= max_nodes:
-            status = RUN_LIMIT
-            break
-        ps = npar[s]
-        if anyangle != 0 and ps != s:
-            p0, p1, p2 = unpack3(nkey[ps])
-        else:
-            p0, p1, p2 = u0, u1, u2
-        for m in range(nm):
-            v0 = u0 + moves[m, 0]
-            v1 = u1 + moves[m, 1]
-            v2 = u2 + moves[m, 2]
-            # Safe rule first: with the bitmask it is one test, and an allowed move's target
-            # is free, hence inside the dense box.
-            if bits:
-                if need[m] & blocked:
-                    continue
-            elif not move_allowed(ufree, mptr, midx, m):
-                continue
-            if dense:
-                loc = np.uint64(base + moff[m])
-                t = np.int64(dsl[loc]) - 1  # stored as slot + 1, 0 none
-            else:
-                bk = block_key(v0, v1, v2)
-                if bk != last_bk:
-                    p = mix64(bk) & bmask
-                    while True:
-                        q = btab[p]
-                        if q == _EMPTY or bkeys[q] == bk:
-                            break
-                        p = (p + 1) & bmask
-                    if q == _EMPTY:
-                        q = new_page(slots, st, bk, p)
-                    last_bk = bk
-                    last_pg = q
-                loc = np.uint64(last_pg * PAGE + local(v0, v1, v2))
-                t = np.int64(pages[loc])
-            new = t == _EMPTY
-            if new:
-                t = n
-                n += 1
-                if dense:
-                    dsl[loc] = t + 1
-                else:
-                    pages[loc] = t
-                tu = np.uint64(t)  # unsigned: no negative-index fix-up on each access
-                nkey[tu] = pack3(v0, v1, v2)
-                ng[tu] = np.inf
-                nh[tu] = node_estimate(oct_s, hkind, hmat, hw, gm, gl0 - v0, gl1 - v1, gl2 - v2)
-            else:
-                tu = np.uint64(t)
-                if npos[tu] == -1:
-                    continue  # closed: a consistent heuristic never improves it
-                if lazy and npar[tu] == ps:
-                    # its g came through this parent, the sum below to the bit (a closed
-                    # node's g stays): not less, so no square root
-                    continue
-            if anyangle == 0:
-                gt = ng[s] + mcost[m]
-                par = s
-            else:
-                gt = ng[ps] + length(gm, v0 - p0, v1 - p1, v2 - p2)  # through s's parent
-                par = ps
-                if anyangle == THETA and ps != s:
-                    g1 = ng[s] + mcost[m]
-                    if gt >= ng[tu] and g1 >= ng[tu]:
-                        continue  # neither parent improves t: its sight line is moot
-                    if cubic_dense:
-                        ok, c = dense_walk(grid, lo, dims, v0, v1, v2, p0, p1, p2)
-                    elif cubic:
-                        ok, c = cubic_walk(occ, v0, v1, v2, p0, p1, p2)
-                    else:
-                        ok, c = sight(occ, walk, sc, st, p0, p1, p2, v0, v1, v2)
-                    lookups += c
-                    if not ok:
-                        gt = g1
-                        par = s
-            if gt < ng[tu]:
-                ng[tu] = gt
-                fv = _heap.fkey(gt + nh[tu], fq, fq_inv)
-                npar[tu] = par
-                if new:
-                    hn, sn = _heap.pq_push(heap, npos, hn, sn, fcur, t, fv, gt)
-                else:
-                    hn, sn = _heap.pq_decrease(heap, npos, hn, sn, fcur, t, fv, gt)
-    if status != RUN_FOUND:  # the arrays may be copied or the search resumed
-        hn = _heap.pq_flush(heap, npos, hn, sn, fcur)
-    st.nodes = n
-    st.queued = hn
-    st.expansions = expansions
-    st.lookups = lookups
     return status
 
 
