@@ -176,12 +176,24 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
         sf[S_IDQ + j] = iy
         sf[S_SG + j] = sg
         sf[S_SY + j] = sg * iy
-    # Rows and columns of the pairs only: the other slots' exit times stay 1e300, which
-    # the finite numbers an earlier walk left there (zero at first) move by nothing.
+    # Rows of the pairs only: the other slots' exit times stay 1e300, which the finite
+    # numbers an earlier walk left there (zero at first) move by nothing. Whole rows
+    # (the padding's products are zeros) from eight locals: a row is eight independent
+    # products, not a chain of stores and reloads of the scratch it writes.
+    y0, y1, y2, y3 = sf[S_SY], sf[S_SY + 1], sf[S_SY + 2], sf[S_SY + 3]
+    y4, y5, y6, y7 = sf[S_SY + 4], sf[S_SY + 5], sf[S_SY + 6], sf[S_SY + 7]
     for j in range(npair):
         sg = sf[S_SG + j]
-        for k in range(npair):
-            sf[S_INC + SLOTS * j + k] = sg * fd[o_gp + SLOTS * j + k] * sf[S_SY + k]
+        a = np.uint64(S_INC + SLOTS * j)
+        b = np.uint64(o_gp + SLOTS * j)
+        sf[a] = sg * fd[b] * y0
+        sf[a + np.uint64(1)] = sg * fd[b + np.uint64(1)] * y1
+        sf[a + np.uint64(2)] = sg * fd[b + np.uint64(2)] * y2
+        sf[a + np.uint64(3)] = sg * fd[b + np.uint64(3)] * y3
+        sf[a + np.uint64(4)] = sg * fd[b + np.uint64(4)] * y4
+        sf[a + np.uint64(5)] = sg * fd[b + np.uint64(5)] * y5
+        sf[a + np.uint64(6)] = sg * fd[b + np.uint64(6)] * y6
+        sf[a + np.uint64(7)] = sg * fd[b + np.uint64(7)] * y7
     idx = ((p0 - b0) * d1 + (p1 - b1)) * d2 + (p2 - b2)
     if nrec > 0:
         si[o_rec] = p0
