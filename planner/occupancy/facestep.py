@@ -21,7 +21,8 @@ SLOTS = 8  # exit-time slots: forward facets of a 3D Voronoi cell (at most 7)
 # Scratch (``sf`` float64, ``si`` int64, from face_scratch): exit time of forward slot k,
 # 1 / (d . v) of slot k, d . v_r of facet r, the change of slot k's time on a step through
 # slot i (8, 8); the facet of slot k, the flat index step through slot k's facet, the
-# cells the segment runs along (SM, 3), the number of cells to record and the record.
+# cells the segment runs along (SM,: flat indices), the number of cells to record and
+# the record.
 # The sign of slot k's facet (+1: its pair's first, 0: parallel) and 1 / (d . w_k).
 S_T, S_IDQ, S_DQ, S_INC, S_SG, S_SY, S_F = 0, 8, 16, 32, 96, 104, 112
 S_FW, S_STEP, S_CUR = 0, 8, 16

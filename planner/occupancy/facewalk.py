@@ -81,15 +81,15 @@ _NEVER = 1e300  # exit time of an empty slot
 def face_scratch(sm: int, record: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """Scratch ``(sf, si)`` for :func:`face_walk`: ``sm`` cells around a face, ``record``
     cells to record in ``si`` (tests; :func:`recorded` reads them)."""
-    si = np.zeros(S_CUR + 3 * max(sm, 1) + 1 + 3 * record, np.int64)
-    si[S_CUR + 3 * max(sm, 1)] = record
+    si = np.zeros(S_CUR + max(sm, 1) + 1 + 3 * record, np.int64)
+    si[S_CUR + max(sm, 1)] = record
     return np.zeros(S_F), si
 
 
 @njit_cached
 def recorded(si, sm, n):  # pragma: no cover - compiled
     """The first ``n`` cells :func:`face_walk` looked up, (n, 3), from a recording scratch."""
-    o = S_CUR + 3 * max(sm, 1) + 1
+    o = S_CUR + max(sm, 1) + 1
     return si[o:o + 3 * n].reshape(-1, 3)
 
 
@@ -107,7 +107,7 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
     o_wv = 4 * nrel
     o_cells = fi[I_STAROFF]
     o_masks = fi[I_STARMASK]
-    o_rec = S_CUR + 3 * max(sm, 1)
+    o_rec = S_CUR + max(sm, 1)
     nrec = si[o_rec]
     o_rec += 1
     e0, e1, e2 = q0 - p0, q1 - p1, q2 - p2
@@ -220,8 +220,9 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
         return False, lookups, True
     lim = 1.0 - 4.0 * gap
     mirroring = True  # stepping from both ends (``stop``: the last mirror image)
-    ncur = 0  # cells the segment runs along besides the chain cell (si[S_CUR:][:3 ncur])
+    ncur = 0  # cells the segment runs along besides the chain cell (flat: si[S_CUR:][:ncur])
     pm = np.int64(0)  # the chain cell's facets the segment runs in
+    u0 = u1 = u2 = 0  # off a dense grid: the chain cell's offset from p, at a tie
     while True:
         if mirroring:
             if dense:
@@ -294,10 +295,14 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
                 m = min(m, sf[S_T + k])
             if m >= 1.0:
                 break
-        # An edge or a vertex, or a facet the segment runs in: the face table.
-        u2 = idx % d2 + b2 - p2  # the chain cell's offset from p
-        u1 = (idx // d2) % d1 + b1 - p1
-        u0 = idx // s0 + b0 - p0
+        # An edge or a vertex, or a facet the segment runs in: the face table. Its cells
+        # by flat index (the chain cell's plus their offset's): on a dense grid a lookup
+        # is a bit test and no cell's indices are needed (no division); else from the
+        # chain cell's offset from p.
+        if not dense:
+            u2 = idx % d2 + b2 - p2
+            u1 = (idx // d2) % d1 + b1 - p1
+            u0 = idx // s0 + b0 - p0
         am = pm
         for k in range(nfw):
             r = si[S_FW + k]
@@ -311,27 +316,28 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
         ns = fi[fi[I_STARN] + f]
         for j in range(ns):
             a = o_cells + 3 * (sm * f + j)
-            c0 = u0 + fi[a]
-            c1 = u1 + fi[a + 1]
-            c2 = u2 + fi[a + 2]
-            if fi[a] != 0 or fi[a + 1] != 0 or fi[a + 2] != 0:
-                seen = False
+            f0, f1, f2 = fi[a], fi[a + 1], fi[a + 2]
+            if f0 != 0 or f1 != 0 or f2 != 0:
+                c = idx + f0 * s0 + f1 * s1 + f2
+                seen = c == stop  # the far end's cell: looked up by its walk
                 for i in range(ncur):
-                    b = S_CUR + 3 * i
-                    if si[b] == c0 and si[b + 1] == c1 and si[b + 2] == c2:
+                    if si[S_CUR + i] == c:
                         seen = True
                         break
-                # the far end's cell: looked up by its walk
-                seen = seen or ((p0 + c0 - b0) * d1 + (p1 + c1 - b1)) * d2 + p2 + c2 - b2 == stop
                 if not seen:
-                    if lookups < nrec:
-                        si[o_rec + 3 * lookups] = p0 + c0
-                        si[o_rec + 3 * lookups + 1] = p1 + c1
-                        si[o_rec + 3 * lookups + 2] = p2 + c2
                     lookups += 1
-                    if not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi,
-                                     p0 + c0, p1 + c1, p2 + c2):
-                        return False, lookups, True
+                    if dense:
+                        if (grid[np.uint64(c) >> np.uint64(3)] >> (c & 7)) & 1 == 0:
+                            return False, lookups, True
+                    else:
+                        c0, c1, c2 = p0 + u0 + f0, p1 + u1 + f1, p2 + u2 + f2
+                        if lookups <= nrec:
+                            si[o_rec + 3 * lookups - 3] = c0
+                            si[o_rec + 3 * lookups - 2] = c1
+                            si[o_rec + 3 * lookups - 1] = c2
+                        if not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi,
+                                         c0, c1, c2):
+                            return False, lookups, True
             bm = fi[o_masks + sm * f + j]
             if bm & fwm:
                 continue  # the segment leaves it here
@@ -349,26 +355,22 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
                 bm = fi[o_masks + sm * f + j]
                 if bm & fwm == 0 and bm & parm != 0:
                     a = o_cells + 3 * (sm * f + j)
-                    b = S_CUR + 3 * ncur
-                    si[b] = u0 + fi[a]
-                    si[b + 1] = u1 + fi[a + 1]
-                    si[b + 2] = u2 + fi[a + 2]
+                    si[S_CUR + ncur] = idx + fi[a] * s0 + fi[a + 1] * s1 + fi[a + 2]
                     ncur += 1
         pm = fi[o_masks + sm * f + nxt] & parm
         a = o_cells + 3 * (sm * f + nxt)
-        o0, o1, o2 = u0, u1, u2
-        u0 += fi[a]
-        u1 += fi[a + 1]
-        u2 += fi[a + 2]
-        idx = ((p0 + u0 - b0) * d1 + (p1 + u1 - b1)) * d2 + (p2 + u2 - b2)
+        g0, g1, g2 = fi[a], fi[a + 1], fi[a + 2]
+        old = idx
+        idx += g0 * s0 + g1 * s1 + g2
         if idx == stop:
             break
+        # The exit times from the next chain cell: moved by the offset (c_u . v), as the
+        # fast steps move them.
         for k in range(nfw):
             r = si[S_FW + k]
             w = o_wv + 3 * r
             if fwm >> r & 1:
-                sf[S_T + k] = ((fd[o_rhs + r] + fd[w] * u0 + fd[w + 1] * u1 + fd[w + 2] * u2)
-                               * sf[S_IDQ + k])
+                sf[S_T + k] += (fd[w] * g0 + fd[w + 1] * g1 + fd[w + 2] * g2) * sf[S_IDQ + k]
         if mirroring:
             # The tie's mirror image: its cells' images, when the next chain cell's exit
             # keeps the two walks apart (the segment in its interior: no facet run along).
@@ -380,17 +382,21 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
                 continue
             for j in range(ns):
                 a = o_cells + 3 * (sm * f + j)
-                if fi[a] != 0 or fi[a + 1] != 0 or fi[a + 2] != 0:
-                    c0 = q0 - o0 - fi[a]
-                    c1 = q1 - o1 - fi[a + 1]
-                    c2 = q2 - o2 - fi[a + 2]
-                    if lookups < nrec:
-                        si[o_rec + 3 * lookups] = c0
-                        si[o_rec + 3 * lookups + 1] = c1
-                        si[o_rec + 3 * lookups + 2] = c2
+                f0, f1, f2 = fi[a], fi[a + 1], fi[a + 2]
+                if f0 != 0 or f1 != 0 or f2 != 0:
                     lookups += 1
-                    if not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi, c0, c1,
-                                     c2):
-                        return False, lookups, True
+                    if dense:
+                        c = mir - old - f0 * s0 - f1 * s1 - f2
+                        if (grid[np.uint64(c) >> np.uint64(3)] >> (c & 7)) & 1 == 0:
+                            return False, lookups, True
+                    else:
+                        c0, c1, c2 = q0 - u0 - f0, q1 - u1 - f1, q2 - u2 - f2
+                        if lookups <= nrec:
+                            si[o_rec + 3 * lookups - 3] = c0
+                            si[o_rec + 3 * lookups - 2] = c1
+                            si[o_rec + 3 * lookups - 1] = c2
+                        if not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi,
+                                         c0, c1, c2):
+                            return False, lookups, True
             stop = mir - idx
     return True, lookups, True
