@@ -19,7 +19,9 @@ __all__ = ["FaceTable", "face_table"]
 # few arguments, so a call of the walk costs little; R facets, NF faces, SM cells a face).
 # fd: relevant vectors (R, 3) m at 0, |v|^2 / 2 (R,) at 3R, rel @ G (R, 3) at 4R (so
 # c_u . v = (rel @ G) u for the cell at offset u), v_r . v_s (R, R) at 7R, and the same
-# for the facet pairs (below; padded with zeros to (SLOTS, SLOTS)) at 7R + R^2.
+# for the facet pairs (below; padded with zeros to (SLOTS, SLOTS)) at 7R + R^2, and
+# |v|^2 / 2 + rho |v| (R,) at 7R + R^2 + SLOTS^2, rho the covering radius (an exit time
+# through facet v from a cell touching the segment d is at most 1 + this / |d . v|).
 # fi: the header below, then the relevant vectors as index offsets (R, 3) at I_RIDX, the
 # face id of each facet set (2**R,; -1: no face) at fi[I_FMASK], the number of cells
 # around each face (NF,) at fi[I_STARN], their offsets (NF, SM, 3) at fi[I_STAROFF], and
@@ -97,8 +99,9 @@ def face_table(lattice: Lattice) -> FaceTable:
         raise ValueError("a Voronoi cell's facets come in at most 8 opposite pairs")
     gp = np.zeros((SLOTS, SLOTS))
     gp[:len(pairs), :len(pairs)] = (rel @ rel.T)[np.ix_(pairs[:, 0], pairs[:, 0])]
+    reach_t = rhs + cell.covering_radius * np.linalg.norm(rel, axis=1)
     fd = np.concatenate([rel.ravel(), rhs, (rel @ g).ravel(), (rel @ rel.T).ravel(),
-                         gp.ravel()])
+                         gp.ravel(), reach_t])
     head = np.zeros(I_RIDX, np.int64)
     head[I_R], head[I_NF], head[I_SM] = nrel, nf, sm
     head[I_REACH:I_REACH + 3] = reach

@@ -32,18 +32,22 @@ of opposite facets: a Voronoi cell's facets come in pairs, one of which faces fo
 from __future__ import annotations
 
 import numpy as np
+from numba.cpython.unsafe.numbers import leading_zeros
 
 from planner._numba import njit_cached
 from planner.occupancy.facestep import (
     BLOCKED,
     END,
+    KEY_BITS,
+    LOW,
     MET,
     S_CUR,
     S_DQ,
     S_F,
     S_FW,
     S_IDQ,
-    S_INC,
+    S_KEY,
+    S_KINC,
     S_SG,
     S_STEP,
     S_SY,
@@ -51,6 +55,7 @@ from planner.occupancy.facestep import (
     SLOTS,
     STEPPED,
     TIE,
+    key,
     run_mirror,
     run_one,
 )
@@ -76,6 +81,11 @@ _PAR = 1e-12  # |cos| below which a facet is parallel to the segment
 _ON = 1e-8  # slack (relative to |v|^2 / 2) below which a facet passes through the exit point
 _GAP = 1e-6  # fast step only when the next exit is this much later (relative, as _ON)
 _NEVER = 1e300  # exit time of an empty slot
+# The fast steps' keys round each step's change of an exit time (facestep); a tie is
+# decided on exit times only while their accumulated rounding stays below this share of
+# the tie slack (_ON): past it (long lines with a facet nearly parallel to the segment,
+# whose exit-time bound coarsens the scale) the generic walk decides.
+_KEY_SAFE = 0.1 * _ON
 
 
 def face_scratch(sm: int, record: int = 0) -> tuple[np.ndarray, np.ndarray]:
@@ -91,6 +101,15 @@ def recorded(si, sm, n):  # pragma: no cover - compiled
     """The first ``n`` cells :func:`face_walk` looked up, (n, 3), from a recording scratch."""
     o = S_CUR + max(sm, 1) + 1
     return si[o:o + 3 * n].reshape(-1, 3)
+
+
+@njit_cached(_nrt=False)
+def _tmin(si, n, isc):  # pragma: no cover - compiled
+    """The earliest exit time of the first ``n`` slots, from their keys."""
+    m = si[S_KEY]
+    for k in range(1, n):
+        m = min(m, si[S_KEY + k])
+    return np.float64(m & LOW) * isc
 
 
 @njit_cached(_nrt=False)
@@ -143,6 +162,9 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
     fwm = np.int64(0)
     parm = np.int64(0)
     gap = 0.0
+    tmax = 0.0  # a bound on every exit time of the line (facetable: reach_t)
+    t0min = _NEVER
+    o_reach = o_gp + SLOTS * SLOTS
     par2 = _PAR * _PAR * dn2
     for j in range(SLOTS):
         t = _NEVER
@@ -171,29 +193,40 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
                 iy = 1.0 / abs(y)
                 t = h * iy  # exact exit times (no tolerance): ties to rounding
                 gap = max(gap, _GAP * t)
+                t0min = min(t0min, t)
+                tmax = max(tmax, fd[o_reach + r] * iy, fd[o_reach + r2] * iy)
         si[S_FW + j] = rs
         sf[S_T + j] = t
         sf[S_IDQ + j] = iy
         sf[S_SG + j] = sg
         sf[S_SY + j] = sg * iy
-    # Rows of the pairs only: the other slots' exit times stay 1e300, which the finite
-    # numbers an earlier walk left there (zero at first) move by nothing. Whole rows
-    # (the padding's products are zeros) from eight locals: a row is eight independent
-    # products, not a chain of stores and reloads of the scratch it writes.
-    y0, y1, y2, y3 = sf[S_SY], sf[S_SY + 1], sf[S_SY + 2], sf[S_SY + 3]
-    y4, y5, y6, y7 = sf[S_SY + 4], sf[S_SY + 5], sf[S_SY + 6], sf[S_SY + 7]
+    # The keys' scale: a power of two with every exit time of the line below
+    # 2**KEY_BITS units, and the lookups after which a tie is past their precision (each
+    # step moves a key by its rounded change: < 16 units, a lookup at most a step).
+    ex = 64 - leading_zeros(np.int64(min(1.0 + tmax, 2.0 ** 50)))  # 1 + tmax < 2**ex
+    sc = np.float64(np.int64(1) << (KEY_BITS - ex))
+    isc = 1.0 / sc
+    nsafe = _KEY_SAFE * t0min * np.float64(np.int64(1) << (KEY_BITS - 6 - ex))
+    for j in range(SLOTS):
+        si[S_KEY + j] = key(sf[S_T + j], sc, j)
+    # The change table in keys (multiples of 8: the slot bits stay), rows of the pairs
+    # only: the padding's and parallel slots' products are zeros, so their keys stay
+    # empty. Whole rows from eight locals: eight independent products a row.
+    y0, y1, y2, y3 = sf[S_SY] * sc, sf[S_SY + 1] * sc, sf[S_SY + 2] * sc, sf[S_SY + 3] * sc
+    y4, y5, y6, y7 = sf[S_SY + 4] * sc, sf[S_SY + 5] * sc, sf[S_SY + 6] * sc, sf[S_SY + 7] * sc
+    low = np.int64(-8)
     for j in range(npair):
         sg = sf[S_SG + j]
-        a = np.uint64(S_INC + SLOTS * j)
+        a = np.uint64(S_KINC + SLOTS * j)
         b = np.uint64(o_gp + SLOTS * j)
-        sf[a] = sg * fd[b] * y0
-        sf[a + np.uint64(1)] = sg * fd[b + np.uint64(1)] * y1
-        sf[a + np.uint64(2)] = sg * fd[b + np.uint64(2)] * y2
-        sf[a + np.uint64(3)] = sg * fd[b + np.uint64(3)] * y3
-        sf[a + np.uint64(4)] = sg * fd[b + np.uint64(4)] * y4
-        sf[a + np.uint64(5)] = sg * fd[b + np.uint64(5)] * y5
-        sf[a + np.uint64(6)] = sg * fd[b + np.uint64(6)] * y6
-        sf[a + np.uint64(7)] = sg * fd[b + np.uint64(7)] * y7
+        si[a] = np.int64(sg * fd[b] * y0) & low
+        si[a + np.uint64(1)] = np.int64(sg * fd[b + np.uint64(1)] * y1) & low
+        si[a + np.uint64(2)] = np.int64(sg * fd[b + np.uint64(2)] * y2) & low
+        si[a + np.uint64(3)] = np.int64(sg * fd[b + np.uint64(3)] * y3) & low
+        si[a + np.uint64(4)] = np.int64(sg * fd[b + np.uint64(4)] * y4) & low
+        si[a + np.uint64(5)] = np.int64(sg * fd[b + np.uint64(5)] * y5) & low
+        si[a + np.uint64(6)] = np.int64(sg * fd[b + np.uint64(6)] * y6) & low
+        si[a + np.uint64(7)] = np.int64(sg * fd[b + np.uint64(7)] * y7) & low
     idx = ((p0 - b0) * d1 + (p1 - b1)) * d2 + (p2 - b2)
     if nrec > 0:
         si[o_rec] = p0
@@ -219,6 +252,9 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
     if not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi, q0, q1, q2):
         return False, lookups, True
     lim = 1.0 - 4.0 * gap
+    gi = np.int64(gap * sc)  # the tie margin, the midpoint's margin and the end as keys
+    li = np.int64(lim * sc)
+    one = np.int64(sc)
     mirroring = True  # stepping from both ends (``stop``: the last mirror image)
     ncur = 0  # cells the segment runs along besides the chain cell (flat: si[S_CUR:][:ncur])
     pm = np.int64(0)  # the chain cell's facets the segment runs in
@@ -226,24 +262,18 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
     while True:
         if mirroring:
             if dense:
-                code, idx, stop, lookups = run_mirror(grid, sf, si, idx, mir, lookups, gap,
-                                                      lim)
+                code, idx, stop, lookups = run_mirror(grid, si, idx, mir, lookups, gi, li)
                 if code == BLOCKED:
                     return False, lookups, True
             else:
                 code = MET
-                m = _NEVER
-                for k in range(nfw):
-                    m = min(m, sf[S_T + k])
+                m = _tmin(si, nfw, isc)
                 while m + m < lim:
-                    code, idx, lookups, _ = run_one(grid, sf, si, idx, lookups, gap, False,
-                                                    stop)
+                    code, idx, lookups, _ = run_one(grid, si, idx, lookups, gi, one, False, stop)
                     if code != STEPPED:  # a tie
                         break
                     code = MET
-                    mn = _NEVER
-                    for k in range(nfw):
-                        mn = min(mn, sf[S_T + k])
+                    mn = _tmin(si, nfw, isc)
                     for half in range(2):  # the cell stepped into, then its mirror image
                         if half == 1:
                             if mn + m >= lim:
@@ -269,11 +299,10 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
                 if idx == stop:
                     break
                 continue
-            m = _NEVER
-            for k in range(nfw):
-                m = min(m, sf[S_T + k])
+            m = _tmin(si, nfw, isc)
         elif pm == 0:
-            code, idx, lookups, m = run_one(grid, sf, si, idx, lookups, gap, dense, stop)
+            code, idx, lookups, mk = run_one(grid, si, idx, lookups, gi, one, dense, stop)
+            m = np.float64(mk & LOW) * isc
             if code == END or code == MET:
                 break
             if code == BLOCKED:
@@ -290,15 +319,15 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
                     return False, lookups, True
                 continue
         else:
-            m = _NEVER
-            for k in range(nfw):
-                m = min(m, sf[S_T + k])
+            m = _tmin(si, nfw, isc)
             if m >= 1.0:
                 break
         # An edge or a vertex, or a facet the segment runs in: the face table. Its cells
         # by flat index (the chain cell's plus their offset's): on a dense grid a lookup
         # is a bit test and no cell's indices are needed (no division); else from the
         # chain cell's offset from p.
+        if lookups > nsafe:
+            return True, lookups, False
         if not dense:
             u2 = idx % d2 + b2 - p2
             u1 = (idx // d2) % d1 + b1 - p1
@@ -306,7 +335,8 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
         am = pm
         for k in range(nfw):
             r = si[S_FW + k]
-            if fwm >> r & 1 and sf[S_DQ + r] * (sf[S_T + k] - m) <= _ON * fd[o_rhs + r]:
+            t = np.float64(si[S_KEY + k] & LOW) * isc
+            if fwm >> r & 1 and sf[S_DQ + r] * (t - m) <= _ON * fd[o_rhs + r]:
                 am |= np.int64(1) << r
         f = fi[fi[I_FMASK] + am]
         if f < 0:
@@ -365,18 +395,17 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
         if idx == stop:
             break
         # The exit times from the next chain cell: moved by the offset (c_u . v), as the
-        # fast steps move them.
+        # fast steps move them (a change rounded the same way).
         for k in range(nfw):
             r = si[S_FW + k]
             w = o_wv + 3 * r
             if fwm >> r & 1:
-                sf[S_T + k] += (fd[w] * g0 + fd[w + 1] * g1 + fd[w + 2] * g2) * sf[S_IDQ + k]
+                si[S_KEY + k] += np.int64((fd[w] * g0 + fd[w + 1] * g1 + fd[w + 2] * g2)
+                                          * sf[S_IDQ + k] * sc) & LOW
         if mirroring:
             # The tie's mirror image: its cells' images, when the next chain cell's exit
             # keeps the two walks apart (the segment in its interior: no facet run along).
-            mn = _NEVER
-            for k in range(nfw):
-                mn = min(mn, sf[S_T + k])
+            mn = _tmin(si, nfw, isc)
             if not inner or mn + m >= lim:
                 mirroring = False
                 continue
