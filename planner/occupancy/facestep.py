@@ -29,13 +29,13 @@ __all__ = ["BLOCKED", "END", "KEY_BITS", "LOW", "MET", "SLOTS", "STEPPED", "TIE"
 SLOTS = 8  # exit-time slots: forward facets of a 3D Voronoi cell (at most 7)
 KEY_BITS = 57  # a line's exit times in fixed point stay below 2**KEY_BITS
 KEY_CAP = 2.0 ** 60  # the key of an empty slot (parallel facets, padding): never the next
-# Scratch (``sf`` float64, ``si`` int64, from face_scratch): 1 / (d . v) of slot k, d . v_r
-# of facet r, the sign of slot k's facet (+1: its pair's first, 0: parallel), sign /
-# (d . w_k), the first exit time of slot k; the facet of slot k, the flat index step
+# Scratch (``sf`` float64, ``si`` int64, from face_scratch): 1 / |d . v| of slot k, |d . v|
+# of slot k, the sign of slot k's facet (+1: its pair's first, 0: parallel), sign /
+# |d . w_k|, the first exit time of slot k; the facet of slot k, the flat index step
 # through slot k's facet, the key of slot k, the change of slot k's key on a step through
 # slot i (8, 8), the cells the segment runs along (SM,: flat indices), the number of cells
 # to record and the record.
-S_IDQ, S_DQ, S_SG, S_SY, S_T, S_F = 0, 8, 24, 32, 40, 48
+S_IDQ, S_AY, S_SG, S_SY, S_T, S_F = 0, 8, 16, 24, 32, 40
 S_FW, S_STEP, S_KEY, S_KINC, S_CUR = 0, 8, 16, 24, 88
 
 END, BLOCKED, TIE, STEPPED, MET = 0, 1, 2, 3, 4  # how run_one and run_mirror stop

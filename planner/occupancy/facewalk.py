@@ -41,8 +41,8 @@ from planner.occupancy.facestep import (
     KEY_BITS,
     LOW,
     MET,
+    S_AY,
     S_CUR,
-    S_DQ,
     S_F,
     S_FW,
     S_IDQ,
@@ -60,11 +60,14 @@ from planner.occupancy.facestep import (
     run_one,
 )
 from planner.occupancy.facetable import (
+    F_A,
+    F_H,
+    F_REL,
+    F_W,
     I_FMASK,
-    I_PAIR,
     I_R,
     I_REACH,
-    I_RIDX,
+    I_SLOT,
     I_SM,
     I_STARMASK,
     I_STARN,
@@ -112,7 +115,9 @@ def _tmin(si, n, isc):  # pragma: no cover - compiled
     return np.float64(m & LOW) * isc
 
 
-@njit_cached(_nrt=False)
+# numpy's error model: a float division by zero (a parallel slot's, selected away) is
+# not checked (no branch in the set-up's loop).
+@njit_cached(_nrt=False, error_model="numpy")
 def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover - compiled
     """Line of sight between the centres of cells p and q: every cell whose closed Voronoi
     cell the segment touches is looked up, in order along it, until a blocked one.
@@ -122,8 +127,6 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
     mode, grid, lo, dims, table, tmask, gg, blo, bhi = occ
     nrel = fi[I_R]
     sm = fi[I_SM]
-    o_rhs = 3 * nrel
-    o_wv = 4 * nrel
     o_cells = fi[I_STAROFF]
     o_masks = fi[I_STARMASK]
     o_rec = S_CUR + max(sm, 1)
@@ -156,48 +159,42 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
     # a product of whole rows: inc[j, k] = v_j . v_k / (d . v_k) = s_j (w_j . w_k) s_k / |y_k|
     # for v_j = s_j w_j (w_j the pair's first facet, y_k = d . w_k, s = sign y).
     npair = nrel // 2
-    o_pair = fi[I_PAIR]
-    o_gp = 7 * nrel + nrel * nrel
+    o_gp = F_REL + 3 * nrel
     nfw = npair
     fwm = np.int64(0)
     parm = np.int64(0)
     gap = 0.0
-    tmax = 0.0  # a bound on every exit time of the line (facetable: reach_t)
+    tmax = 0.0  # a bound on every exit time of the line (facetable: F_A)
     t0min = _NEVER
-    o_reach = o_gp + SLOTS * SLOTS
-    par2 = _PAR * _PAR * dn2
+    par2 = 2.0 * _PAR * _PAR * dn2
+    # Every slot alike, padding too (w = 0: parallel, no facet bits), and no branch: the
+    # selects by which of a pair faces forward (unpredictable) are arithmetic, as the
+    # compiler made branches of conditional expressions.
     for j in range(SLOTS):
-        t = _NEVER
-        iy = 0.0
-        sg = 0.0
-        rs = 0
-        if j < npair:
-            r = fi[o_pair + 2 * j]
-            r2 = fi[o_pair + 2 * j + 1]
-            y = x0 * fd[3 * r] + x1 * fd[3 * r + 1] + x2 * fd[3 * r + 2]
-            h = fd[o_rhs + r]
-            sf[S_DQ + r] = y
-            sf[S_DQ + r2] = -y
-            par = y * y <= par2 * 2.0 * h
-            pos = y > 0.0
-            rs = r if pos else r2
-            sg = 1.0 if pos else -1.0
-            a = I_RIDX + 3 * r
-            st = fi[a] * s0 + fi[a + 1] * s1 + fi[a + 2]
-            si[S_STEP + j] = st if pos else -st
-            if par:
-                parm |= (np.int64(1) << r) | (np.int64(1) << r2)
-                sg = 0.0
-            else:
-                fwm |= np.int64(1) << rs
-                iy = 1.0 / abs(y)
-                t = h * iy  # exact exit times (no tolerance): ties to rounding
-                gap = max(gap, _GAP * t)
-                t0min = min(t0min, t)
-                tmax = max(tmax, fd[o_reach + r] * iy, fd[o_reach + r2] * iy)
-        si[S_FW + j] = rs
+        y = x0 * fd[F_W + j] + x1 * fd[F_W + SLOTS + j] + x2 * fd[F_W + 2 * SLOTS + j]
+        h = fd[F_H + j]
+        ay = abs(y)
+        pos = np.int64(y > 0.0)
+        live = np.int64(y * y > par2 * h)  # not parallel
+        fp = -pos  # all ones if the pair's first faces forward
+        fl = -live
+        iy = np.float64(live) / max(ay, 1e-300)  # parallel: 0
+        t = h * iy + np.float64(1 - live) * _NEVER  # exact (no tolerance): ties to rounding
+        sg = np.float64(live * (pos + pos - 1))
+        br = fi[I_SLOT + 2 * SLOTS + j]
+        bs = fi[I_SLOT + 3 * SLOTS + j]
+        fwm |= ((br & fp) | (bs & ~fp)) & fl
+        parm |= (br | bs) & ~fl
+        st = (fi[I_SLOT + 4 * SLOTS + j] * s0 + fi[I_SLOT + 5 * SLOTS + j] * s1
+              + fi[I_SLOT + 6 * SLOTS + j])
+        si[S_STEP + j] = st * (pos + pos - 1)
+        si[S_FW + j] = (fi[I_SLOT + j] & fp) | (fi[I_SLOT + SLOTS + j] & ~fp)
+        gap = max(gap, _GAP * h * iy)
+        t0min = min(t0min, t)
+        tmax = max(tmax, fd[F_A + j] * iy)
         sf[S_T + j] = t
         sf[S_IDQ + j] = iy
+        sf[S_AY + j] = ay
         sf[S_SG + j] = sg
         sf[S_SY + j] = sg * iy
     # The keys' scale: a power of two with every exit time of the line below
@@ -336,7 +333,7 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
         for k in range(nfw):
             r = si[S_FW + k]
             t = np.float64(si[S_KEY + k] & LOW) * isc
-            if fwm >> r & 1 and sf[S_DQ + r] * (t - m) <= _ON * fd[o_rhs + r]:
+            if fwm >> r & 1 and sf[S_AY + k] * (t - m) <= _ON * fd[F_H + k]:
                 am |= np.int64(1) << r
         f = fi[fi[I_FMASK] + am]
         if f < 0:
@@ -398,7 +395,7 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
         # fast steps move them (a change rounded the same way).
         for k in range(nfw):
             r = si[S_FW + k]
-            w = o_wv + 3 * r
+            w = F_REL + 3 * r
             if fwm >> r & 1:
                 si[S_KEY + k] += np.int64((fd[w] * g0 + fd[w + 1] * g1 + fd[w + 2] * g2)
                                           * sf[S_IDQ + k] * sc) & LOW
