@@ -33,10 +33,11 @@ KEY_CAP = 2.0 ** 60  # the key of an empty slot (parallel facets, padding): neve
 # of slot k, the sign of slot k's facet (+1: its pair's first, 0: parallel), sign /
 # |d . w_k|, the first exit time of slot k; the facet of slot k, the flat index step
 # through slot k's facet, the key of slot k, the change of slot k's key on a step through
-# slot i (8, 8), the cells the segment runs along (SM,: flat indices), the number of cells
-# to record and the record.
+# slot i (8, 8), the number of slots the padding (the slots past them) was set for, the
+# cells the segment runs along (SM,: flat indices), the number of cells to record and the
+# record.
 S_IDQ, S_AY, S_SG, S_SY, S_T, S_F = 0, 8, 16, 24, 32, 40
-S_FW, S_STEP, S_KEY, S_KINC, S_CUR = 0, 8, 16, 24, 88
+S_FW, S_STEP, S_KEY, S_KINC, S_NP, S_CUR = 0, 8, 16, 24, 88, 89
 
 END, BLOCKED, TIE, STEPPED, MET = 0, 1, 2, 3, 4  # how run_one and run_mirror stop
 LOW = np.int64(-8)  # clears a key's slot bits

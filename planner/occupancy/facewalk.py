@@ -48,6 +48,7 @@ from planner.occupancy.facestep import (
     S_IDQ,
     S_KEY,
     S_KINC,
+    S_NP,
     S_SG,
     S_STEP,
     S_SY,
@@ -167,10 +168,19 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
     tmax = 0.0  # a bound on every exit time of the line (facetable: F_A)
     t0min = _NEVER
     par2 = 2.0 * _PAR * _PAR * dn2
-    # Every slot alike, padding too (w = 0: parallel, no facet bits), and no branch: the
-    # selects by which of a pair faces forward (unpredictable) are arithmetic, as the
-    # compiler made branches of conditional expressions.
-    for j in range(SLOTS):
+    if si[S_NP] != npair:  # a fresh scratch (or another lattice's): the padding slots,
+        for j in range(npair, SLOTS):  # set once: never the next exit, never moved
+            sf[S_T + j] = _NEVER
+            sf[S_IDQ + j] = sf[S_AY + j] = sf[S_SG + j] = sf[S_SY + j] = 0.0
+            si[S_FW + j] = si[S_STEP + j] = 0
+            si[S_KEY + j] = key(_NEVER, 1.0, j)
+            for k in range(SLOTS):
+                si[S_KINC + SLOTS * j + k] = si[S_KINC + SLOTS * k + j] = 0
+        si[S_NP] = npair
+    # Every pair's slot alike, and no branch: the selects by which of a pair faces forward
+    # (unpredictable) are arithmetic, as the compiler made branches of conditional
+    # expressions.
+    for j in range(npair):
         y = x0 * fd[F_W + j] + x1 * fd[F_W + SLOTS + j] + x2 * fd[F_W + 2 * SLOTS + j]
         h = fd[F_H + j]
         ay = abs(y)
@@ -204,7 +214,7 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
     sc = np.float64(np.int64(1) << (KEY_BITS - ex))
     isc = 1.0 / sc
     nsafe = _KEY_SAFE * t0min * np.float64(np.int64(1) << (KEY_BITS - 6 - ex))
-    for j in range(SLOTS):
+    for j in range(npair):
         si[S_KEY + j] = key(sf[S_T + j], sc, j)
     # The change table in keys (multiples of 8: the slot bits stay), rows of the pairs
     # only: the padding's and parallel slots' products are zeros, so their keys stay
@@ -252,7 +262,9 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
     gi = np.int64(gap * sc)  # the tie margin, the midpoint's margin and the end as keys
     li = np.int64(lim * sc)
     one = np.int64(sc)
-    mirroring = True  # stepping from both ends (``stop``: the last mirror image)
+    # stepping from both ends (``stop``: the last mirror image), unless the first exit is
+    # already past the midpoint (p and q touch: one step)
+    mirroring = t0min + t0min < lim
     ncur = 0  # cells the segment runs along besides the chain cell (flat: si[S_CUR:][:ncur])
     pm = np.int64(0)  # the chain cell's facets the segment runs in
     u0 = u1 = u2 = 0  # off a dense grid: the chain cell's offset from p, at a tie
@@ -393,12 +405,11 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
             break
         # The exit times from the next chain cell: moved by the offset (c_u . v), as the
         # fast steps move them (a change rounded the same way).
+        # (A parallel slot's 1 / |d . v| is 0: its key stays.)
         for k in range(nfw):
-            r = si[S_FW + k]
-            w = F_REL + 3 * r
-            if fwm >> r & 1:
-                si[S_KEY + k] += np.int64((fd[w] * g0 + fd[w + 1] * g1 + fd[w + 2] * g2)
-                                          * sf[S_IDQ + k] * sc) & LOW
+            w = F_REL + 3 * si[S_FW + k]
+            si[S_KEY + k] += np.int64((fd[w] * g0 + fd[w + 1] * g1 + fd[w + 2] * g2)
+                                      * sf[S_IDQ + k] * sc) & LOW
         if mirroring:
             # The tie's mirror image: its cells' images, when the next chain cell's exit
             # keeps the two walks apart (the segment in its interior: no facet run along).
