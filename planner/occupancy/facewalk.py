@@ -58,7 +58,9 @@ from planner.occupancy.facestep import (
     TIE,
     key,
     run_mirror,
+    run_mirror4,
     run_one,
+    run_one4,
 )
 from planner.occupancy.facetable import (
     F_A,
@@ -271,14 +273,22 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
     while True:
         if mirroring:
             if dense:
-                code, idx, stop, lookups = run_mirror(grid, si, idx, mir, lookups, gi, li)
+                if npair <= 4:
+                    code, idx, stop, lookups = run_mirror4(grid, si, idx, mir, lookups, gi, li)
+                else:
+                    code, idx, stop, lookups = run_mirror(grid, si, idx, mir, lookups, gi, li)
                 if code == BLOCKED:
                     return False, lookups, True
             else:
                 code = MET
                 m = _tmin(si, nfw, isc)
                 while m + m < lim:
-                    code, idx, lookups, _ = run_one(grid, si, idx, lookups, gi, one, False, stop)
+                    if npair <= 4:
+                        code, idx, lookups, _ = run_one4(grid, si, idx, lookups, gi, one, False,
+                                                         stop)
+                    else:
+                        code, idx, lookups, _ = run_one(grid, si, idx, lookups, gi, one, False,
+                                                        stop)
                     if code != STEPPED:  # a tie
                         break
                     code = MET
@@ -310,7 +320,10 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
                 continue
             m = _tmin(si, nfw, isc)
         elif pm == 0:
-            code, idx, lookups, mk = run_one(grid, si, idx, lookups, gi, one, dense, stop)
+            if npair <= 4:
+                code, idx, lookups, mk = run_one4(grid, si, idx, lookups, gi, one, dense, stop)
+            else:
+                code, idx, lookups, mk = run_one(grid, si, idx, lookups, gi, one, dense, stop)
             m = np.float64(mk & LOW) * isc
             if code == END or code == MET:
                 break
