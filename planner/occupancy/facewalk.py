@@ -212,7 +212,9 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
     # The keys' scale: a power of two with every exit time of the line below
     # 2**KEY_BITS units, and the lookups after which a tie is past their precision (each
     # step moves a key by its rounded change: < 16 units, a lookup at most a step).
-    ex = 64 - leading_zeros(np.int64(min(1.0 + tmax, 2.0 ** 50)))  # 1 + tmax < 2**ex
+    if tmax >= 2.0 ** 40:  # a facet all but parallel to a long line: keys too coarse
+        return True, 0, False
+    ex = 64 - leading_zeros(np.int64(1.0 + tmax))  # 1 + tmax < 2**ex
     sc = np.float64(np.int64(1) << (KEY_BITS - ex))
     isc = 1.0 / sc
     nsafe = _KEY_SAFE * t0min * np.float64(np.int64(1) << (KEY_BITS - 6 - ex))
