@@ -5,7 +5,8 @@ Between two cell centres the segment touches the closed Voronoi cells of a chain
 it passes through, and besides them only cells whose boundary it meets: at an edge or a
 vertex it passes through, or along a facet it runs in. :func:`face_walk` keeps the exit
 time of the current cell through each facet facing forward (``t_r``, updated by a table
-``inc`` when it steps), and steps through the first facet when that facet is the only one
+``inc`` when it steps; integer keys that name their facet, :mod:`planner.occupancy.
+facestep`), and steps through the first facet when that facet is the only one
 at the exit point and the segment runs in no facet: the common case, a few additions per
 cell. Otherwise the exit point lies on a face (edge or vertex) of the cell named by the set
 of facets through it; the face table (:class:`FaceTable`, from the cell's geometry) lists
