@@ -27,7 +27,8 @@ import numpy as np
 
 from planner._numba import njit_cached
 
-__all__ = ["BLOCKED", "END", "KEY_BITS", "LOW", "MET", "SLOTS", "STEPPED", "TIE", "key",
+__all__ = ["BLOCKED", "END", "KEY_BITS", "LOW", "MET", "SLOTS", "STEPPED", "TIE",
+           "face_scratch", "first_exit", "key", "recorded",
            "run_mirror", "run_mirror4", "run_one", "run_one4"]
 
 SLOTS = 8  # exit-time slots: forward facets of a 3D Voronoi cell (at most 7)
@@ -45,6 +46,32 @@ S_FW, S_STEP, S_KEY, S_KINC, S_NP, S_CUR = 0, 8, 16, 24, 88, 89
 
 END, BLOCKED, TIE, STEPPED, MET = 0, 1, 2, 3, 4  # how run_one and run_mirror stop
 LOW = np.int64(-8)  # clears a key's slot bits
+
+
+def face_scratch(sm: int, record: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """Scratch ``(sf, si)`` for :func:`planner.occupancy.facewalk.face_walk`: ``sm`` cells
+    around a face, ``record`` cells to record in ``si`` (tests; :func:`recorded` reads
+    them). A scratch serves one walk at a time, of any lattice."""
+    si = np.zeros(S_CUR + max(sm, 1) + 1 + 3 * record, np.int64)
+    si[S_CUR + max(sm, 1)] = record
+    return np.zeros(S_F), si
+
+
+@njit_cached
+def recorded(si, sm, n):  # pragma: no cover - compiled
+    """The first ``n`` cells :func:`planner.occupancy.facewalk.face_walk` looked up, (n, 3),
+    from a recording scratch."""
+    o = S_CUR + max(sm, 1) + 1
+    return si[o:o + 3 * n].reshape(-1, 3)
+
+
+@njit_cached(_nrt=False)
+def first_exit(si, n, isc):  # pragma: no cover - compiled
+    """The earliest exit time of the first ``n`` slots, from their keys."""
+    m = si[S_KEY]
+    for k in range(1, n):
+        m = min(m, si[S_KEY + k])
+    return np.float64(m & LOW) * isc
 
 
 @njit_cached(_nrt=False)

@@ -44,7 +44,6 @@ from planner.occupancy.facestep import (
     MET,
     S_AY,
     S_CUR,
-    S_F,
     S_FW,
     S_IDQ,
     S_KEY,
@@ -57,7 +56,10 @@ from planner.occupancy.facestep import (
     SLOTS,
     STEPPED,
     TIE,
+    face_scratch,
+    first_exit,
     key,
+    recorded,
     run_mirror,
     run_mirror4,
     run_one,
@@ -93,30 +95,6 @@ _NEVER = 1e300  # exit time of an empty slot
 # the tie slack (_ON): past it (long lines with a facet nearly parallel to the segment,
 # whose exit-time bound coarsens the scale) the generic walk decides.
 _KEY_SAFE = 0.1 * _ON
-
-
-def face_scratch(sm: int, record: int = 0) -> tuple[np.ndarray, np.ndarray]:
-    """Scratch ``(sf, si)`` for :func:`face_walk`: ``sm`` cells around a face, ``record``
-    cells to record in ``si`` (tests; :func:`recorded` reads them)."""
-    si = np.zeros(S_CUR + max(sm, 1) + 1 + 3 * record, np.int64)
-    si[S_CUR + max(sm, 1)] = record
-    return np.zeros(S_F), si
-
-
-@njit_cached
-def recorded(si, sm, n):  # pragma: no cover - compiled
-    """The first ``n`` cells :func:`face_walk` looked up, (n, 3), from a recording scratch."""
-    o = S_CUR + max(sm, 1) + 1
-    return si[o:o + 3 * n].reshape(-1, 3)
-
-
-@njit_cached(_nrt=False)
-def _tmin(si, n, isc):  # pragma: no cover - compiled
-    """The earliest exit time of the first ``n`` slots, from their keys."""
-    m = si[S_KEY]
-    for k in range(1, n):
-        m = min(m, si[S_KEY + k])
-    return np.float64(m & LOW) * isc
 
 
 # numpy's error model: a float division by zero (a parallel slot's, selected away) is
@@ -284,7 +262,7 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
                     return False, lookups, True
             else:
                 code = MET
-                m = _tmin(si, nfw, isc)
+                m = first_exit(si, nfw, isc)
                 while m + m < lim:
                     if npair <= 4:
                         code, idx, lookups, _ = run_one4(grid, si, idx, lookups, gi, one, False,
@@ -295,7 +273,7 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
                     if code != STEPPED:  # a tie
                         break
                     code = MET
-                    mn = _tmin(si, nfw, isc)
+                    mn = first_exit(si, nfw, isc)
                     for half in range(2):  # the cell stepped into, then its mirror image
                         if half == 1:
                             if mn + m >= lim:
@@ -321,7 +299,7 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
                 if idx == stop:
                     break
                 continue
-            m = _tmin(si, nfw, isc)
+            m = first_exit(si, nfw, isc)
         elif pm == 0:
             if npair <= 4:
                 code, idx, lookups, mk = run_one4(grid, si, idx, lookups, gi, one, dense, stop)
@@ -344,7 +322,7 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
                     return False, lookups, True
                 continue
         else:
-            m = _tmin(si, nfw, isc)
+            m = first_exit(si, nfw, isc)
             if m >= 1.0:
                 break
         # An edge or a vertex, or a facet the segment runs in: the face table. Its cells
@@ -429,7 +407,7 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
         if mirroring:
             # The tie's mirror image: its cells' images, when the next chain cell's exit
             # keeps the two walks apart (the segment in its interior: no facet run along).
-            mn = _tmin(si, nfw, isc)
+            mn = first_exit(si, nfw, isc)
             if not inner or mn + m >= lim:
                 mirroring = False
                 continue
