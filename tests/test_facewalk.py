@@ -175,3 +175,21 @@ def test_sight_lines_use_the_face_walk(name):
         want = face_walk(chk.occupancy, chk.walk.fd, chk.walk.fi, sf, si, *p, *q)
         assert want[2] and got == want[:2]
         assert got[0] == world.segment_free(*lat.to_world(np.stack([p, q])))
+
+
+def test_one_scratch_serves_lattices_with_other_slot_counts():
+    """A scratch set up by one lattice's walk (its unused slots) gives another lattice's walk
+    the verdicts and lookups of a fresh scratch: hex (4 facet pairs), BCC (7), FCC (6), hex."""
+    worlds = {n: World(Lattice.named(n, 1.0), np.array([[2, 1, 0], [-3, 2, 1]]),
+                       np.array([[-12.0] * 3, [12.0] * 3])) for n in ("hex", "bcc", "fcc")}
+    size = max(int(w.checker.walk.fi[I_SM]) for w in worlds.values())
+    shared = face_scratch(size)
+    rng = np.random.default_rng(5)
+    for name in ("hex", "bcc", "fcc", "hex"):
+        chk = worlds[name].checker
+        for _ in range(300):
+            p, q = rng.integers(-6, 7, (2, 3))
+            fresh = face_scratch(int(chk.walk.fi[I_SM]))
+            want = face_walk(chk.occupancy, chk.walk.fd, chk.walk.fi, *fresh, *p, *q)
+            got = face_walk(chk.occupancy, chk.walk.fd, chk.walk.fi, *shared, *p, *q)
+            assert got == want, (name, p.tolist(), q.tolist())

@@ -3,79 +3,125 @@
 their own (the walk's set-up and its tie handling stay there).
 
 A fast step goes from a Voronoi cell through the one facet at the segment's exit point:
-the exit times of the facets facing forward are kept in eight scalars (``sf[S_T:]``), the
-next exit is their minimum, and a step adds the crossed facet's row of the change table
-(``sf[S_INC:]``) to them, the way a cubic DDA adds tDelta to tMax.
+the exit times of the facets facing forward are kept in eight scalars, the next exit is
+their minimum, and a step adds the crossed facet's row of the change table to them, the
+way a cubic DDA adds tDelta to tMax.
+
+The eight exit times are integer keys while the steps run: the time in fixed point (a
+power-of-two scale per line, ``sc``, from a bound on every exit time of the line) with the
+slot's number in its three low bits, and the change table's entries multiples of 8. The
+minimum key is then the next exit and names its slot, with no compare of each time against
+it: one integer minimum, a mask and a load per step (the float version compared all eight
+against the minimum and counted the matches, twice the step's time). The rounding of the
+table to the scale's unit (at most 16 units a step and slot) is what the walk's tie
+decisions must tolerate: :func:`planner.occupancy.facewalk.face_walk` bounds it.
+
+A cell of at most four facet pairs (the hexagonal prism) steps on four keys
+(:func:`run_one4`, :func:`run_mirror4`: the same loops with half the minimum tree and half
+the additions, some 12% of a hex line's time); the walk picks the pair once per call.
 """
 
 from __future__ import annotations
 
 import numpy as np
-from numba.cpython.unsafe.numbers import trailing_zeros
 
 from planner._numba import njit_cached
 
-__all__ = ["BLOCKED", "END", "MET", "SLOTS", "STEPPED", "TIE", "run_mirror", "run_one"]
+__all__ = ["BLOCKED", "END", "KEY_BITS", "LOW", "MET", "SLOTS", "STEPPED", "TIE",
+           "face_scratch", "first_exit", "key", "recorded",
+           "run_mirror", "run_mirror4", "run_one", "run_one4"]
 
 SLOTS = 8  # exit-time slots: forward facets of a 3D Voronoi cell (at most 7)
-# Scratch (``sf`` float64, ``si`` int64, from face_scratch): exit time of forward slot k,
-# 1 / (d . v) of slot k, d . v_r of facet r, the change of slot k's time on a step through
-# slot i (8, 8); the facet of slot k, the flat index step through slot k's facet, the
-# cells the segment runs along (SM, 3), the number of cells to record and the record.
-# The sign of slot k's facet (+1: its pair's first, 0: parallel) and 1 / (d . w_k).
-S_T, S_IDQ, S_DQ, S_INC, S_SG, S_SY, S_F = 0, 8, 16, 32, 96, 104, 112
-S_FW, S_STEP, S_CUR = 0, 8, 16
+KEY_BITS = 57  # a line's exit times in fixed point stay below 2**KEY_BITS
+KEY_CAP = 2.0 ** 60  # the key of an empty slot (parallel facets, padding): never the next
+# Scratch (``sf`` float64, ``si`` int64, from face_scratch): 1 / |d . v| of slot k, |d . v|
+# of slot k, the sign of slot k's facet (+1: its pair's first, 0: parallel), sign /
+# |d . w_k|, the first exit time of slot k; the facet of slot k, the flat index step
+# through slot k's facet, the key of slot k, the change of slot k's key on a step through
+# slot i (8, 8), the number of slots the padding (the slots past them) was set for, the
+# cells the segment runs along (SM,: flat indices), the number of cells to record and the
+# record.
+S_IDQ, S_AY, S_SG, S_SY, S_T, S_F = 0, 8, 16, 24, 32, 40
+S_FW, S_STEP, S_KEY, S_KINC, S_NP, S_CUR = 0, 8, 16, 24, 88, 89
 
 END, BLOCKED, TIE, STEPPED, MET = 0, 1, 2, 3, 4  # how run_one and run_mirror stop
+LOW = np.int64(-8)  # clears a key's slot bits
+
+
+def face_scratch(sm: int, record: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """Scratch ``(sf, si)`` for :func:`planner.occupancy.facewalk.face_walk`: ``sm`` cells
+    around a face, ``record`` cells to record in ``si`` (tests; :func:`recorded` reads
+    them). A scratch serves one walk at a time, of any lattice."""
+    si = np.zeros(S_CUR + max(sm, 1) + 1 + 3 * record, np.int64)
+    si[S_CUR + max(sm, 1)] = record
+    return np.zeros(S_F), si
+
+
+@njit_cached
+def recorded(si, sm, n):  # pragma: no cover - compiled
+    """The first ``n`` cells :func:`planner.occupancy.facewalk.face_walk` looked up, (n, 3),
+    from a recording scratch."""
+    o = S_CUR + max(sm, 1) + 1
+    return si[o:o + 3 * n].reshape(-1, 3)
 
 
 @njit_cached(_nrt=False)
-def run_one(grid, sf, si, idx, lookups, gap, dense, stop):  # pragma: no cover - compiled
-    """The walk's fast steps, from the exit times in ``sf``: while one facet alone is at the
-    exit point, step through it and (``dense``) test the cell's bit at flat index ``idx``.
-    Stops at the segment's end (``END``), a blocked cell (``BLOCKED``), a tie
-    (``TIE``) or, not dense, after one step (``STEPPED``: the caller looks the cell up).
-    Returns ``(code, idx, lookups, m)``, ``m`` the next exit time; the exit times back in
-    ``sf``. A function of its own, with few arguments and little state, so that the eight
-    exit times stay in registers (in the walk's body the compiler spilled the step's state
-    around them)."""
+def first_exit(si, n, isc):  # pragma: no cover - compiled
+    """The earliest exit time of the first ``n`` slots, from their keys."""
+    m = si[S_KEY]
+    for k in range(1, n):
+        m = min(m, si[S_KEY + k])
+    return np.float64(m & LOW) * isc
+
+
+@njit_cached(_nrt=False)
+def key(t, sc, k):  # pragma: no cover - compiled
+    """Slot ``k``'s key of exit time ``t`` at scale ``sc`` (an empty slot's: KEY_CAP)."""
+    return (np.int64(min(t * sc, KEY_CAP)) & LOW) | k
+
+
+@njit_cached(_nrt=False)
+def run_one(grid, si, idx, lookups, gi, one, dense, stop):  # pragma: no cover - compiled
+    """The walk's fast steps, from the keys in ``si`` (``gi``: the tie margin, ``one``:
+    the segment's end, as keys): while one facet alone is at the exit point, step through
+    it and (``dense``) test the cell's bit at flat index ``idx``. Stops at the segment's
+    end (``END``), a blocked cell (``BLOCKED``), a tie (``TIE``) or, not dense, after one
+    step (``STEPPED``: the caller looks the cell up). Returns ``(code, idx, lookups, m)``,
+    ``m`` the next exit's key; the keys back in ``si``. A function of its own, with few
+    arguments and little state, so that the eight keys stay in registers (in the walk's
+    body the compiler spilled the step's state around them)."""
     # Eight locals: at most half the facets face forward, and a 3D Voronoi cell has at
     # most 14. Branch-free minima: which facet comes next is not predictable (a
     # mispredicted branch per facet doubled the step's time).
-    t0, t1, t2, t3 = sf[S_T], sf[S_T + 1], sf[S_T + 2], sf[S_T + 3]
-    t4, t5, t6, t7 = sf[S_T + 4], sf[S_T + 5], sf[S_T + 6], sf[S_T + 7]
+    t0, t1, t2, t3 = si[S_KEY], si[S_KEY + 1], si[S_KEY + 2], si[S_KEY + 3]
+    t4, t5, t6, t7 = si[S_KEY + 4], si[S_KEY + 5], si[S_KEY + 6], si[S_KEY + 7]
     code = END
     while True:
         m = min(min(min(t0, t1), min(t2, t3)), min(min(t4, t5), min(t6, t7)))
-        if m >= 1.0:
+        if m >= one:
             break
-        # The slot at the minimum (m is one of the times, exactly) picks the step; the tie
-        # test (a second time within the margin) is off that chain, so the step's loads
-        # need not wait for it.
-        eq = (np.int64(t0 == m) | (np.int64(t1 == m) << 1) | (np.int64(t2 == m) << 2)
-              | (np.int64(t3 == m) << 3) | (np.int64(t4 == m) << 4)
-              | (np.int64(t5 == m) << 5) | (np.int64(t6 == m) << 6)
-              | (np.int64(t7 == m) << 7))
-        lim = m + gap
-        at = (np.int64(t0 <= lim) + np.int64(t1 <= lim) + np.int64(t2 <= lim)
-              + np.int64(t3 <= lim) + np.int64(t4 <= lim) + np.int64(t5 <= lim)
-              + np.int64(t6 <= lim) + np.int64(t7 <= lim))
-        if at > 1:
+        # A tie: a second key within the margin ((t - lim - 1) >> 63 is -1 for each key
+        # at most lim); off the step's chain, which needs the minimum's slot bits only.
+        lim = m + gi
+        at = (((t0 - lim - 1) >> 63) + ((t1 - lim - 1) >> 63) + ((t2 - lim - 1) >> 63)
+              + ((t3 - lim - 1) >> 63) + ((t4 - lim - 1) >> 63) + ((t5 - lim - 1) >> 63)
+              + ((t6 - lim - 1) >> 63) + ((t7 - lim - 1) >> 63))
+        if at < -1:
             code = TIE
             break
         # One facet at the exit point: step through it (unsigned indices: no
         # negative-index fix-up on each load).
-        st = trailing_zeros(eq)
-        idx += si[np.uint64(S_STEP + st)]
-        a = np.uint64(S_INC + SLOTS * st)
-        t0 += sf[a]
-        t1 += sf[a + np.uint64(1)]
-        t2 += sf[a + np.uint64(2)]
-        t3 += sf[a + np.uint64(3)]
-        t4 += sf[a + np.uint64(4)]
-        t5 += sf[a + np.uint64(5)]
-        t6 += sf[a + np.uint64(6)]
-        t7 += sf[a + np.uint64(7)]
+        st = np.uint64(m & 7)
+        idx += si[np.uint64(S_STEP) + st]
+        a = np.uint64(S_KINC) + np.uint64(SLOTS) * st
+        t0 += si[a]
+        t1 += si[a + np.uint64(1)]
+        t2 += si[a + np.uint64(2)]
+        t3 += si[a + np.uint64(3)]
+        t4 += si[a + np.uint64(4)]
+        t5 += si[a + np.uint64(5)]
+        t6 += si[a + np.uint64(6)]
+        t7 += si[a + np.uint64(7)]
         if idx == stop:  # the far end's walk looked it up and the rest
             code = MET
             break
@@ -86,55 +132,53 @@ def run_one(grid, sf, si, idx, lookups, gap, dense, stop):  # pragma: no cover -
         if (grid[np.uint64(idx) >> np.uint64(3)] >> (idx & 7)) & 1 == 0:
             code = BLOCKED
             break
-    sf[S_T], sf[S_T + 1], sf[S_T + 2], sf[S_T + 3] = t0, t1, t2, t3
-    sf[S_T + 4], sf[S_T + 5], sf[S_T + 6], sf[S_T + 7] = t4, t5, t6, t7
+    si[S_KEY], si[S_KEY + 1], si[S_KEY + 2], si[S_KEY + 3] = t0, t1, t2, t3
+    si[S_KEY + 4], si[S_KEY + 5], si[S_KEY + 6], si[S_KEY + 7] = t4, t5, t6, t7
     return code, idx, lookups, m
 
 
 @njit_cached(_nrt=False)
-def run_mirror(grid, sf, si, idx, mir, lookups, gap, lim):  # pragma: no cover - compiled
+def run_mirror(grid, si, idx, mir, lookups, gi, li):  # pragma: no cover - compiled
     """:func:`run_one` on a dense grid, each step looking up the cell stepped into (flat
     index ``idx``) and its mirror image through the segment's midpoint (``mir - idx``), the
     cell the same step from q reaches: the walk from q need not be taken. Steps while the
-    next exit time ``m`` is below ``lim / 2`` (just under the midpoint) and is one facet's
-    alone; the mirror image is looked up while the exit time after the step plus ``m``
-    stays below ``lim`` (the walks from both ends have not met: every cell is new).
+    next exit's key ``m`` is below ``li / 2`` (just under the midpoint) and is one facet's
+    alone; the mirror image is looked up while the exit after the step plus ``m`` stays
+    below ``li`` (the walks from both ends have not met: every cell is new).
     Returns ``(code, idx, stop, lookups)``: ``MET``, ``TIE`` or ``BLOCKED``; ``stop``
     the last mirror image looked up (q at first): the walk from p goes on until it reaches
     it (the segment is in its interior from there on, its later crossings single facets,
-    the mirror images of this walk's). The exit times back in ``sf``."""
-    t0, t1, t2, t3 = sf[S_T], sf[S_T + 1], sf[S_T + 2], sf[S_T + 3]
-    t4, t5, t6, t7 = sf[S_T + 4], sf[S_T + 5], sf[S_T + 6], sf[S_T + 7]
+    the mirror images of this walk's). The keys back in ``si``."""
+    t0, t1, t2, t3 = si[S_KEY], si[S_KEY + 1], si[S_KEY + 2], si[S_KEY + 3]
+    t4, t5, t6, t7 = si[S_KEY + 4], si[S_KEY + 5], si[S_KEY + 6], si[S_KEY + 7]
     m = min(min(min(t0, t1), min(t2, t3)), min(min(t4, t5), min(t6, t7)))
     stop = mir - idx
     code = MET
-    while m + m < lim:
-        lm = m + gap
-        # bit k: slot k's exit is at the minimum (up to the tie margin)
-        at = (np.int64(t0 <= lm) | (np.int64(t1 <= lm) << 1) | (np.int64(t2 <= lm) << 2)
-              | (np.int64(t3 <= lm) << 3) | (np.int64(t4 <= lm) << 4)
-              | (np.int64(t5 <= lm) << 5) | (np.int64(t6 <= lm) << 6)
-              | (np.int64(t7 <= lm) << 7))
-        if at & (at - 1) != 0:
+    while m + m < li:
+        lm = m + gi
+        at = (((t0 - lm - 1) >> 63) + ((t1 - lm - 1) >> 63) + ((t2 - lm - 1) >> 63)
+              + ((t3 - lm - 1) >> 63) + ((t4 - lm - 1) >> 63) + ((t5 - lm - 1) >> 63)
+              + ((t6 - lm - 1) >> 63) + ((t7 - lm - 1) >> 63))
+        if at < -1:
             code = TIE
             break
-        st = trailing_zeros(at)
-        idx += si[np.uint64(S_STEP + st)]
-        a = np.uint64(S_INC + SLOTS * st)
-        t0 += sf[a]
-        t1 += sf[a + np.uint64(1)]
-        t2 += sf[a + np.uint64(2)]
-        t3 += sf[a + np.uint64(3)]
-        t4 += sf[a + np.uint64(4)]
-        t5 += sf[a + np.uint64(5)]
-        t6 += sf[a + np.uint64(6)]
-        t7 += sf[a + np.uint64(7)]
+        st = np.uint64(m & 7)
+        idx += si[np.uint64(S_STEP) + st]
+        a = np.uint64(S_KINC) + np.uint64(SLOTS) * st
+        t0 += si[a]
+        t1 += si[a + np.uint64(1)]
+        t2 += si[a + np.uint64(2)]
+        t3 += si[a + np.uint64(3)]
+        t4 += si[a + np.uint64(4)]
+        t5 += si[a + np.uint64(5)]
+        t6 += si[a + np.uint64(6)]
+        t7 += si[a + np.uint64(7)]
         lookups += 1
         if (grid[np.uint64(idx) >> np.uint64(3)] >> (idx & 7)) & 1 == 0:
             code = BLOCKED
             break
         mn = min(min(min(t0, t1), min(t2, t3)), min(min(t4, t5), min(t6, t7)))
-        if mn + m >= lim:
+        if mn + m >= li:
             break
         stop = mir - idx
         lookups += 1
@@ -142,6 +186,84 @@ def run_mirror(grid, sf, si, idx, mir, lookups, gap, lim):  # pragma: no cover -
             code = BLOCKED
             break
         m = mn
-    sf[S_T], sf[S_T + 1], sf[S_T + 2], sf[S_T + 3] = t0, t1, t2, t3
-    sf[S_T + 4], sf[S_T + 5], sf[S_T + 6], sf[S_T + 7] = t4, t5, t6, t7
+    si[S_KEY], si[S_KEY + 1], si[S_KEY + 2], si[S_KEY + 3] = t0, t1, t2, t3
+    si[S_KEY + 4], si[S_KEY + 5], si[S_KEY + 6], si[S_KEY + 7] = t4, t5, t6, t7
+    return code, idx, stop, lookups
+
+
+@njit_cached(_nrt=False)
+def run_one4(grid, si, idx, lookups, gi, one, dense, stop):  # pragma: no cover - compiled
+    """:func:`run_one` for a cell of at most four facet pairs (hex prisms): four keys."""
+    t0, t1, t2, t3 = si[S_KEY], si[S_KEY + 1], si[S_KEY + 2], si[S_KEY + 3]
+    code = END
+    while True:
+        m = min(min(t0, t1), min(t2, t3))
+        if m >= one:
+            break
+        # A tie: a second key within the margin ((t - lim - 1) >> 63 is -1 for each key
+        # at most lim); off the step's chain, which needs the minimum's slot bits only.
+        lim = m + gi
+        at = (((t0 - lim - 1) >> 63) + ((t1 - lim - 1) >> 63) + ((t2 - lim - 1) >> 63)
+              + ((t3 - lim - 1) >> 63))
+        if at < -1:
+            code = TIE
+            break
+        # One facet at the exit point: step through it (unsigned indices: no
+        # negative-index fix-up on each load).
+        st = np.uint64(m & 7)
+        idx += si[np.uint64(S_STEP) + st]
+        a = np.uint64(S_KINC) + np.uint64(SLOTS) * st
+        t0 += si[a]
+        t1 += si[a + np.uint64(1)]
+        t2 += si[a + np.uint64(2)]
+        t3 += si[a + np.uint64(3)]
+        if idx == stop:  # the far end's walk looked it up and the rest
+            code = MET
+            break
+        lookups += 1
+        if not dense:
+            code = STEPPED
+            break
+        if (grid[np.uint64(idx) >> np.uint64(3)] >> (idx & 7)) & 1 == 0:
+            code = BLOCKED
+            break
+    si[S_KEY], si[S_KEY + 1], si[S_KEY + 2], si[S_KEY + 3] = t0, t1, t2, t3
+    return code, idx, lookups, m
+
+
+@njit_cached(_nrt=False)
+def run_mirror4(grid, si, idx, mir, lookups, gi, li):  # pragma: no cover - compiled
+    """:func:`run_mirror` for a cell of at most four facet pairs (hex prisms): four keys."""
+    t0, t1, t2, t3 = si[S_KEY], si[S_KEY + 1], si[S_KEY + 2], si[S_KEY + 3]
+    m = min(min(t0, t1), min(t2, t3))
+    stop = mir - idx
+    code = MET
+    while m + m < li:
+        lm = m + gi
+        at = (((t0 - lm - 1) >> 63) + ((t1 - lm - 1) >> 63) + ((t2 - lm - 1) >> 63)
+              + ((t3 - lm - 1) >> 63))
+        if at < -1:
+            code = TIE
+            break
+        st = np.uint64(m & 7)
+        idx += si[np.uint64(S_STEP) + st]
+        a = np.uint64(S_KINC) + np.uint64(SLOTS) * st
+        t0 += si[a]
+        t1 += si[a + np.uint64(1)]
+        t2 += si[a + np.uint64(2)]
+        t3 += si[a + np.uint64(3)]
+        lookups += 1
+        if (grid[np.uint64(idx) >> np.uint64(3)] >> (idx & 7)) & 1 == 0:
+            code = BLOCKED
+            break
+        mn = min(min(t0, t1), min(t2, t3))
+        if mn + m >= li:
+            break
+        stop = mir - idx
+        lookups += 1
+        if (grid[np.uint64(stop) >> np.uint64(3)] >> (stop & 7)) & 1 == 0:
+            code = BLOCKED
+            break
+        m = mn
+    si[S_KEY], si[S_KEY + 1], si[S_KEY + 2], si[S_KEY + 3] = t0, t1, t2, t3
     return code, idx, stop, lookups

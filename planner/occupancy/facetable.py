@@ -17,16 +17,22 @@ __all__ = ["FaceTable", "face_table"]
 
 # Layout of a lattice's packed table (one float64 array ``fd`` and one int64 array ``fi``:
 # few arguments, so a call of the walk costs little; R facets, NF faces, SM cells a face).
-# fd: relevant vectors (R, 3) m at 0, |v|^2 / 2 (R,) at 3R, rel @ G (R, 3) at 4R (so
-# c_u . v = (rel @ G) u for the cell at offset u), v_r . v_s (R, R) at 7R, and the same
-# for the facet pairs (below; padded with zeros to (SLOTS, SLOTS)) at 7R + R^2.
-# fi: the header below, then the relevant vectors as index offsets (R, 3) at I_RIDX, the
-# face id of each facet set (2**R,; -1: no face) at fi[I_FMASK], the number of cells
-# around each face (NF,) at fi[I_STARN], their offsets (NF, SM, 3) at fi[I_STAROFF], and
-# each one's facets through the face (NF, SM; bit r: facet r) at fi[I_STARMASK], and the
-# facets in opposite pairs (R / 2, 2; v_s = -v_r) at fi[I_PAIR].
+# The slots first, at fixed offsets (the walk's per-line set-up reads them slot by slot,
+# with no indirection): one slot per pair of opposite facets (v_s = -v_r), the padding's
+# zeros. fd: the pair's first facet w (3, SLOTS) at F_W, |w|^2 / 2 at F_H, |w|^2 / 2 +
+# rho |w| at F_A (rho the covering radius: an exit time through +-w from a cell touching
+# the segment d is at most 1 + this / |d . w|); then at F_REL the relevant vectors times
+# the generator, rel @ G (R, 3) (c_u . v = (rel @ G) u for the cell at offset u), and
+# w_j . w_k (SLOTS, SLOTS) at F_REL + 3R.
+# fi: the header below; the slots' facets r and s (SLOTS,) each at I_SLOT, their bits
+# 1 << r, 1 << s (0: padding) at I_SLOT + 2 SLOTS and w as index offsets (3, SLOTS) at
+# I_SLOT + 4 SLOTS; then the face id of each facet set (2**R,; -1: no face) at
+# fi[I_FMASK], the number of cells around each face (NF,) at fi[I_STARN], their offsets
+# (NF, SM, 3) at fi[I_STAROFF], and each one's facets through the face (NF, SM; bit r:
+# facet r) at fi[I_STARMASK].
 I_R, I_NF, I_SM, I_REACH = 0, 1, 2, 3  # reach: |index - segment point| bound, 3 axes
-I_FMASK, I_STARN, I_STAROFF, I_STARMASK, I_PAIR, I_RIDX = 6, 7, 8, 9, 10, 11
+I_FMASK, I_STARN, I_STAROFF, I_STARMASK, I_SLOT = 6, 7, 8, 9, 10
+F_W, F_H, F_A, F_REL = 0, 3 * SLOTS, 4 * SLOTS, 5 * SLOTS
 
 
 class FaceTable(NamedTuple):
@@ -95,19 +101,27 @@ def face_table(lattice: Lattice) -> FaceTable:
                       if np.allclose(rel[r], -rel[s], atol=1e-9 * np.abs(rel).max())], np.int64)
     if len(pairs) * 2 != nrel or len(pairs) > SLOTS:
         raise ValueError("a Voronoi cell's facets come in at most 8 opposite pairs")
+    npair = len(pairs)
+    first = pairs[:, 0]
+    slot_f = np.zeros((5, SLOTS))
+    slot_f[:3, :npair] = rel[first].T
+    slot_f[3, :npair] = rhs[first]
+    slot_f[4, :npair] = rhs[first] + cell.covering_radius * np.linalg.norm(rel[first], axis=1)
     gp = np.zeros((SLOTS, SLOTS))
-    gp[:len(pairs), :len(pairs)] = (rel @ rel.T)[np.ix_(pairs[:, 0], pairs[:, 0])]
-    fd = np.concatenate([rel.ravel(), rhs, (rel @ g).ravel(), (rel @ rel.T).ravel(),
-                         gp.ravel()])
-    head = np.zeros(I_RIDX, np.int64)
+    gp[:npair, :npair] = (rel @ rel.T)[np.ix_(first, first)]
+    fd = np.concatenate([slot_f.ravel(), (rel @ g).ravel(), gp.ravel()])
+    slot_i = np.zeros((7, SLOTS), np.int64)
+    slot_i[0, :npair], slot_i[1, :npair] = pairs[:, 0], pairs[:, 1]
+    slot_i[2, :npair], slot_i[3, :npair] = 1 << pairs[:, 0], 1 << pairs[:, 1]
+    slot_i[4:, :npair] = ridx[first].T
+    head = np.zeros(I_SLOT, np.int64)
     head[I_R], head[I_NF], head[I_SM] = nrel, nf, sm
     head[I_REACH:I_REACH + 3] = reach
-    o = I_RIDX + 3 * nrel
+    o = I_SLOT + slot_i.size
     head[I_FMASK] = o
     head[I_STARN] = o = o + len(fmask)
     head[I_STAROFF] = o = o + nf
-    head[I_STARMASK] = o = o + 3 * nf * sm
-    head[I_PAIR] = o + nf * sm
-    fi = np.concatenate([head, ridx.ravel(), fmask, star_n, star_off.ravel(), star_mask.ravel(),
-                         pairs.ravel()])
+    head[I_STARMASK] = o + 3 * nf * sm
+    fi = np.concatenate([head, slot_i.ravel(), fmask, star_n, star_off.ravel(),
+                         star_mask.ravel()])
     return FaceTable(np.ascontiguousarray(fd, float), np.ascontiguousarray(fi, np.int64))

@@ -5,7 +5,8 @@ Between two cell centres the segment touches the closed Voronoi cells of a chain
 it passes through, and besides them only cells whose boundary it meets: at an edge or a
 vertex it passes through, or along a facet it runs in. :func:`face_walk` keeps the exit
 time of the current cell through each facet facing forward (``t_r``, updated by a table
-``inc`` when it steps), and steps through the first facet when that facet is the only one
+``inc`` when it steps; integer keys that name their facet, :mod:`planner.occupancy.
+facestep`), and steps through the first facet when that facet is the only one
 at the exit point and the segment runs in no facet: the common case, a few additions per
 cell. Otherwise the exit point lies on a face (edge or vertex) of the cell named by the set
 of facets through it; the face table (:class:`FaceTable`, from the cell's geometry) lists
@@ -32,18 +33,22 @@ of opposite facets: a Voronoi cell's facets come in pairs, one of which faces fo
 from __future__ import annotations
 
 import numpy as np
+from numba.cpython.unsafe.numbers import leading_zeros
 
 from planner._numba import njit_cached
 from planner.occupancy.facestep import (
     BLOCKED,
     END,
+    KEY_BITS,
+    LOW,
     MET,
+    S_AY,
     S_CUR,
-    S_DQ,
-    S_F,
     S_FW,
     S_IDQ,
-    S_INC,
+    S_KEY,
+    S_KINC,
+    S_NP,
     S_SG,
     S_STEP,
     S_SY,
@@ -51,15 +56,24 @@ from planner.occupancy.facestep import (
     SLOTS,
     STEPPED,
     TIE,
+    face_scratch,
+    first_exit,
+    key,
+    recorded,
     run_mirror,
+    run_mirror4,
     run_one,
+    run_one4,
 )
 from planner.occupancy.facetable import (
+    F_A,
+    F_H,
+    F_REL,
+    F_W,
     I_FMASK,
-    I_PAIR,
     I_R,
     I_REACH,
-    I_RIDX,
+    I_SLOT,
     I_SM,
     I_STARMASK,
     I_STARN,
@@ -76,24 +90,16 @@ _PAR = 1e-12  # |cos| below which a facet is parallel to the segment
 _ON = 1e-8  # slack (relative to |v|^2 / 2) below which a facet passes through the exit point
 _GAP = 1e-6  # fast step only when the next exit is this much later (relative, as _ON)
 _NEVER = 1e300  # exit time of an empty slot
+# The fast steps' keys round each step's change of an exit time (facestep); a tie is
+# decided on exit times only while their accumulated rounding stays below this share of
+# the tie slack (_ON): past it (long lines with a facet nearly parallel to the segment,
+# whose exit-time bound coarsens the scale) the generic walk decides.
+_KEY_SAFE = 0.1 * _ON
 
 
-def face_scratch(sm: int, record: int = 0) -> tuple[np.ndarray, np.ndarray]:
-    """Scratch ``(sf, si)`` for :func:`face_walk`: ``sm`` cells around a face, ``record``
-    cells to record in ``si`` (tests; :func:`recorded` reads them)."""
-    si = np.zeros(S_CUR + 3 * max(sm, 1) + 1 + 3 * record, np.int64)
-    si[S_CUR + 3 * max(sm, 1)] = record
-    return np.zeros(S_F), si
-
-
-@njit_cached
-def recorded(si, sm, n):  # pragma: no cover - compiled
-    """The first ``n`` cells :func:`face_walk` looked up, (n, 3), from a recording scratch."""
-    o = S_CUR + 3 * max(sm, 1) + 1
-    return si[o:o + 3 * n].reshape(-1, 3)
-
-
-@njit_cached(_nrt=False)
+# numpy's error model: a float division by zero (a parallel slot's, selected away) is
+# not checked (no branch in the set-up's loop).
+@njit_cached(_nrt=False, error_model="numpy")
 def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover - compiled
     """Line of sight between the centres of cells p and q: every cell whose closed Voronoi
     cell the segment touches is looked up, in order along it, until a blocked one.
@@ -103,11 +109,9 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
     mode, grid, lo, dims, table, tmask, gg, blo, bhi = occ
     nrel = fi[I_R]
     sm = fi[I_SM]
-    o_rhs = 3 * nrel
-    o_wv = 4 * nrel
     o_cells = fi[I_STAROFF]
     o_masks = fi[I_STARMASK]
-    o_rec = S_CUR + 3 * max(sm, 1)
+    o_rec = S_CUR + max(sm, 1)
     nrec = si[o_rec]
     o_rec += 1
     e0, e1, e2 = q0 - p0, q1 - p1, q2 - p2
@@ -137,51 +141,82 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
     # a product of whole rows: inc[j, k] = v_j . v_k / (d . v_k) = s_j (w_j . w_k) s_k / |y_k|
     # for v_j = s_j w_j (w_j the pair's first facet, y_k = d . w_k, s = sign y).
     npair = nrel // 2
-    o_pair = fi[I_PAIR]
-    o_gp = 7 * nrel + nrel * nrel
+    o_gp = F_REL + 3 * nrel
     nfw = npair
     fwm = np.int64(0)
     parm = np.int64(0)
     gap = 0.0
-    par2 = _PAR * _PAR * dn2
-    for j in range(SLOTS):
-        t = _NEVER
-        iy = 0.0
-        sg = 0.0
-        rs = 0
-        if j < npair:
-            r = fi[o_pair + 2 * j]
-            r2 = fi[o_pair + 2 * j + 1]
-            y = x0 * fd[3 * r] + x1 * fd[3 * r + 1] + x2 * fd[3 * r + 2]
-            h = fd[o_rhs + r]
-            sf[S_DQ + r] = y
-            sf[S_DQ + r2] = -y
-            par = y * y <= par2 * 2.0 * h
-            pos = y > 0.0
-            rs = r if pos else r2
-            sg = 1.0 if pos else -1.0
-            a = I_RIDX + 3 * r
-            st = fi[a] * s0 + fi[a + 1] * s1 + fi[a + 2]
-            si[S_STEP + j] = st if pos else -st
-            if par:
-                parm |= (np.int64(1) << r) | (np.int64(1) << r2)
-                sg = 0.0
-            else:
-                fwm |= np.int64(1) << rs
-                iy = 1.0 / abs(y)
-                t = h * iy  # exact exit times (no tolerance): ties to rounding
-                gap = max(gap, _GAP * t)
-        si[S_FW + j] = rs
+    tmax = 0.0  # a bound on every exit time of the line (facetable: F_A)
+    t0min = _NEVER
+    par2 = 2.0 * _PAR * _PAR * dn2
+    if si[S_NP] != npair:  # a fresh scratch (or another lattice's): the padding slots,
+        for j in range(npair, SLOTS):  # set once: never the next exit, never moved
+            sf[S_T + j] = _NEVER
+            sf[S_IDQ + j] = sf[S_AY + j] = sf[S_SG + j] = sf[S_SY + j] = 0.0
+            si[S_FW + j] = si[S_STEP + j] = 0
+            si[S_KEY + j] = key(_NEVER, 1.0, j)
+            for k in range(SLOTS):
+                si[S_KINC + SLOTS * j + k] = si[S_KINC + SLOTS * k + j] = 0
+        si[S_NP] = npair
+    # Every pair's slot alike, and no branch: the selects by which of a pair faces forward
+    # (unpredictable) are arithmetic, as the compiler made branches of conditional
+    # expressions.
+    for j in range(npair):
+        y = x0 * fd[F_W + j] + x1 * fd[F_W + SLOTS + j] + x2 * fd[F_W + 2 * SLOTS + j]
+        h = fd[F_H + j]
+        ay = abs(y)
+        pos = np.int64(y > 0.0)
+        live = np.int64(y * y > par2 * h)  # not parallel
+        fp = -pos  # all ones if the pair's first faces forward
+        fl = -live
+        iy = np.float64(live) / max(ay, 1e-300)  # parallel: 0
+        t = h * iy + np.float64(1 - live) * _NEVER  # exact (no tolerance): ties to rounding
+        sg = np.float64(live * (pos + pos - 1))
+        br = fi[I_SLOT + 2 * SLOTS + j]
+        bs = fi[I_SLOT + 3 * SLOTS + j]
+        fwm |= ((br & fp) | (bs & ~fp)) & fl
+        parm |= (br | bs) & ~fl
+        st = (fi[I_SLOT + 4 * SLOTS + j] * s0 + fi[I_SLOT + 5 * SLOTS + j] * s1
+              + fi[I_SLOT + 6 * SLOTS + j])
+        si[S_STEP + j] = st * (pos + pos - 1)
+        si[S_FW + j] = (fi[I_SLOT + j] & fp) | (fi[I_SLOT + SLOTS + j] & ~fp)
+        gap = max(gap, _GAP * h * iy)
+        t0min = min(t0min, t)
+        tmax = max(tmax, fd[F_A + j] * iy)
         sf[S_T + j] = t
         sf[S_IDQ + j] = iy
+        sf[S_AY + j] = ay
         sf[S_SG + j] = sg
         sf[S_SY + j] = sg * iy
-    # Rows and columns of the pairs only: the other slots' exit times stay 1e300, which
-    # the finite numbers an earlier walk left there (zero at first) move by nothing.
+    # The keys' scale: a power of two with every exit time of the line below
+    # 2**KEY_BITS units, and the lookups after which a tie is past their precision (each
+    # step moves a key by its rounded change: < 16 units, a lookup at most a step).
+    if tmax >= 2.0 ** 40:  # a facet all but parallel to a long line: keys too coarse
+        return True, 0, False
+    ex = 64 - leading_zeros(np.int64(1.0 + tmax))  # 1 + tmax < 2**ex
+    sc = np.float64(np.int64(1) << (KEY_BITS - ex))
+    isc = 1.0 / sc
+    nsafe = _KEY_SAFE * t0min * np.float64(np.int64(1) << (KEY_BITS - 6 - ex))
+    for j in range(npair):
+        si[S_KEY + j] = key(sf[S_T + j], sc, j)
+    # The change table in keys (multiples of 8: the slot bits stay), rows of the pairs
+    # only: the padding's and parallel slots' products are zeros, so their keys stay
+    # empty. Whole rows from eight locals: eight independent products a row.
+    y0, y1, y2, y3 = sf[S_SY] * sc, sf[S_SY + 1] * sc, sf[S_SY + 2] * sc, sf[S_SY + 3] * sc
+    y4, y5, y6, y7 = sf[S_SY + 4] * sc, sf[S_SY + 5] * sc, sf[S_SY + 6] * sc, sf[S_SY + 7] * sc
+    low = np.int64(-8)
     for j in range(npair):
         sg = sf[S_SG + j]
-        for k in range(npair):
-            sf[S_INC + SLOTS * j + k] = sg * fd[o_gp + SLOTS * j + k] * sf[S_SY + k]
+        a = np.uint64(S_KINC + SLOTS * j)
+        b = np.uint64(o_gp + SLOTS * j)
+        si[a] = np.int64(sg * fd[b] * y0) & low
+        si[a + np.uint64(1)] = np.int64(sg * fd[b + np.uint64(1)] * y1) & low
+        si[a + np.uint64(2)] = np.int64(sg * fd[b + np.uint64(2)] * y2) & low
+        si[a + np.uint64(3)] = np.int64(sg * fd[b + np.uint64(3)] * y3) & low
+        si[a + np.uint64(4)] = np.int64(sg * fd[b + np.uint64(4)] * y4) & low
+        si[a + np.uint64(5)] = np.int64(sg * fd[b + np.uint64(5)] * y5) & low
+        si[a + np.uint64(6)] = np.int64(sg * fd[b + np.uint64(6)] * y6) & low
+        si[a + np.uint64(7)] = np.int64(sg * fd[b + np.uint64(7)] * y7) & low
     idx = ((p0 - b0) * d1 + (p1 - b1)) * d2 + (p2 - b2)
     if nrec > 0:
         si[o_rec] = p0
@@ -207,30 +242,38 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
     if not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi, q0, q1, q2):
         return False, lookups, True
     lim = 1.0 - 4.0 * gap
-    mirroring = True  # stepping from both ends (``stop``: the last mirror image)
-    ncur = 0  # cells the segment runs along besides the chain cell (si[S_CUR:][:3 ncur])
+    gi = np.int64(gap * sc)  # the tie margin, the midpoint's margin and the end as keys
+    li = np.int64(lim * sc)
+    one = np.int64(sc)
+    # stepping from both ends (``stop``: the last mirror image), unless the first exit is
+    # already past the midpoint (p and q touch: one step)
+    mirroring = t0min + t0min < lim
+    ncur = 0  # cells the segment runs along besides the chain cell (flat: si[S_CUR:][:ncur])
     pm = np.int64(0)  # the chain cell's facets the segment runs in
+    u0 = u1 = u2 = 0  # off a dense grid: the chain cell's offset from p, at a tie
     while True:
         if mirroring:
             if dense:
-                code, idx, stop, lookups = run_mirror(grid, sf, si, idx, mir, lookups, gap,
-                                                      lim)
+                if npair <= 4:
+                    code, idx, stop, lookups = run_mirror4(grid, si, idx, mir, lookups, gi, li)
+                else:
+                    code, idx, stop, lookups = run_mirror(grid, si, idx, mir, lookups, gi, li)
                 if code == BLOCKED:
                     return False, lookups, True
             else:
                 code = MET
-                m = _NEVER
-                for k in range(nfw):
-                    m = min(m, sf[S_T + k])
+                m = first_exit(si, nfw, isc)
                 while m + m < lim:
-                    code, idx, lookups, _ = run_one(grid, sf, si, idx, lookups, gap, False,
-                                                    stop)
+                    if npair <= 4:
+                        code, idx, lookups, _ = run_one4(grid, si, idx, lookups, gi, one, False,
+                                                         stop)
+                    else:
+                        code, idx, lookups, _ = run_one(grid, si, idx, lookups, gi, one, False,
+                                                        stop)
                     if code != STEPPED:  # a tie
                         break
                     code = MET
-                    mn = _NEVER
-                    for k in range(nfw):
-                        mn = min(mn, sf[S_T + k])
+                    mn = first_exit(si, nfw, isc)
                     for half in range(2):  # the cell stepped into, then its mirror image
                         if half == 1:
                             if mn + m >= lim:
@@ -256,11 +299,13 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
                 if idx == stop:
                     break
                 continue
-            m = _NEVER
-            for k in range(nfw):
-                m = min(m, sf[S_T + k])
+            m = first_exit(si, nfw, isc)
         elif pm == 0:
-            code, idx, lookups, m = run_one(grid, sf, si, idx, lookups, gap, dense, stop)
+            if npair <= 4:
+                code, idx, lookups, mk = run_one4(grid, si, idx, lookups, gi, one, dense, stop)
+            else:
+                code, idx, lookups, mk = run_one(grid, si, idx, lookups, gi, one, dense, stop)
+            m = np.float64(mk & LOW) * isc
             if code == END or code == MET:
                 break
             if code == BLOCKED:
@@ -277,19 +322,24 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
                     return False, lookups, True
                 continue
         else:
-            m = _NEVER
-            for k in range(nfw):
-                m = min(m, sf[S_T + k])
+            m = first_exit(si, nfw, isc)
             if m >= 1.0:
                 break
-        # An edge or a vertex, or a facet the segment runs in: the face table.
-        u2 = idx % d2 + b2 - p2  # the chain cell's offset from p
-        u1 = (idx // d2) % d1 + b1 - p1
-        u0 = idx // s0 + b0 - p0
+        # An edge or a vertex, or a facet the segment runs in: the face table. Its cells
+        # by flat index (the chain cell's plus their offset's): on a dense grid a lookup
+        # is a bit test and no cell's indices are needed (no division); else from the
+        # chain cell's offset from p.
+        if lookups > nsafe:
+            return True, lookups, False
+        if not dense:
+            u2 = idx % d2 + b2 - p2
+            u1 = (idx // d2) % d1 + b1 - p1
+            u0 = idx // s0 + b0 - p0
         am = pm
         for k in range(nfw):
             r = si[S_FW + k]
-            if fwm >> r & 1 and sf[S_DQ + r] * (sf[S_T + k] - m) <= _ON * fd[o_rhs + r]:
+            t = np.float64(si[S_KEY + k] & LOW) * isc
+            if fwm >> r & 1 and sf[S_AY + k] * (t - m) <= _ON * fd[F_H + k]:
                 am |= np.int64(1) << r
         f = fi[fi[I_FMASK] + am]
         if f < 0:
@@ -299,27 +349,28 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
         ns = fi[fi[I_STARN] + f]
         for j in range(ns):
             a = o_cells + 3 * (sm * f + j)
-            c0 = u0 + fi[a]
-            c1 = u1 + fi[a + 1]
-            c2 = u2 + fi[a + 2]
-            if fi[a] != 0 or fi[a + 1] != 0 or fi[a + 2] != 0:
-                seen = False
+            f0, f1, f2 = fi[a], fi[a + 1], fi[a + 2]
+            if f0 != 0 or f1 != 0 or f2 != 0:
+                c = idx + f0 * s0 + f1 * s1 + f2
+                seen = c == stop  # the far end's cell: looked up by its walk
                 for i in range(ncur):
-                    b = S_CUR + 3 * i
-                    if si[b] == c0 and si[b + 1] == c1 and si[b + 2] == c2:
+                    if si[S_CUR + i] == c:
                         seen = True
                         break
-                # the far end's cell: looked up by its walk
-                seen = seen or ((p0 + c0 - b0) * d1 + (p1 + c1 - b1)) * d2 + p2 + c2 - b2 == stop
                 if not seen:
-                    if lookups < nrec:
-                        si[o_rec + 3 * lookups] = p0 + c0
-                        si[o_rec + 3 * lookups + 1] = p1 + c1
-                        si[o_rec + 3 * lookups + 2] = p2 + c2
                     lookups += 1
-                    if not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi,
-                                     p0 + c0, p1 + c1, p2 + c2):
-                        return False, lookups, True
+                    if dense:
+                        if (grid[np.uint64(c) >> np.uint64(3)] >> (c & 7)) & 1 == 0:
+                            return False, lookups, True
+                    else:
+                        c0, c1, c2 = p0 + u0 + f0, p1 + u1 + f1, p2 + u2 + f2
+                        if lookups <= nrec:
+                            si[o_rec + 3 * lookups - 3] = c0
+                            si[o_rec + 3 * lookups - 2] = c1
+                            si[o_rec + 3 * lookups - 1] = c2
+                        if not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi,
+                                         c0, c1, c2):
+                            return False, lookups, True
             bm = fi[o_masks + sm * f + j]
             if bm & fwm:
                 continue  # the segment leaves it here
@@ -337,48 +388,46 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
                 bm = fi[o_masks + sm * f + j]
                 if bm & fwm == 0 and bm & parm != 0:
                     a = o_cells + 3 * (sm * f + j)
-                    b = S_CUR + 3 * ncur
-                    si[b] = u0 + fi[a]
-                    si[b + 1] = u1 + fi[a + 1]
-                    si[b + 2] = u2 + fi[a + 2]
+                    si[S_CUR + ncur] = idx + fi[a] * s0 + fi[a + 1] * s1 + fi[a + 2]
                     ncur += 1
         pm = fi[o_masks + sm * f + nxt] & parm
         a = o_cells + 3 * (sm * f + nxt)
-        o0, o1, o2 = u0, u1, u2
-        u0 += fi[a]
-        u1 += fi[a + 1]
-        u2 += fi[a + 2]
-        idx = ((p0 + u0 - b0) * d1 + (p1 + u1 - b1)) * d2 + (p2 + u2 - b2)
+        g0, g1, g2 = fi[a], fi[a + 1], fi[a + 2]
+        old = idx
+        idx += g0 * s0 + g1 * s1 + g2
         if idx == stop:
             break
+        # The exit times from the next chain cell: moved by the offset (c_u . v), as the
+        # fast steps move them (a change rounded the same way).
+        # (A parallel slot's 1 / |d . v| is 0: its key stays.)
         for k in range(nfw):
-            r = si[S_FW + k]
-            w = o_wv + 3 * r
-            if fwm >> r & 1:
-                sf[S_T + k] = ((fd[o_rhs + r] + fd[w] * u0 + fd[w + 1] * u1 + fd[w + 2] * u2)
-                               * sf[S_IDQ + k])
+            w = F_REL + 3 * si[S_FW + k]
+            si[S_KEY + k] += np.int64((fd[w] * g0 + fd[w + 1] * g1 + fd[w + 2] * g2)
+                                      * sf[S_IDQ + k] * sc) & LOW
         if mirroring:
             # The tie's mirror image: its cells' images, when the next chain cell's exit
             # keeps the two walks apart (the segment in its interior: no facet run along).
-            mn = _NEVER
-            for k in range(nfw):
-                mn = min(mn, sf[S_T + k])
+            mn = first_exit(si, nfw, isc)
             if not inner or mn + m >= lim:
                 mirroring = False
                 continue
             for j in range(ns):
                 a = o_cells + 3 * (sm * f + j)
-                if fi[a] != 0 or fi[a + 1] != 0 or fi[a + 2] != 0:
-                    c0 = q0 - o0 - fi[a]
-                    c1 = q1 - o1 - fi[a + 1]
-                    c2 = q2 - o2 - fi[a + 2]
-                    if lookups < nrec:
-                        si[o_rec + 3 * lookups] = c0
-                        si[o_rec + 3 * lookups + 1] = c1
-                        si[o_rec + 3 * lookups + 2] = c2
+                f0, f1, f2 = fi[a], fi[a + 1], fi[a + 2]
+                if f0 != 0 or f1 != 0 or f2 != 0:
                     lookups += 1
-                    if not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi, c0, c1,
-                                     c2):
-                        return False, lookups, True
+                    if dense:
+                        c = mir - old - f0 * s0 - f1 * s1 - f2
+                        if (grid[np.uint64(c) >> np.uint64(3)] >> (c & 7)) & 1 == 0:
+                            return False, lookups, True
+                    else:
+                        c0, c1, c2 = q0 - u0 - f0, q1 - u1 - f1, q2 - u2 - f2
+                        if lookups <= nrec:
+                            si[o_rec + 3 * lookups - 3] = c0
+                            si[o_rec + 3 * lookups - 2] = c1
+                            si[o_rec + 3 * lookups - 1] = c2
+                        if not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi,
+                                         c0, c1, c2):
+                            return False, lookups, True
             stop = mir - idx
     return True, lookups, True
