@@ -129,14 +129,20 @@ def sift_down(h, pos, i0, n0):  # pragma: no cover - compiled
         c0 = (i << _U2) + _U1
         if c0 >= n:
             break
-        c = c0
+        # the best child by selects, not branches (non-short-circuit & and |): which
+        # child wins is a coin toss, and a mispredicted branch costs more than the loads
+        # (one cache line of tie-breakers, see _lined)
+        c, cf, cg = c0, hf[c0], hg[c0]
         end = min(c0 + _U4, n)
         for d in range(c0 + _U1, end):
-            if _before(hf[d], hg[d], hf[c], hg[c]):
-                c = d
-        if not _before(hf[c], hg[c], xf, xg):
+            df, dg = hf[d], hg[d]
+            b = (df < cf) | ((df == cf) & (dg > cg))
+            c = d if b else c
+            cf = df if b else cf
+            cg = dg if b else cg
+        if not _before(cf, cg, xf, xg):
             break
-        _put(h, pos, i, slot[c], hf[c], hg[c])
+        _put(h, pos, i, slot[c], cf, cg)
         i = c
     _put(h, pos, i, x, xf, xg)
 
