@@ -204,3 +204,17 @@ def test_plateau_queue_pops_in_key_order_on_random_sequences(seed):
         assert hn + sn == len(key)
         _pq_positions_exact(h, pos, hn, sn)
     assert pops > 500 and side_pops > 100 and flushes > 10
+
+
+@pytest.mark.parametrize("cap", [4, 64, 4096])
+def test_children_of_an_entry_share_a_cache_line_and_growing_keeps_entries(cap):
+    h, pos = _heap(cap)
+    for a in h:  # item 1 starts a line: children 4i+1 .. 4i+4 never straddle two lines
+        assert a.flags.c_contiguous and a.flags.writeable and len(a) == cap
+        assert (a.ctypes.data + a.itemsize) % 64 == 0
+    n = 0
+    for slot, f in enumerate([5.0, 1.0, 4.0, 2.0][:cap]):
+        n = H.push(h, pos, n, slot, f, 0.0)
+    g = H.grown_heap(h, 2 * cap, n)
+    assert len(g.f) == 2 * cap and all((a.ctypes.data + a.itemsize) % 64 == 0 for a in g)
+    assert _drain(g, pos, n) == _drain(h, pos.copy(), n)

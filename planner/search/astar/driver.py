@@ -24,7 +24,7 @@ import numpy as np
 
 from planner._entry import entry_point, raw_entry_point, signal_cause
 from planner.search._grow import grown
-from planner.search._heap import Heap, new_heap
+from planner.search._heap import grown_heap, new_heap
 from planner.search._nodes import (
     ASTAR_STATE,
     PAGE,
@@ -385,7 +385,7 @@ def _loop(ctx: _Context, occ, walk, ms, sc, dslot, params, pausing, out=None):
         if n + nm > cap:
             cap *= 2
             ctx.nodes = NodeTable(*(grown(a, cap, n) for a in nodes))
-            ctx.heap = Heap(*(grown(a, cap, n) for a in ctx.heap))
+            ctx.heap = grown_heap(ctx.heap, cap, n)
         if npg + nm > pcap or 2 * (npg + nm) > len(slots.btab):
             pcap *= 2
             ctx.slots = SlotMap(grown(slots.pages, pcap * PAGE, npg * PAGE),

@@ -44,7 +44,7 @@ from planner._entry import entry_point, raw_entry_point, signal_cause
 from planner.errors import PlanError
 from planner.occupancy.walk import as_cells
 from planner.search._grow import grown
-from planner.search._heap import Heap, new_heap
+from planner.search._heap import grown_heap, new_heap
 from planner.search._state import new_state
 from planner.search.dstar import kernel as dk
 from planner.search.dstar import replan as dr
@@ -143,7 +143,7 @@ class DStarLite:
             while cap < n + extra:
                 cap *= 2
             self._nd = dk.new_nodes(cap, self._nd, n)
-            self._heap = Heap(*(grown(a, cap, int(self._st["queued"])) for a in self._heap))
+            self._heap = grown_heap(self._heap, cap, int(self._st["queued"]))
         sc = self._sc
         if len(sc.path) < n + 1:  # keeps the stored path
             k = int(self._st["path_len"])
