@@ -27,7 +27,7 @@ equal in both f and g may come out in another order. ``fcur`` changes only when 
 heap is empty, so every side entry always has f == fcur.
 
 All functions are ``inline="always"`` (numba copies their bodies into each caller): as
-calls, the dense A* loop ran about 4% slower on long queries
+calls, the search loop's dense A* variant ran about 4% slower on long queries
 (``benchmarks/search_speed.py``), while inlining them adds little to the compile. Inside,
 heap indices are unsigned: numba then adds no negative-index fix-up to each load and store
 (the sifts run markedly faster).
