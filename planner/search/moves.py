@@ -66,6 +66,17 @@ def move_allowed(ufree, ptr, idx, m):  # pragma: no cover - compiled
     return True
 
 
+@njit_cached(_nrt=False, inline="always")
+def move_open(bits, need, blocked, ufree, ptr, idx, m):  # pragma: no cover - compiled
+    """Move ``m`` is allowed, read from the expanded cell's stencil lookups: with the union
+    stencil as a bit mask (``bits``; at most :data:`MAX_BITS` cells) one test of
+    ``need[m]`` against the ``blocked`` mask, else :func:`move_allowed` on ``ufree``.
+    Inlined: in a loop compiled with ``bits`` constant, one of the two tests is left."""
+    if bits:
+        return need[m] & blocked == 0
+    return move_allowed(ufree, ptr, idx, m)
+
+
 def _empty_occupancy(g: np.ndarray) -> Occupancy:
     """Everything free (the hash mode with an empty set and unbounded box): the walk then
     only enumerates touched cells."""

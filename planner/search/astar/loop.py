@@ -38,7 +38,7 @@ from planner.search._los import DDA_MAX, cubic_walk, dense_walk, is_cubic, sight
 from planner.search._nodes import PAGE, block_key, find_slot, local, new_page
 from planner.search.astar.dense import stencil_mask
 from planner.search.heuristic import H_GAUGE, length, node_estimate, rows
-from planner.search.moves import MAX_BITS, move_allowed
+from planner.search.moves import MAX_BITS, move_open
 from planner.search.result import RUN_BUDGET, RUN_EXHAUSTED, RUN_FOUND, RUN_GROW, RUN_LIMIT
 
 __all__ = ["GENERAL", "DENSE_LAZY", "DENSE_ASTAR", "THETA", "LAZY_THETA", "search_loop"]
@@ -228,10 +228,7 @@ def search_loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, 
                 best = np.inf
                 bp = np.int64(-1)
                 for m in range(nm):
-                    if bits:
-                        if need[m] & blocked:
-                            continue
-                    elif not move_allowed(ufree, ms.ptr, ms.idx, m):
+                    if not move_open(bits, need, blocked, ufree, ms.ptr, ms.idx, m):
                         continue
                     if dense:  # an allowed move's target is free, hence inside the box
                         t = np.int64(dsl[np.uint64(base + moff[m])]) - 1
@@ -261,10 +258,7 @@ def search_loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, 
         for m in range(nm):
             # Safe rule first: with the bitmask it is one test, and an allowed move's target
             # is free, hence inside the dense box.
-            if bits:
-                if need[m] & blocked:
-                    continue
-            elif not move_allowed(ufree, ms.ptr, ms.idx, m):
+            if not move_open(bits, need, blocked, ufree, ms.ptr, ms.idx, m):
                 continue
             if dense:
                 loc = np.uint64(base + moff[m])
