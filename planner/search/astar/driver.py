@@ -87,6 +87,31 @@ def _dense(ctx: _Context, occ, owner) -> np.ndarray | None:
     return a
 
 
+def _short(ctx: _Context, f: _Fast, free: list, start, goal):
+    """The short path's one compiled call, from ``start`` to ``goal`` on ``f``'s arrays.
+
+    Returns ``(out, peak)`` as :func:`run`'s, with ``ctx`` back among the thread's ``free``
+    contexts; ``peak`` is None when the search needs room or paused, and the general path
+    then resumes it from ``out``.
+    """
+    try:
+        out = f.cells(f.bound, f.first, f.pausing, *start.tolist(), *goal.tolist())
+    except SystemError as exc:  # as entry_point's wrapper, which this call saves
+        raise signal_cause(exc) from None  # the context, left mid-search, is dropped
+    return out, _done(ctx, f, free, out)
+
+
+def _done(ctx: _Context, f: _Fast, free: list, out: tuple) -> int | None:
+    """The peak bytes of the short path's search that gave ``out``, with ``ctx`` back among
+    the thread's ``free`` contexts; None when it needs room or paused (``ctx`` stays out)."""
+    status, _, _, _, n, _ = out
+    if status == RUN_GROW or (f.pausing and status == RUN_BUDGET):
+        return None
+    if len(free) < 2:
+        free.append(ctx)  # _release
+    return f.small if n <= _CAP else _fresh_bytes(n, 0) + f.rest
+
+
 def run(occ, walk, ms, start, goal, params, span: float, owner=None, dense: bool = True,
         pause_at: int = 0, keep_going=None, tag=None):
     """Run one search to completion. ``span``: longest sight line (m) the any-angle scratch
@@ -130,15 +155,9 @@ def run(occ, walk, ms, start, goal, params, span: float, owner=None, dense: bool
             and f.pause_at == pause_at and (keep_going is None) is f.no_probe):
         # the short path (module docstring): the context's arrays, bound and dense slot
         # array are those of its last search, which was like this one
-        try:
-            out = f.cells(f.bound, f.first, f.pausing, *start.tolist(), *goal.tolist())
-        except SystemError as exc:  # as entry_point's wrapper, which this call saves
-            raise signal_cause(exc) from None  # the context, left mid-search, is dropped
-        status, _, _, _, n, _ = out
-        if status != RUN_GROW and not (f.pausing and status == RUN_BUDGET):
-            if len(free) < 2:
-                free.append(ctx)  # _release
-            return out, (f.small if n <= _CAP else _fresh_bytes(n, 0) + f.rest)
+        out, peak = _short(ctx, f, free, start, goal)
+        if peak is not None:
+            return out, peak
         out = _run(ctx, occ, walk, ms, start, goal, params, span, owner, dense, pause_at,
                    keep_going, out, tag)
     else:
@@ -161,15 +180,9 @@ def repeat(owner, tag, start, goal, keep_going=None):
     if f is None or f.tag is not tag or f.owner != id(owner) or tag is None:
         return None
     ctx = free.pop()  # taken while it searches: a search started meanwhile takes another
-    try:
-        out = f.cells(f.bound, f.first, f.pausing, *start.tolist(), *goal.tolist())
-    except SystemError as exc:  # as entry_point's wrapper, which this call saves
-        raise signal_cause(exc) from None  # the context, left mid-search, is dropped
-    status, _, _, _, n, _ = out
-    if status != RUN_GROW and not (f.pausing and status == RUN_BUDGET):
-        if len(free) < 2:
-            free.append(ctx)  # _release
-        return out, (f.small if n <= _CAP else _fresh_bytes(n, 0) + f.rest)
+    out, peak = _short(ctx, f, free, start, goal)
+    if peak is not None:
+        return out, peak
     out = _run(ctx, f.occ, f.walk, f.ms, start, goal, f.params, 0.0, owner, True, f.pause_at,
                keep_going, out, tag)
     _settle(ctx, owner)
@@ -214,11 +227,9 @@ def run_points(occ, walk, ms, params, owner, rounding, pts, pause_at: int = 0,
         ctx.points = _Points(f.search, ginv, call)  # no world's arrays: none outlives a world
     free.pop()
     out = call(f.bound, f.first, f.pausing, *rounding, *pts)
-    status, _, _, _, n, _ = out
-    if status != RUN_GROW and not (f.pausing and status == RUN_BUDGET):
-        if len(free) < 2:
-            free.append(ctx)  # _release
-        return out, (f.small if n <= _CAP else _fresh_bytes(n, 0) + f.rest)
+    peak = _done(ctx, f, free, out)
+    if peak is not None:
+        return out, peak
     # it needs room or paused: go on as run does (the cells are in the context's ends)
     out = _run(ctx, occ, walk, ms, None, None, params, 0.0, owner, True, pause_at, keep_going,
                out)
