@@ -17,9 +17,7 @@ import numpy as np
 
 from planner._numba import njit_cached
 from planner.lattice.quantize import candidate_norms3, closest_point3
-from planner.occupancy.keys import in_key_set, pack3
-
-_LIM = 1 << 20  # packable index range [-_LIM, _LIM) per axis (planner.keys, 3D)
+from planner.occupancy.keys import in_key_set, in_key_set3
 
 
 @njit_cached(nogil=True)
@@ -52,10 +50,7 @@ def score_poses(pts, wts, rots, trans, b, binv, cand, cand_z, counts, t, table, 
             x1 = r[1, 0] * a0 + r[1, 1] * a1 + r[1, 2] * a2 + ty
             x2 = r[2, 0] * a0 + r[2, 1] * a1 + r[2, 2] * a2 + tz
             w0, w1, w2 = closest_point3(x0, x1, x2, b, binv, cand, cand_z, counts, t, cn)
-            if (w0 < -_LIM or w0 >= _LIM or w1 < -_LIM or w1 >= _LIM
-                    or w2 < -_LIM or w2 >= _LIM):
-                continue  # beyond the packable range: no stored cell is there
-            if in_key_set(table, mask, pack3(w0, w1, w2)):
+            if in_key_set3(table, mask, w0, w1, w2):
                 s += wts[i]
         out[p] = s
 
@@ -126,10 +121,7 @@ def score_poses_cosets(pts, wts, rots, trans, inv_sides, sides, shifts, mb, mo, 
             w0 = mb[0, 0] * j0 + mb[0, 1] * j1 + mb[0, 2] * j2 + mo[bc, 0]
             w1 = mb[1, 0] * j0 + mb[1, 1] * j1 + mb[1, 2] * j2 + mo[bc, 1]
             w2 = mb[2, 0] * j0 + mb[2, 1] * j1 + mb[2, 2] * j2 + mo[bc, 2]
-            if (w0 < -_LIM or w0 >= _LIM or w1 < -_LIM or w1 >= _LIM
-                    or w2 < -_LIM or w2 >= _LIM):
-                continue  # beyond the packable range: no stored cell is there
-            if in_key_set(table, mask, pack3(w0, w1, w2)):
+            if in_key_set3(table, mask, w0, w1, w2):
                 s += wts[i]
         out[p] = s
 
@@ -150,10 +142,7 @@ def score_poses_cubic(pts, wts, rots, trans, inv_side, table, bits,
             w0 = np.int64(np.rint((r[0, 0] * a0 + r[0, 1] * a1 + r[0, 2] * a2 + tx) * inv_side))
             w1 = np.int64(np.rint((r[1, 0] * a0 + r[1, 1] * a1 + r[1, 2] * a2 + ty) * inv_side))
             w2 = np.int64(np.rint((r[2, 0] * a0 + r[2, 1] * a1 + r[2, 2] * a2 + tz) * inv_side))
-            if (w0 < -_LIM or w0 >= _LIM or w1 < -_LIM or w1 >= _LIM
-                    or w2 < -_LIM or w2 >= _LIM):
-                continue  # beyond the packable range: no stored cell is there
-            if in_key_set(table, mask, pack3(w0, w1, w2)):
+            if in_key_set3(table, mask, w0, w1, w2):
                 s += wts[i]
         out[p] = s
 

@@ -13,8 +13,8 @@ from planner._numba import njit_cached
 from planner.errors import MapError
 
 BITS = {2: 31, 3: 21}
-__all__ = ["BITS", "build_key_set", "check_range", "in_key_set", "index_limit", "mix64", "pack",
-           "pack3", "step3", "unique_keys", "unpack", "unpack3"]
+__all__ = ["BITS", "build_key_set", "check_range", "in_key_set", "in_key_set3", "index_limit",
+           "mix64", "pack", "pack3", "step3", "unique_keys", "unpack", "unpack3"]
 
 _EMPTY = -1  # empty slot of a key set
 
@@ -133,3 +133,12 @@ def in_key_set(table, mask, k):  # pragma: no cover - compiled
         if t == _EMPTY:
             return False
         p = (p + 1) & mask
+
+
+@njit_cached(_nrt=False)
+def in_key_set3(table, mask, i, j, k):  # pragma: no cover - compiled
+    """Is the 3D index ``(i, j, k)``'s key in the set? False past :func:`pack3`'s range
+    (``index_limit(3)`` each side of 0 per axis), where no stored cell is."""
+    if i < -_L3 or i >= _L3 or j < -_L3 or j >= _L3 or k < -_L3 or k >= _L3:
+        return False
+    return in_key_set(table, mask, pack3(i, j, k))
