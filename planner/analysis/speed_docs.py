@@ -111,6 +111,14 @@ def _and(words: list[str]) -> str:
     return words[0] if len(words) == 1 else ", ".join(words[:-1]) + " and " + words[-1]
 
 
+def _places(maps: list[str]) -> str:
+    """The floor table's maps as a sentence names them (the Warframe maps, geb079)."""
+    wf = [m for m in maps if m != "geb079"]
+    words = ([f"Warframe {_and(wf)}"] if wf else []) + (["geb079"] if "geb079" in maps
+                                                        else [])
+    return " and on ".join(words)
+
+
 def _ci(r: dict) -> str:
     """``median [95% CI low, high]`` as the harness prints it."""
     ci = (f"[95% CI {r['low']:.3g}, {r['high']:.3g}]" if r.get("low") is not None
@@ -157,7 +165,7 @@ def readme_block(run: _Run) -> str:
            f"each figure with its method in [benchmarks/README.md](benchmarks/README.md) "
            f"(\"Search speed\"): our A* runs at {_and([_f(s) for s in speeds])} of the "
            f"strongest such floor's expansions per second on cubic-26 over all queries on "
-           f"{_and(maps)} (goal 0.9; the median of the per-query ratios is "
+           f"{_places(maps)} (goal 0.9; the median of the per-query ratios is "
            + (f"lower, {_span(medians)}: short queries weigh our per-call cost"
               if lower else _span(medians))
            + f"), Lazy Theta* at {_span(aa, '.1f')}x A*'s time and `weighted-theta` at "
@@ -165,7 +173,8 @@ def readme_block(run: _Run) -> str:
            f"call on a prebuilt world costs {_f(fc['search_us'], '.1f')} us with a one-move "
            f"query (goal 5), a `plan()` call {_span(plans, '.1f')} us with array, tuple or "
            f"list endpoints (goal 15). Measured by `{run.data['command']}` "
-           f"({_machine(run)}); `{REGENERATE}` rewrites this item and the next from it.")
+           f"({_machine(run)}); `{REGENERATE}` rewrites this item and the next from that "
+           "run's record.")
     sight = [run.fig("sight", k, "vs_cubic") for k in OTHER]
     lazy = {m: [run.fig("plan", m, k, "lazy_vs_cubic") for k in OTHER] for m in PLAN_MAPS}
     smooth = {m: [run.fig("plan", m, k, "astar_smooth_vs_cubic") for k in ("bcc", "mcc")]
@@ -320,7 +329,7 @@ def bench_block(run: _Run) -> str:
              f"`{run.data['command']}`; {head[0]}; {head[1]}; "
              f"{run.data.get('end', '')}. Thread CPU time per call, the sides of each "
              "comparison taking turns query by query (batch by batch for the sight walk), "
-             "each its fastest of the command's `--repeat` rounds; \"median of the "
+             f"each its fastest of {run.fig('floor_checked', 'repeat')} rounds; \"median of the "
              "per-query ratios\" is the Hodges-Lehmann median of the paired ratios with its "
              "95% signed-rank interval, as the `ratio` lines print it (`harness.py`).")
     rows = [_floor_row(run), _lattice_row(run), _fixed_row(run), _anyangle_row(run),
