@@ -31,8 +31,8 @@ from planner.analysis.readme_results import block, splice
 from planner.errors import PlannerError
 from planner.fsutil import write_text_atomic
 
-__all__ = ["README_START", "README_END", "BENCH_START", "BENCH_END", "REGENERATE", "load",
-           "readme_block", "bench_block", "regenerate"]
+__all__ = ["README_START", "README_END", "BENCH_START", "BENCH_END", "REGENERATE",
+           "SpeedRecord", "load", "readme_block", "bench_block", "regenerate"]
 
 README_START = "<!-- speed-limits:start -->"
 README_END = "<!-- speed-limits:end -->"
@@ -43,8 +43,9 @@ OTHER = ("bcc", "fcc", "mcc", "hex")  # the non-cubic lattices, in the tables' o
 PLAN_MAPS = ("office", "geb079")
 
 
-class _Run:
-    """One ``--json`` record, read with errors that name the missing figure."""
+class SpeedRecord:
+    """One ``search_speed.py --json`` record (``data``: the harness's ``Record`` as a
+    dict; ``source``: where it was read), read with errors that name the missing figure."""
 
     def __init__(self, data: dict, source: str):
         self.data, self.source = data, source
@@ -75,7 +76,7 @@ class _Run:
         return True
 
 
-def load(path: str | Path) -> _Run:
+def load(path: str | Path) -> SpeedRecord:
     """Read a ``--json`` record; PlannerError (one line) when it is unreadable, a smoke run,
     or not a ``search_speed.py`` run."""
     path = Path(path)
@@ -94,7 +95,7 @@ def load(path: str | Path) -> _Run:
     if "search_speed.py" not in data["command"]:
         raise PlannerError(f"{path}: a run of `{data['command']}`, not of "
                            "benchmarks/search_speed.py")
-    return _Run(data, str(path))
+    return SpeedRecord(data, str(path))
 
 
 def _f(v: float | None, spec: str = ".2f") -> str:
@@ -131,19 +132,19 @@ def _bullet(text: str) -> str:
                          break_on_hyphens=False, break_long_words=False)
 
 
-def _floor_maps(run: _Run) -> list[str]:
+def _floor_maps(run: SpeedRecord) -> list[str]:
     return list(run.fig("floor"))
 
 
-def _anyangle_worlds(run: _Run) -> list[str]:
+def _anyangle_worlds(run: SpeedRecord) -> list[str]:
     return list(run.fig("anyangle"))
 
 
-def _weighted_worlds(run: _Run) -> list[str]:
+def _weighted_worlds(run: SpeedRecord) -> list[str]:
     return list(run.fig("weighted"))
 
 
-def _machine(run: _Run) -> str:
+def _machine(run: SpeedRecord) -> str:
     head = run.data["header"]
     commit = next((p.split("commit ", 1)[1].split(";")[0] for p in head[1:]
                    if "commit " in p), "unknown")
@@ -151,7 +152,7 @@ def _machine(run: _Run) -> str:
             f"{run.data.get('end', '').removeprefix('load average at end ')}")
 
 
-def readme_block(run: _Run) -> str:
+def readme_block(run: SpeedRecord) -> str:
     """The README's two "Known limits" speed items (Markdown bullets)."""
     maps = _floor_maps(run)
     speeds = [run.fig("floor", m, "speed") for m in maps]
@@ -204,7 +205,7 @@ def _row(what: str, figure: str) -> str:
     return f"| {what} | {figure} |"
 
 
-def _floor_row(run: _Run) -> str:
+def _floor_row(run: SpeedRecord) -> str:
     maps = _floor_maps(run)
     rows = {m: run.fig("floor", m) for m in maps}
     chk = run.fig("floor_checked")
@@ -232,7 +233,7 @@ def _floor_row(run: _Run) -> str:
     return _row(what, fig)
 
 
-def _lattice_row(run: _Run) -> str | None:
+def _lattice_row(run: SpeedRecord) -> str | None:
     if not run.has("lattice_expansion", "cubic"):
         return None
     lat = run.fig("lattice_expansion")
@@ -248,7 +249,7 @@ def _lattice_row(run: _Run) -> str | None:
     return _row(what, fig)
 
 
-def _fixed_row(run: _Run) -> str:
+def _fixed_row(run: SpeedRecord) -> str:
     fc = run.fig("fixed_cost")
     what = (f"fixed cost per call on a prebuilt world, one-move query (median per call over "
             f"batches of {fc['batch']}; {fc['calls']:,} calls)")
@@ -260,7 +261,7 @@ def _fixed_row(run: _Run) -> str:
     return _row(what, fig)
 
 
-def _anyangle_row(run: _Run) -> str:
+def _anyangle_row(run: SpeedRecord) -> str:
     ws, ww = _anyangle_worlds(run), _weighted_worlds(run)
     aa, wt = run.fig("anyangle"), run.fig("weighted")
     n = max(aa[w]["queries"] for w in ws)
@@ -284,7 +285,7 @@ def _anyangle_row(run: _Run) -> str:
     return _row(what, fig)
 
 
-def _sight_row(run: _Run) -> str:
+def _sight_row(run: SpeedRecord) -> str:
     sight = run.fig("sight")
     names = [k for k in sight if k != "cubic"]
     c = sight["cubic"]
@@ -299,7 +300,7 @@ def _sight_row(run: _Run) -> str:
     return _row(what, fig)
 
 
-def _plan_row(run: _Run, m: str) -> str:
+def _plan_row(run: SpeedRecord, m: str) -> str:
     p = run.fig("plan", m)
     names = [k for k in p if k != "cubic"]
     c = p["cubic"]
@@ -321,7 +322,7 @@ def _plan_row(run: _Run, m: str) -> str:
     return _row(what, fig)
 
 
-def bench_block(run: _Run) -> str:
+def bench_block(run: SpeedRecord) -> str:
     """benchmarks/README.md's generated "Search speed" section: provenance and table."""
     head = run.data["header"]
     intro = (f"Generated from `benchmarks/speed.json` by `{REGENERATE}` (from the "
