@@ -681,6 +681,12 @@ def print_rows(rows: list[Row]) -> None:
               f"{1e3 * r.floor.sum():9.2f} {1e3 * r.ours.sum():9.2f} {speed:6.2f} "
               f"{r.exp_ours.sum() / max(1, r.exp_floor.sum()):9.3f} {int(long.sum()):5d} "
               f"{ls:6.2f} {r.mismatches:6d}")
+        harness.record(f"floor/{r.name}", dict(
+            axes="".join("xyz"[i] for i in r.perm), queries=r.checked,
+            floor_ms=1e3 * r.floor.sum(), ours_ms=1e3 * r.ours.sum(), speed=speed,
+            exp_ratio=r.exp_ours.sum() / max(1, r.exp_floor.sum()),
+            long_queries=int(long.sum()), long_min_expansions=LONG, long_speed=ls,
+            mismatches=r.mismatches))
     print("speed: ours expansions/s / the floor's over all queries (sum/sum); long: queries "
           f"of >= {LONG:,} floor expansions and the speed over them; axes: the map's axes "
           "from slowest to fastest")

@@ -99,6 +99,9 @@ def fixed_cost(calls: int = 3000) -> dict:
 def line(calls: int = 3000) -> str:
     """One printed line of :func:`fixed_cost` (microseconds)."""
     r = fixed_cost(calls)
+    harness.record("fixed_cost", dict(calls=calls, batch=BATCH,
+                                      **{f"{k.replace(' ', '_')}_us": v * 1e6
+                                         for k, v in r.items()}))
     return (f"fixed cost per call on a prebuilt world (one-move query; thread CPU time, median "
             f"per call over batches of {BATCH}, {calls} calls): search() "
             f"{r['search'] * 1e6:.1f} us (goal <= 5; its engine call "

@@ -22,6 +22,12 @@
   again at the end, so a figure always comes with the conditions it was measured in.
 * Smoke: :func:`add_arguments` gives every script ``--smoke`` (tiny sizes, a few seconds)
   and ``--data`` (the shared data folder, default ``../shared/data`` from the checkout).
+* Figures as data: a script that takes ``--json PATH`` (:func:`add_arguments` with
+  ``json=True``) passes it to :func:`session`; while the session is open every
+  :func:`ratio_line` and :func:`single_ratio` keeps its figures, and :func:`record` keeps a
+  table's, in a :class:`Record`, written to PATH (temp file + rename) with the header, the
+  load at the end and the command line when the block ends without an error. The printed
+  output is the same with or without it.
 
 Reads only the package's public API.
 """
@@ -32,11 +38,12 @@ import argparse
 import contextlib
 import math
 import os
+import shlex
 import sys
 import time
 import tracemalloc
 from collections.abc import Callable, Iterator, Sequence
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -49,9 +56,10 @@ cpu_clock = time.thread_time  # this thread's CPU seconds
 
 
 def add_arguments(ap: argparse.ArgumentParser, *, repeat: int | None = 3,
-                  data: bool = False) -> argparse.ArgumentParser:
+                  data: bool = False, json: bool = False) -> argparse.ArgumentParser:
     """Add the options every benchmark shares: ``--smoke``, and ``--repeat`` (rounds per
-    item, best kept) and ``--data`` when asked for."""
+    item, best kept), ``--data`` and ``--json`` (the printed figures as data,
+    :class:`Record`) when asked for."""
     ap.add_argument("--smoke", action="store_true",
                     help="tiny sizes, a few seconds: checks the script runs (figures "
                          "are not meaningful)")
@@ -62,7 +70,79 @@ def add_arguments(ap: argparse.ArgumentParser, *, repeat: int | None = 3,
     if data:
         ap.add_argument("--data", type=Path, default=DATA,
                         help=f"the shared data folder (default {DATA})")
+    if json:
+        ap.add_argument("--json", type=Path, metavar="PATH",
+                        help="also write the printed figures to this JSON file (written "
+                             "when the run ends without an error)")
     return ap
+
+
+@dataclass
+class Record:
+    """The figures one run printed, as data (``--json``).
+
+    Attributes
+    ----------
+    title : str
+        The header's title.
+    command : str
+        The command line that ran, as typed from the checkout's root.
+    smoke : bool
+        A smoke run (tiny sizes: figures not meaningful).
+    header : list of str
+        The header's machine, load and version lines (without the leading ``# ``).
+    ratios : dict
+        ``what`` of each :func:`ratio_line` -> ``median``, ``low``, ``high`` (None without
+        an interval), ``overall``, ``n``, ``goal``, ``note``; of each :func:`single_ratio`
+        -> ``value``, ``goal``, ``note``.
+    figures : dict
+        What :func:`record` kept (nested by its ``/``-separated keys).
+    end : str
+        The closing line (load average at the end, wall seconds).
+    """
+
+    title: str
+    command: str
+    smoke: bool
+    header: list[str]
+    ratios: dict[str, dict] = field(default_factory=dict)
+    figures: dict[str, Any] = field(default_factory=dict)
+    end: str = ""
+
+
+_record: Record | None = None  # the open session's, when it was given a JSON path
+
+
+def _plain(value: Any) -> Any:
+    """``value`` with numpy scalars and arrays as Python numbers and lists (JSON), and
+    non-finite floats as None."""
+    if isinstance(value, dict):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, list | tuple | np.ndarray):
+        return [_plain(v) for v in value]
+    if isinstance(value, np.integer | int) and not isinstance(value, bool):
+        return int(value)
+    if isinstance(value, np.floating | float):
+        return float(value) if math.isfinite(value) else None
+    return value
+
+
+def record(key: str, value: Any) -> None:
+    """Keep ``value`` (a number, string or dict of them) under ``key`` (``"table/row"``:
+    nested dicts) in the open session's :class:`Record`; nothing without one."""
+    if _record is None:
+        return
+    *path, last = key.split("/")
+    node = _record.figures
+    for k in path:
+        node = node.setdefault(k, {})
+    node[last] = _plain(value)
+
+
+def command_line(script: str, argv: Sequence[str] | None) -> str:
+    """``python benchmarks/SCRIPT ARGS`` as typed (``argv`` None: this process's)."""
+    args = sys.argv[1:] if argv is None else list(argv)
+    return shlex.join(["python", f"benchmarks/{script}", *map(str, args)])
 
 
 def cpu(fn: Callable[[], Any]) -> float:
@@ -183,6 +263,11 @@ def ratio_line(what: str, x, y, *, goal: str = "", note: str = "",
     if r.n == 0:
         return f"ratio {what}: no pairs" + (f" ({note})" if note else "")
     total = r.total if overall is None else overall
+    if _record is not None:
+        ok = r.low > 0 and math.isfinite(r.high)
+        _record.ratios[what] = _plain(dict(median=r.median, low=r.low if ok else None,
+                                           high=r.high if ok else None, overall=total, n=r.n,
+                                           goal=goal, note=note))
     # too few pairs for a 95% signed-rank interval (n < 6): the paired statistic returns
     # [0, inf], which reads like a measured range
     ci = (f"[95% CI {r.low:.3g}, {r.high:.3g}]" if r.low > 0 and math.isfinite(r.high)
@@ -199,6 +284,8 @@ def single_ratio(what: str, x: float, y: float, *, goal: str = "", note: str = "
     """``ratio WHAT: R (x / y)`` for one pair of figures (each already a median or a best
     of N; say which in ``note``)."""
     line = f"ratio {what}: {x / y:.3g}" if y else f"ratio {what}: n/a (zero baseline)"
+    if _record is not None:
+        _record.ratios[what] = _plain(dict(value=x / y if y else None, goal=goal, note=note))
     if goal:
         line += f" (goal {goal})"
     if note:
@@ -278,21 +365,41 @@ def machine() -> list[str]:
 
 
 @contextlib.contextmanager
-def session(title: str, *, smoke: bool = False, stream=None) -> Iterator[None]:
+def session(title: str, *, smoke: bool = False, stream=None, json: Path | None = None,
+            command: str = "") -> Iterator[None]:
     """Print the header (title, machine, load, versions, commit) before the block and the
-    load average after it."""
+    load average after it.
+
+    With ``json``, the block's ratio lines and :func:`record` figures are kept and written
+    there (temp file + rename) as a :class:`Record` with the header and ``command`` (see
+    :func:`command_line`) once the block ends without an error; nothing is written
+    otherwise."""
+    global _record
+    from planner.fsutil import write_text_atomic
+
     out = stream if stream is not None else sys.stdout
     print(f"# {title}" + (" (smoke run: tiny sizes, figures not meaningful)" if smoke
                           else ""), file=out)
-    for line in machine():
+    header = machine()
+    for line in header:
         print(f"# {line}", file=out)
     print(file=out, flush=True)
+    rec = Record(title, command, smoke, header) if json is not None else None
+    outer, _record = _record, rec
     t0 = time.perf_counter()
+    ok = False
     try:
         yield
+        ok = True
     finally:
-        print(f"\n# load average at end {_load()}; {time.perf_counter() - t0:.1f} s wall",
-              file=out, flush=True)
+        _record = outer
+        end = f"load average at end {_load()}; {time.perf_counter() - t0:.1f} s wall"
+        print(f"\n# {end}", file=out, flush=True)
+        if rec is not None and ok:
+            import json as json_module
+
+            rec.end = end
+            write_text_atomic(json, json_module.dumps(asdict(rec), indent=1) + "\n")
 
 
 def skip(reason: str) -> int:

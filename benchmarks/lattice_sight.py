@@ -100,6 +100,9 @@ def sight_table(n: int, repeat: int) -> None:
         tot = 1e9 * best[name].sum() / cells.sum()
         base = 1e9 * best["cubic"].sum() / cases["cubic"][3].sum()
         print(f"{name:8s} {cells.sum() / n:10.1f} {tot:8.1f} {tot / base:8.2f}")
+        harness.record(f"sight/{name}", dict(lines=n, batch=batch,
+                                             cells_per_line=cells.sum() / n,
+                                             ns_per_cell=tot, vs_cubic=tot / base))
     for name in cases:
         if name != "cubic":
             print(harness.ratio_line(f"sight walk ns per cell {name}/cubic", ns[name],
@@ -209,6 +212,13 @@ def plan_table(map_name: str, n: int, repeat: int, data: Path) -> None:
               f"{np.median(a / ba):6.2f} {sum(info[i, 'astar'][1] for i in range(len(q))):9d} "
               f"{sm_s:6.4f} {sm_look:7d} {lz.sum():8.3f} {lz.sum() / bl.sum():8.2f} "
               f"{np.median(lz / bl):6.2f} {sum(info[i, 'lazy'][1] for i in range(len(q))):9d}")
+        harness.record(f"plan/{map_name}/{name}", dict(
+            cell_volume=cv, queries=len(q), found=found, astar_smooth_s=a.sum(),
+            astar_smooth_vs_cubic=a.sum() / ba.sum(), astar_smooth_median=np.median(a / ba),
+            astar_expansions=sum(info[i, "astar"][1] for i in range(len(q))),
+            smooth_s=sm_s, smooth_lookups=sm_look, lazy_s=lz.sum(),
+            lazy_vs_cubic=lz.sum() / bl.sum(), lazy_median=np.median(lz / bl),
+            lazy_expansions=sum(info[i, "lazy"][1] for i in range(len(q)))))
     for name in cases:
         if name == "cubic":
             continue
@@ -221,7 +231,7 @@ def plan_table(map_name: str, n: int, repeat: int, data: Path) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    harness.add_arguments(ap, repeat=3, data=True)
+    harness.add_arguments(ap, repeat=3, data=True, json=True)
     ap.add_argument("--segments", type=int, default=20_000, help="sight lines per lattice")
     ap.add_argument("--maps", nargs="*", default=["office", "geb079"],
                     help="maps of the planning table (bundled names or geb079)")
@@ -231,7 +241,8 @@ def main(argv: list[str] | None = None) -> int:
         a.segments, a.queries, a.repeat = 5000, 2, 1
         a.maps = [m for m in a.maps if m != "geb079"]
     with harness.session("non-cubic lattices at cubic's cost per check: sight walk and "
-                         "planning per lattice", smoke=a.smoke):
+                         "planning per lattice", smoke=a.smoke, json=a.json,
+                         command=harness.command_line("lattice_sight.py", argv)):
         if a.segments:
             sight_table(a.segments, a.repeat)
         for m in a.maps:

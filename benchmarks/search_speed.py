@@ -257,6 +257,9 @@ def lattice_table(geb: tuple[World, np.ndarray], repeat: int = 3,
         per[name] = np.where(ok, best[name] / np.maximum(exps, 1), math.inf)
         print(f"{name:8s} {int(ok.sum()):7d} {exp:11d} {ns[name]:8.0f} "
               f"{ns[name] / ns['cubic']:8.2f}")
+        harness.record(f"lattice_expansion/{name}", dict(
+            queries=int(ok.sum()), expansions=exp, ns_per_expansion=ns[name],
+            vs_cubic=ns[name] / ns["cubic"]))
     for name in cases:
         if name != "cubic":
             print(harness.ratio_line(f"A* ns per expansion {name}/cubic, geb079", per[name],
@@ -322,6 +325,11 @@ def anyangle_table(cases: list, n: int, save: Path | None = None,
             rel[~np.isfinite(old) & ~np.isfinite(new)] = 0.0
             row += f" {rel.max():9.2e} {int((rel > 1e-3).sum()):5d}"
         print(row)
+        harness.record(f"anyangle/{name}", dict(
+            queries=len(qs), astar_median_ms=1e3 * np.median(ta),
+            lazy_median_ms=1e3 * np.median(tl), median_ratio=np.median(tl / ta),
+            expansion_ratio=el.sum() / ea.sum(), median_expansion_ratio=np.median(el / ea),
+            lazy_length_m=sum(ll)))
         ratios.append(harness.ratio_line(f"Lazy Theta*/A* time, {name}", tl, ta,
                                          goal="<= 2", note="per query"))
     for line in ratios:
@@ -358,6 +366,11 @@ def weighted_table(cases: list, n: int, repeat: int = 3) -> None:
         print(f"{name:8s} {len(ln):7d} {np.median(tl / ta):7.2f} {np.median(tw / ta):6.2f} "
               f"{np.median(ew):8.2f} {ln.max():8.4f} {np.median(ln):8.4f} "
               f"{np.mean(ln <= 1.005):6.0%}")
+        harness.record(f"weighted/{name}", dict(
+            queries=len(ln), lazy_over_astar=np.median(tl / ta),
+            weighted_over_astar=np.median(tw / ta), weighted_expansions_over_astar=np.median(ew),
+            length_max=ln.max(), length_median=np.median(ln),
+            within_half_percent=int((ln <= 1.005).sum())))
         ratios += [harness.ratio_line(f"weighted-theta/A* time, {name}", tw, ta, goal="<= 2",
                                       note="per query"),
                    harness.ratio_line(f"weighted-theta/Lazy Theta* time, {name}", tw, tl,
@@ -391,7 +404,7 @@ def cold_warm() -> tuple[float, float]:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    harness.add_arguments(ap, repeat=3, data=True)
+    harness.add_arguments(ap, repeat=3, data=True, json=True)
     ap.add_argument("--all-warframe", action="store_true",
                     help="check all 10,000 queries of each Warframe map")
     ap.add_argument("--maps", nargs="+", choices=MAPS, default=list(MAPS),
@@ -427,7 +440,8 @@ def main(argv: list[str] | None = None) -> int:
     if not a.geb079:
         plan_maps = [m for m in plan_maps if m != "geb079"]
     with harness.session("search engine speed: ours vs the C++ floor, per lattice, "
-                         "any-angle vs A*", smoke=a.smoke):
+                         "any-angle vs A*", smoke=a.smoke, json=a.json,
+                         command=harness.command_line("search_speed.py", argv)):
         return _run(a, segments, plan_maps, plan_queries)
 
 
@@ -440,6 +454,7 @@ def _run(a: argparse.Namespace, segments: int, plan_maps: list[str], plan_querie
     cold, warm = cold_warm()
     print(f"first call in a fresh process (import + cached-kernel load + tiny search): "
           f"{cold:.2f} s; second call {warm * 1e3:.2f} ms")
+    harness.record("first_call", dict(cold_s=cold, warm_ms=warm * 1e3))
     print(fixed_cost.line(300 if a.smoke else 3000))
 
     print("\nA*, cubic-26, safe rule (= MovingAI no corner cutting), ours vs the strongest "
@@ -458,6 +473,10 @@ def _run(a: argparse.Namespace, segments: int, plan_maps: list[str], plan_querie
         if rows:
             cpp_anchor.print_rows(rows)
             total_bad = sum(r.mismatches for r in rows)
+            harness.record("floor_checked", dict(
+                mismatches=total_bad, all_warframe=a.all_warframe,
+                queries_per_warframe_map=10_000 if a.all_warframe else a.sample,
+                geb079_queries=a.geb_queries if a.geb079 else 0, repeat=a.repeat))
             print(f"optimal costs: {total_bad} mismatches (ours vs the floor vs the listed "
                   "Warframe optimum)"
                   + (f" (all {10_000 * len(a.maps):,} Warframe queries)" if a.all_warframe
@@ -495,6 +514,8 @@ def _run(a: argparse.Namespace, segments: int, plan_maps: list[str], plan_querie
         r = numba_batch(world, qs)
         print(f"\n{a.da1} DA1 queries, one by one (search): {r['wall']:.2f} s wall "
               f"({r['ksec']:.2f} s in the kernel), {len(r['bad'])} mismatches")
+        harness.record("da1/one_by_one", dict(queries=a.da1, wall_s=r["wall"],
+                                              kernel_s=r["ksec"], mismatches=len(r["bad"])))
         for workers in sorted({1, a.workers}):
             t0 = time.perf_counter()
             res = S.search_many(world, qs[:, :3].astype(np.int64), qs[:, 3:6].astype(np.int64),
@@ -504,6 +525,8 @@ def _run(a: argparse.Namespace, segments: int, plan_maps: list[str], plan_querie
                       for x, q in zip(res, qs, strict=True))
             print(f"{a.da1} DA1 queries, search_many with {workers} thread(s): {wall:.2f} s "
                   f"wall, {bad} mismatches")
+            harness.record(f"da1/search_many_{workers}", dict(queries=a.da1, wall_s=wall,
+                                                              mismatches=bad))
         total_bad += len(r["bad"])
     if not a.compare:
         return 1 if total_bad else 0
@@ -527,6 +550,8 @@ def _run(a: argparse.Namespace, segments: int, plan_maps: list[str], plan_querie
               f"{r['nx'] / r['numba']:9.0f} {r['py'] / r['numba']:9.0f}"
               + (f"  ({r['skipped']} skipped: crop over the networkx cap)"
                  if r["skipped"] else ""))
+        harness.record(f"cropped/{name}", dict(queries=done, numba_s=r["numba"], nx_s=r["nx"],
+                                               python_s=r["py"], skipped=r["skipped"]))
         ratios += [harness.single_ratio(f"networkx/numba time, {name} cropped", r["nx"],
                                         r["numba"], note=f"sums over {done} queries"),
                    harness.single_ratio(f"Python/numba time, {name} cropped", r["py"],

@@ -13,6 +13,7 @@ module or name).
 from __future__ import annotations
 
 import ast
+import json
 import os
 import re
 import shutil
@@ -145,3 +146,75 @@ def test_floor_agrees_with_our_search_on_a_small_map(bench_modules):
     assert np.allclose(res[:, 0], cpp_anchor.run(m.free.transpose(2, 1, 0),
                                                  m.queries[:, [2, 1, 0, 5, 4, 3]])[:, 0])
     assert (res[:, 1] > 0).all() and (res[:, 2] >= 0).all()
+
+
+def _figures_block(h):
+    print(h.ratio_line("ours/floor", [2.0, 4.0, 6.0, 8.0, 2.0, 4.0],
+                       [1.0, 2.0, 3.0, 2.0, 1.0, 2.0], goal=">= 0.9"))
+    print(h.single_ratio("a/b", 3.0, 2.0, note="medians"))
+    h.record("floor/Simple", {"speed": np.float64(0.5), "long": float("nan"),
+                              "n": np.int64(3)})
+
+
+def _body(out: str) -> list[str]:
+    """The printed lines but the header's and the end's (load and time vary)."""
+    return [ln for ln in out.splitlines() if not ln.startswith("# ")]
+
+
+def test_json_keeps_what_the_session_printed_and_prints_the_same(bench_modules, tmp_path,
+                                                                  capsys):
+    h = bench_modules
+    with h.session("figures"):
+        _figures_block(h)
+    plain = capsys.readouterr().out
+    path = tmp_path / "run.json"
+    cmd = h.command_line("x.py", ["--json", "my run.json"])
+    assert cmd == "python benchmarks/x.py --json 'my run.json'"
+    with h.session("figures", json=path, command=cmd):
+        _figures_block(h)
+    assert _body(capsys.readouterr().out) == _body(plain)
+    rec = json.loads(path.read_text())
+    assert rec["command"] == cmd and rec["title"] == "figures" and rec["smoke"] is False
+    assert rec["header"][0].startswith("machine: ") and " commit " in rec["header"][1]
+    assert rec["end"].startswith("load average at end ")
+    r = rec["ratios"]["ours/floor"]
+    assert r["median"] == pytest.approx(2) and r["low"] == pytest.approx(2)
+    assert r["n"] == 6 and r["goal"] == ">= 0.9" and r["high"] >= 2
+    assert r["overall"] == pytest.approx(26 / 11)
+    assert rec["ratios"]["a/b"] == {"value": 1.5, "goal": "", "note": "medians"}
+    assert rec["figures"] == {"floor": {"Simple": {"speed": 0.5, "long": None, "n": 3}}}
+    assert not list(tmp_path.glob(".*"))  # no temp file left
+
+
+def test_json_is_not_written_when_the_run_fails_and_nothing_is_kept_outside(
+        bench_modules, tmp_path, capsys):
+    h = bench_modules
+    path = tmp_path / "run.json"
+    with pytest.raises(RuntimeError), h.session("figures", json=path):
+        _figures_block(h)
+        raise RuntimeError("the run broke")
+    assert not path.exists() and h._record is None
+    h.record("floor/Simple", {"speed": 1.0})  # outside a session: a no-op
+    assert h._record is None
+
+
+@pytest.mark.slow
+def test_search_speed_json_on_a_smoke_run(tmp_path):
+    from planner.analysis.speed_docs import load
+    from planner.errors import PlannerError
+
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    path = tmp_path / "speed.json"
+    out = subprocess.run([sys.executable, str(BENCH / "search_speed.py"), "--smoke",
+                          "--json", str(path)], cwd=ROOT, env=env, capture_output=True,
+                         text=True, timeout=900)
+    assert out.returncode == 0, out.stderr[-3000:]
+    rec = json.loads(path.read_text())
+    assert rec["smoke"] and rec["command"].startswith("python benchmarks/search_speed.py")
+    figs = rec["figures"]
+    assert {"fixed_cost", "sight", "plan", "anyangle"} <= set(figs)
+    assert figs["sight"]["cubic"]["vs_cubic"] == 1.0 and "office" in figs["plan"]
+    printed = RATIO.findall(out.stdout)
+    assert len(rec["ratios"]) == len(printed)  # one entry per ratio line printed
+    with pytest.raises(PlannerError, match="smoke run"):
+        load(path)
