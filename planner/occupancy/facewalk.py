@@ -100,9 +100,9 @@ _KEY_SAFE = 0.1 * _ON
 
 @njit_cached(_nrt=False)
 def _look(occ, si, o_rec, nrec, lookups, c0, c1, c2):  # pragma: no cover - compiled
-    """Look cell (c0, c1, c2) up in ``occ`` (the walk's lookups but a dense grid's bit tests),
-    recording it as lookup number ``lookups`` while the scratch records (tests:
-    :func:`recorded`). True iff it is free. One home for the walk's four such lookups."""
+    """Look cell (c0, c1, c2) up in ``occ``, recording it as lookup number ``lookups`` while
+    the scratch records (tests: :func:`recorded`); True iff it is free. Every lookup of the
+    walk by cell indices (off a dense grid's flat-index bit tests) goes through it."""
     mode, grid, lo, dims, table, tmask, gg, blo, bhi = occ
     if lookups <= nrec:
         si[o_rec + 3 * lookups - 3] = c0
