@@ -91,7 +91,7 @@ def search_loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, 
     pages, btab, bkeys, dsl = slots.pages, slots.btab, slots.bkeys, slots.dense
     uoff, moff, reach, mkey = dt.uoff, dt.moff, dt.reach, dt.mkey
     roff, rshift, rmask, ubit, need = dt.roff, dt.rshift, dt.rmask, dt.ubit, dt.need2
-    hmd, fval, cand = dt.hmd, dt.fval, dt.cand
+    hhalf, habs = dt.hhalf, dt.habs
     gridded = fixed or mode == 0
     dense = fixed or (dsl.shape[0] > 1 and mode == 0)  # the dense slot box is the grid's box
     marks = astar_v  # closed nodes marked in the dense node array
@@ -127,7 +127,7 @@ def search_loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, 
     nu = ust.shape[0]
     nm = moves.shape[0]
     nr = roff.shape[0]
-    nfac = hmat.shape[0]
+    nhalf = hhalf.shape[0]
     last = np.uint64(grid.shape[0] - 1)
     bits = fixed or nu <= MAX_BITS  # one mask test per move instead of its cell list
     windows = bits and dt.rows
@@ -254,7 +254,6 @@ def search_loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, 
             break
         gs = ng[su]
         gp = ng[ps]
-        ncand = -1  # the gauge's facets that can hold a new node's maximum: not found yet
         for m in range(nm):
             # Safe rule first: with the bitmask it is one test, and an allowed move's target
             # is free, hence inside the dense box.
@@ -338,30 +337,14 @@ def search_loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, 
             if lazy_v:  # its move set's heuristic is the straight line (kernel.search_run)
                 hv = hw * length(gm, x0, x1, x2)
             elif gauge:
-                # A move changes each facet's value by at most hmd, so a facet below the
-                # expanded node's best by more than 2 hmd never wins at a neighbour (found
-                # once per expansion, at its first new node; the value of a new node is
-                # still the full formula, over fewer facets).
-                if ncand < 0:
-                    e0, e1, e2 = gl0 - u0, gl1 - u1, gl2 - u2
-                    best = -np.inf
-                    for k in range(nfac):
-                        x = hmat[k, 0] * e0 + hmat[k, 1] * e1 + hmat[k, 2] * e2
-                        fval[k] = x
-                        best = max(best, x)
-                    # the margin's last term outweighs any rounding of these sums
-                    thr = best - 2.0 * hmd - 1e-9 * (1.0 + abs(best))
-                    ncand = 0
-                    for k in range(nfac):
-                        if fval[k] >= thr:
-                            cand[ncand] = k
-                            ncand += 1
+                # max |facet . x| over one facet of each antipodal pair (DenseTables.hhalf):
+                # the gauge to the bit over half the facets, in one pass per new node
                 hv = 0.0
-                for i in range(ncand):
-                    k = cand[i]
-                    x = hmat[k, 0] * x0 + hmat[k, 1] * x1 + hmat[k, 2] * x2
-                    if x > hv:
-                        hv = x
+                for k in range(nhalf):
+                    x = hhalf[k, 0] * x0 + hhalf[k, 1] * x1 + hhalf[k, 2] * x2
+                    if habs:
+                        x = abs(x)
+                    hv = max(hv, x)
             else:
                 hv = node_estimate(oct_s, hkind, hmat, hw, gm, x0, x1, x2)
             nh[tn] = hv
