@@ -140,6 +140,7 @@ class DenseTables(NamedTuple):
     mkey: np.ndarray  # (M,) int64 each move as an offset of the packed key
     hhalf: np.ndarray  # (H, 3) float64 the gauge's facets, one of each antipodal pair
     habs: bool  # hhalf halves the facets: the gauge is max |hhalf . e|, else max(0, .)
+    todo: np.ndarray  # (M,) int64 scratch: the moves an expansion goes on to (search loop)
 
 
 @njit_cached
@@ -182,4 +183,4 @@ def dense_tables(ms, dims):  # pragma: no cover - compiled
         mkey[m] = step3(moves[m, 0], moves[m, 1], moves[m, 2])
     hhalf, habs = half_facets(hmat)
     return DenseTables(uoff, moff, reach, roff, rshift, rmask, ubit, need2, all_u, rows, mkey,
-                       hhalf, habs)
+                       hhalf, habs, np.empty(nm, np.int64))

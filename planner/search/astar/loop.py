@@ -91,7 +91,7 @@ def search_loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, 
     pages, btab, bkeys, dsl = slots.pages, slots.btab, slots.bkeys, slots.dense
     uoff, moff, reach, mkey = dt.uoff, dt.moff, dt.reach, dt.mkey
     roff, rshift, rmask, ubit, need = dt.roff, dt.rshift, dt.rmask, dt.ubit, dt.need2
-    hhalf, habs = dt.hhalf, dt.habs
+    hhalf, habs, todo = dt.hhalf, dt.habs, dt.todo
     gridded = fixed or mode == 0
     dense = fixed or (dsl.shape[0] > 1 and mode == 0)  # the dense slot box is the grid's box
     marks = astar_v  # closed nodes marked in the dense node array
@@ -165,6 +165,7 @@ def search_loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, 
         ks = nkey[su]
         u0, u1, u2 = unpack3(ks)
         blocked = np.int64(0)
+        inner = False
         if gridded:
             a0, b0, c0 = u0 - lo0, u1 - lo1, u2 - lo2
             base = (a0 * d1 + b0) * d2 + c0
@@ -254,7 +255,19 @@ def search_loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, 
             break
         gs = ng[su]
         gp = ng[ps]
-        for m in range(nm):
+        # Lattice A* away from the box faces: the moves that are allowed and reach a node
+        # not closed, listed without a branch per move (every target is inside the box; a
+        # branch on open or closed is a coin toss, mispredicted about every other move),
+        # so that the loop below runs only over them (its tests then always pass).
+        nt = nm
+        listed = astar_v and inner
+        if listed:
+            nt = 0
+            for m in range(nm):
+                todo[nt] = m
+                nt += ((need[m] & blocked) == 0) & (dsl[np.uint64(base + moff[m])] >= 0)
+        for i in range(nt):
+            m = todo[i] if listed else i
             # Safe rule first: with the bitmask it is one test, and an allowed move's target
             # is free, hence inside the dense box.
             if not move_open(bits, need, blocked, ufree, ms.ptr, ms.idx, m):
