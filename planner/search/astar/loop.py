@@ -256,29 +256,38 @@ def search_loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, 
         gs = ng[su]
         gp = ng[ps]
         # Lattice A* away from the box faces: the moves that are allowed and reach a node
-        # not closed, listed without a branch per move (every target is inside the box; a
-        # branch on open or closed is a coin toss, mispredicted about every other move),
-        # so that the loop below runs only over them (its tests then always pass).
+        # not closed, listed with the target's slot map entry and without a branch per
+        # move (every target is inside the box; a branch on open or closed is a coin toss,
+        # mispredicted about every other move), so that the loop below runs only over
+        # them and tests nothing more before the target's g. (A move set of the dense
+        # variant has at most MAX_BITS moves: the index fits the entry's low byte.)
         nt = nm
         listed = astar_v and inner
         if listed:
             nt = 0
             for m in range(nm):
-                todo[nt] = m
-                nt += ((need[m] & blocked) == 0) & (dsl[np.uint64(base + moff[m])] >= 0)
+                v = np.int64(dsl[np.uint64(base + moff[m])])
+                todo[nt] = (v << 8) | m
+                nt += ((need[m] & blocked) == 0) & (v >= 0)
         for i in range(nt):
-            m = todo[i] if listed else i
-            # Safe rule first: with the bitmask it is one test, and an allowed move's target
-            # is free, hence inside the dense box.
-            if not move_open(bits, need, blocked, ufree, ms.ptr, ms.idx, m):
+            if listed:
+                e = todo[i]
+                m = e & 255
+                loc = np.uint64(base + moff[m])
+                t = (e >> 8) - 1
+            elif not move_open(bits, need, blocked, ufree, ms.ptr, ms.idx, i):
+                # Safe rule first: with the bitmask it is one test, and an allowed move's
+                # target is free, hence inside the dense box.
                 continue
-            if dense:
+            elif dense:
+                m = i
                 loc = np.uint64(base + moff[m])
                 v = dsl[loc]  # slot + 1, 0 none (-(slot + 1) closed, with marks)
                 if marks and v < 0:
                     continue  # closed: a consistent heuristic never improves it
                 t = np.int64(v) - 1
             else:
+                m = i
                 v0 = u0 + moves[m, 0]
                 v1 = u1 + moves[m, 1]
                 v2 = u2 + moves[m, 2]
