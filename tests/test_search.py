@@ -274,6 +274,29 @@ def test_compiled_and_numpy_heuristics_agree(name):
     assert np.all(H.estimate_np(move_set(lat, "full", False, H.H_ZERO), g, d) == 0.0)
 
 
+
+@pytest.mark.parametrize("name", NAMED_LATTICES)
+@pytest.mark.parametrize("nb", ["face", "full", "full+1"])
+def test_half_facets_give_the_gauge_to_the_bit(name, nb):
+    """The search loop's gauge, max |f . e| over one facet of each antipodal pair
+    (``DenseTables.hhalf``), is the full facet maximum bit for bit, so A* orders its
+    nodes exactly as with every facet."""
+    from planner.search import heuristic as H
+    from planner.search.astar.dense import half_facets
+    from planner.search.moves import move_set
+
+    hmat = move_set(Lattice.named(name, 2.0), nb, False, H.H_GAUGE).hmat
+    half, habs = half_facets(hmat)
+    assert habs and 2 * len(half) == len(hmat)  # lattice move sets are symmetric
+    d = np.random.default_rng(7).integers(-60, 60, (500, 3)).astype(np.float64)
+    got = [max(abs(f[0] * e[0] + f[1] * e[1] + f[2] * e[2]) for f in half) for e in d]
+    want = [H.gauge(hmat, *e) for e in d]
+    assert np.array_equal(got, want)
+    lone = np.array([[1.0, 2.0, 3.0], [-1.0, -2.0, -3.0], [0.0, 0.0, 1.0]])
+    back, habs = half_facets(lone)  # a facet without its negation: every facet is kept
+    assert not habs and np.array_equal(back, lone)
+
+
 # -- search ------------------------------------------------------------------------------
 def _random_world(name, seed, n=5, frac=0.25):
     rng = np.random.default_rng(seed)

@@ -91,7 +91,7 @@ def search_loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, 
     pages, btab, bkeys, dsl = slots.pages, slots.btab, slots.bkeys, slots.dense
     uoff, moff, reach, mkey = dt.uoff, dt.moff, dt.reach, dt.mkey
     roff, rshift, rmask, ubit, need = dt.roff, dt.rshift, dt.rmask, dt.ubit, dt.need2
-    hmd, fval, cand = dt.hmd, dt.fval, dt.cand
+    hhalf, habs, todo = dt.hhalf, dt.habs, dt.todo
     gridded = fixed or mode == 0
     dense = fixed or (dsl.shape[0] > 1 and mode == 0)  # the dense slot box is the grid's box
     marks = astar_v  # closed nodes marked in the dense node array
@@ -127,7 +127,7 @@ def search_loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, 
     nu = ust.shape[0]
     nm = moves.shape[0]
     nr = roff.shape[0]
-    nfac = hmat.shape[0]
+    nhalf = hhalf.shape[0]
     last = np.uint64(grid.shape[0] - 1)
     bits = fixed or nu <= MAX_BITS  # one mask test per move instead of its cell list
     windows = bits and dt.rows
@@ -165,6 +165,7 @@ def search_loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, 
         ks = nkey[su]
         u0, u1, u2 = unpack3(ks)
         blocked = np.int64(0)
+        inner = False
         if gridded:
             a0, b0, c0 = u0 - lo0, u1 - lo1, u2 - lo2
             base = (a0 * d1 + b0) * d2 + c0
@@ -254,19 +255,39 @@ def search_loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, 
             break
         gs = ng[su]
         gp = ng[ps]
-        ncand = -1  # the gauge's facets that can hold a new node's maximum: not found yet
-        for m in range(nm):
-            # Safe rule first: with the bitmask it is one test, and an allowed move's target
-            # is free, hence inside the dense box.
-            if not move_open(bits, need, blocked, ufree, ms.ptr, ms.idx, m):
+        # Lattice A* away from the box faces: the moves that are allowed and reach a node
+        # not closed, listed with the target's slot map entry and without a branch per
+        # move (every target is inside the box; a branch on open or closed is a coin toss,
+        # mispredicted about every other move), so that the loop below runs only over
+        # them and tests nothing more before the target's g. (A move set of the dense
+        # variant has at most MAX_BITS moves: the index fits the entry's low byte.)
+        nt = nm
+        listed = astar_v and inner
+        if listed:
+            nt = 0
+            for m in range(nm):
+                v = np.int64(dsl[np.uint64(base + moff[m])])
+                todo[nt] = (v << 8) | m
+                nt += ((need[m] & blocked) == 0) & (v >= 0)
+        for i in range(nt):
+            if listed:
+                e = todo[i]
+                m = e & 255
+                loc = np.uint64(base + moff[m])
+                t = (e >> 8) - 1
+            elif not move_open(bits, need, blocked, ufree, ms.ptr, ms.idx, i):
+                # Safe rule first: with the bitmask it is one test, and an allowed move's
+                # target is free, hence inside the dense box.
                 continue
-            if dense:
+            elif dense:
+                m = i
                 loc = np.uint64(base + moff[m])
                 v = dsl[loc]  # slot + 1, 0 none (-(slot + 1) closed, with marks)
                 if marks and v < 0:
                     continue  # closed: a consistent heuristic never improves it
                 t = np.int64(v) - 1
             else:
+                m = i
                 v0 = u0 + moves[m, 0]
                 v1 = u1 + moves[m, 1]
                 v2 = u2 + moves[m, 2]
@@ -338,30 +359,14 @@ def search_loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, 
             if lazy_v:  # its move set's heuristic is the straight line (kernel.search_run)
                 hv = hw * length(gm, x0, x1, x2)
             elif gauge:
-                # A move changes each facet's value by at most hmd, so a facet below the
-                # expanded node's best by more than 2 hmd never wins at a neighbour (found
-                # once per expansion, at its first new node; the value of a new node is
-                # still the full formula, over fewer facets).
-                if ncand < 0:
-                    e0, e1, e2 = gl0 - u0, gl1 - u1, gl2 - u2
-                    best = -np.inf
-                    for k in range(nfac):
-                        x = hmat[k, 0] * e0 + hmat[k, 1] * e1 + hmat[k, 2] * e2
-                        fval[k] = x
-                        best = max(best, x)
-                    # the margin's last term outweighs any rounding of these sums
-                    thr = best - 2.0 * hmd - 1e-9 * (1.0 + abs(best))
-                    ncand = 0
-                    for k in range(nfac):
-                        if fval[k] >= thr:
-                            cand[ncand] = k
-                            ncand += 1
+                # max |facet . x| over one facet of each antipodal pair (DenseTables.hhalf):
+                # the gauge to the bit over half the facets, in one pass per new node
                 hv = 0.0
-                for i in range(ncand):
-                    k = cand[i]
-                    x = hmat[k, 0] * x0 + hmat[k, 1] * x1 + hmat[k, 2] * x2
-                    if x > hv:
-                        hv = x
+                for k in range(nhalf):
+                    x = hhalf[k, 0] * x0 + hhalf[k, 1] * x1 + hhalf[k, 2] * x2
+                    if habs:
+                        x = abs(x)
+                    hv = max(hv, x)
             else:
                 hv = node_estimate(oct_s, hkind, hmat, hw, gm, x0, x1, x2)
             nh[tn] = hv
