@@ -39,9 +39,10 @@ from typing import NamedTuple
 
 import numpy as np
 
-from planner._numba import njit_cached
+from planner._numba import njit_cached, prefetch
 
-_U0, _U1, _U2, _U4 = np.uint64(0), np.uint64(1), np.uint64(2), np.uint64(4)
+_U0, _U1, _U2, _U4, _U8 = (np.uint64(0), np.uint64(1), np.uint64(2), np.uint64(4),
+                         np.uint64(8))
 
 __all__ = ["Heap", "fkey", "new_heap", "grown_heap", "push", "pop", "decrease_key",
            "change_key", "remove", "sift_up", "sift_down", "SIDE", "side_index", "pq_push",
@@ -129,6 +130,15 @@ def sift_down(h, pos, i0, n0):  # pragma: no cover - compiled
         c0 = (i << _U2) + _U1
         if c0 >= n:
             break
+        # the grandchildren of all four children are the 16 entries from 4 c0 + 1: two
+        # cache lines of keys and two of tie-breakers (see _lined), fetched while this
+        # level compares, so that a big heap waits on one miss per level, not two
+        g0 = (c0 << _U2) + _U1
+        if g0 < n:
+            prefetch(hf, g0)
+            prefetch(hf, g0 + _U8)
+            prefetch(hg, g0)
+            prefetch(hg, g0 + _U8)
         # the best child by selects, not branches (non-short-circuit & and |): which
         # child wins is a coin toss, and a mispredicted branch costs more than the loads
         # (one cache line of tie-breakers, see _lined)
