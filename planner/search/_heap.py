@@ -71,6 +71,9 @@ def grown_heap(h: Heap, cap: int, keep: int) -> Heap:
 
 
 _LINE = 64  # bytes per cache line
+#: entries above which a sift-down picks the best child by branches instead of selects
+#: (24 bytes an entry: past the first-level caches, about where the loads dominate)
+_BIG = np.uint64(1 << 14)
 
 
 def _lined(cap: int, dtype) -> np.ndarray:
@@ -144,12 +147,21 @@ def sift_down(h, pos, i0, n0):  # pragma: no cover - compiled
         # (one cache line of tie-breakers, see _lined)
         c, cf, cg = c0, hf[c0], hg[c0]
         end = min(c0 + _U4, n)
-        for d in range(c0 + _U1, end):
-            df, dg = hf[d], hg[d]
-            b = (df < cf) | ((df == cf) & (dg > cg))
-            c = d if b else c
-            cf = df if b else cf
-            cg = dg if b else cg
+        if n > _BIG:
+            # a big heap (a long search): branches, so that the next level's loads need
+            # not wait for the last select; the keys come from memory there, and a
+            # mispredicted branch costs less than that wait
+            for d in range(c0 + _U1, end):
+                df = hf[d]
+                if df < cf or (df == cf and hg[d] > cg):
+                    c, cf, cg = d, df, hg[d]
+        else:
+            for d in range(c0 + _U1, end):
+                df, dg = hf[d], hg[d]
+                b = (df < cf) | ((df == cf) & (dg > cg))
+                c = d if b else c
+                cf = df if b else cf
+                cg = dg if b else cg
         if not _before(cf, cg, xf, xg):
             break
         _put(h, pos, i, slot[c], cf, cg)
