@@ -218,3 +218,20 @@ def test_children_of_an_entry_share_a_cache_line_and_growing_keeps_entries(cap):
     g = H.grown_heap(h, 2 * cap, n)
     assert len(g.f) == 2 * cap and all((a.ctypes.data + a.itemsize) % 64 == 0 for a in g)
     assert _drain(g, pos, n) == _drain(h, pos.copy(), n)
+
+
+def test_a_heap_past_a_long_search_size_pops_in_key_order():
+    """A long search's heap (tens of thousands of entries: the sift-down's big-heap path)
+    pops in (f, larger g) order and keeps every position exact."""
+    cap = 40_000
+    h, pos = _heap(cap)
+    rng = np.random.default_rng(7)
+    fs = rng.integers(0, 500, cap).astype(float)
+    gs = rng.integers(0, 6, cap).astype(float)
+    n = 0
+    for slot in range(cap):
+        n = H.push(h, pos, n, slot, fs[slot], gs[slot])
+    assert all(pos[h.slot[i]] == i for i in range(n))
+    order = _drain(h, pos, n)
+    keys = [(fs[s], -gs[s]) for s in order]
+    assert sorted(order) == list(range(cap)) and keys == sorted(keys)

@@ -96,3 +96,32 @@ def test_llvmlite_callbacks_are_named_llvmlite():
 
     assert "llvmlite" in llvmlite.binding.__file__, _gone("llvmlite.binding's module path",
                                                           "planner._interrupt")
+
+
+def test_prefetch_lowers_to_llvm_prefetch():
+    """planner._numba.prefetch declares LLVM's ``llvm.prefetch.p0`` through
+    numba.core.cgutils.get_or_insert_function (the heap's sift-down uses it); a prefetch
+    changes no result, and the compiled code holds the prefetch instruction."""
+    from numba.core import cgutils
+
+    from planner._numba import prefetch
+
+    assert hasattr(cgutils, "get_or_insert_function"), _gone(
+        "numba.core.cgutils.get_or_insert_function", "planner._numba.prefetch")
+
+    @njit(_nrt=False)
+    def total(a):
+        s = 0.0
+        for i in range(a.shape[0]):
+            prefetch(a, i + 8)  # past the end near the last items: a hint, never a fault
+            s += a[i]
+        return s
+
+    a = np.arange(100.0)
+    try:
+        assert total(a) == a.sum()
+    except Exception as exc:  # a lowering error names numba's internals, not ours
+        pytest.fail(_gone(f"llvm.prefetch lowering ({type(exc).__name__}: {exc})",
+                          "planner._numba.prefetch"))
+    llvm = total.inspect_llvm(total.signatures[0])
+    assert "llvm.prefetch" in llvm, _gone("the llvm.prefetch call", "planner._numba.prefetch")

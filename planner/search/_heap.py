@@ -39,13 +39,14 @@ from typing import NamedTuple
 
 import numpy as np
 
-from planner._numba import njit_cached
+from planner._numba import njit_cached, prefetch
 
-_U0, _U1, _U2, _U4 = np.uint64(0), np.uint64(1), np.uint64(2), np.uint64(4)
+_U0, _U1, _U2, _U4, _U8 = (np.uint64(0), np.uint64(1), np.uint64(2), np.uint64(4),
+                         np.uint64(8))
 
 __all__ = ["Heap", "fkey", "new_heap", "grown_heap", "push", "pop", "decrease_key",
            "change_key", "remove", "sift_up", "sift_down", "SIDE", "side_index", "pq_push",
-           "pq_pop", "pq_decrease", "pq_flush"]
+           "pq_pop", "pq_pop_g", "pq_decrease", "pq_flush"]
 
 
 class Heap(NamedTuple):
@@ -70,6 +71,9 @@ def grown_heap(h: Heap, cap: int, keep: int) -> Heap:
 
 
 _LINE = 64  # bytes per cache line
+#: entries above which a sift-down picks the best child by branches instead of selects
+#: (24 bytes an entry: past the first-level caches, about where the loads dominate)
+_BIG = np.uint64(1 << 14)
 
 
 def _lined(cap: int, dtype) -> np.ndarray:
@@ -129,17 +133,35 @@ def sift_down(h, pos, i0, n0):  # pragma: no cover - compiled
         c0 = (i << _U2) + _U1
         if c0 >= n:
             break
+        # the grandchildren of all four children are the 16 entries from 4 c0 + 1: two
+        # cache lines of keys and two of tie-breakers (see _lined), fetched while this
+        # level compares, so that a big heap waits on one miss per level, not two
+        g0 = (c0 << _U2) + _U1
+        if g0 < n:
+            prefetch(hf, g0)
+            prefetch(hf, g0 + _U8)
+            prefetch(hg, g0)
+            prefetch(hg, g0 + _U8)
         # the best child by selects, not branches (non-short-circuit & and |): which
         # child wins is a coin toss, and a mispredicted branch costs more than the loads
         # (one cache line of tie-breakers, see _lined)
         c, cf, cg = c0, hf[c0], hg[c0]
         end = min(c0 + _U4, n)
-        for d in range(c0 + _U1, end):
-            df, dg = hf[d], hg[d]
-            b = (df < cf) | ((df == cf) & (dg > cg))
-            c = d if b else c
-            cf = df if b else cf
-            cg = dg if b else cg
+        if n > _BIG:
+            # a big heap (a long search): branches, so that the next level's loads need
+            # not wait for the last select; the keys come from memory there, and a
+            # mispredicted branch costs less than that wait
+            for d in range(c0 + _U1, end):
+                df = hf[d]
+                if df < cf or (df == cf and hg[d] > cg):
+                    c, cf, cg = d, df, hg[d]
+        else:
+            for d in range(c0 + _U1, end):
+                df, dg = hf[d], hg[d]
+                b = (df < cf) | ((df == cf) & (dg > cg))
+                c = d if b else c
+                cf = df if b else cf
+                cg = dg if b else cg
         if not _before(cf, cg, xf, xg):
             break
         _put(h, pos, i, slot[c], cf, cg)
@@ -280,18 +302,27 @@ def pq_push(h, pos, hn, sn, fcur, x, xf, xg):  # pragma: no cover - compiled
 def pq_pop(h, pos, hn, sn, fcur):  # pragma: no cover - compiled
     """Take the first entry (``hn + sn > 0``); returns ``(slot, hn, sn, fcur)``. The
     popped slot's ``pos`` is left for the caller to mark (closed)."""
+    s, _, hn, sn, fcur = pq_pop_g(h, pos, hn, sn, fcur)
+    return s, hn, sn, fcur
+
+
+@njit_cached(inline="always")
+def pq_pop_g(h, pos, hn, sn, fcur):  # pragma: no cover - compiled
+    """:func:`pq_pop` that also returns the entry's tie-breaker: ``(slot, g, hn, sn,
+    fcur)`` (A* keys its entries by g: the node's g without a load from the node table)."""
     top = np.uint64(h.slot.shape[0] - 1)
     if sn > 0 and (hn == 0 or not _before(h.f[0], h.g[0], fcur, h.g[top])):
-        s = h.slot[top]
+        s, sg = h.slot[top], h.g[top]
         sn -= 1
         if sn > 0:
             a = np.uint64(h.slot.shape[0] - 1 - sn)
             _side_down(h, pos, 0, sn, h.slot[a], h.g[a])
-        return s, hn, sn, fcur
+        return s, sg, hn, sn, fcur
     if sn == 0:
         fcur = h.f[0]
+    sg = h.g[0]
     s, hn = pop(h, pos, hn)
-    return s, hn, sn, fcur
+    return s, sg, hn, sn, fcur
 
 
 @njit_cached(inline="always")

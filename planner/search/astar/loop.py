@@ -153,14 +153,18 @@ def search_loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, 
         if max_exp > 0 and expansions >= max_exp:
             status = RUN_BUDGET
             break
+        sg = 0.0
         if plain:
             s, hn = _heap.pop(heap, npos, hn)
         else:
-            s, hn, sn, fc = _heap.pq_pop(heap, npos, hn, sn, fcur)
+            s, sg, hn, sn, fc = _heap.pq_pop_g(heap, npos, hn, sn, fcur)
             if plateau:
                 fcur = fc
         su = np.uint64(s)  # unsigned node indices: no negative-index fix-up on each access
-        npos[su] = -1
+        if not marks:
+            # (with marks the dense node array tells closed from open, and nothing reads
+            # a closed node's pos: no store to a line of pos per expansion)
+            npos[su] = -1
         expansions += 1
         ks = nkey[su]
         u0, u1, u2 = unpack3(ks)
@@ -253,7 +257,8 @@ def search_loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, 
         if max_nodes > 0 and n >= max_nodes:
             status = RUN_LIMIT
             break
-        gs = ng[su]
+        # lattice A* keys its entries by g: the popped entry's g is the node's
+        gs = sg if astar_v else ng[su]
         gp = ng[ps]
         # Lattice A* away from the box faces: the moves that are allowed and reach a node
         # not closed, listed with the target's slot map entry and without a branch per
