@@ -98,7 +98,7 @@ _NEVER = 1e300  # exit time of an empty slot
 _KEY_SAFE = 0.1 * _ON
 
 
-@njit_cached(_nrt=False)
+@njit_cached(_nrt=False, inline="always")
 def _look(occ, si, o_rec, nrec, lookups, c0, c1, c2):  # pragma: no cover - compiled
     """Look cell (c0, c1, c2) up in ``occ``, recording it as lookup number ``lookups`` while
     the scratch records (tests: :func:`recorded`); True iff it is free. Every lookup of the

@@ -71,7 +71,7 @@ def grown_heap(h: Heap, cap: int, keep: int) -> Heap:
 
 
 _LINE = 64  # bytes per cache line
-#: entries above which a sift-down picks the best child by branches instead of selects
+#: entries above which a sift-down prefetches and picks the best child by branches, not selects
 #: (24 bytes an entry: past the first-level caches, about where the loads dominate)
 _BIG = np.uint64(1 << 14)
 
@@ -133,29 +133,30 @@ def sift_down(h, pos, i0, n0):  # pragma: no cover - compiled
         c0 = (i << _U2) + _U1
         if c0 >= n:
             break
-        # the grandchildren of all four children are the 16 entries from 4 c0 + 1: two
-        # cache lines of keys and two of tie-breakers (see _lined), fetched while this
-        # level compares, so that a big heap waits on one miss per level, not two
-        g0 = (c0 << _U2) + _U1
-        if g0 < n:
-            prefetch(hf, g0)
-            prefetch(hf, g0 + _U8)
-            prefetch(hg, g0)
-            prefetch(hg, g0 + _U8)
-        # the best child by selects, not branches (non-short-circuit & and |): which
-        # child wins is a coin toss, and a mispredicted branch costs more than the loads
-        # (one cache line of tie-breakers, see _lined)
         c, cf, cg = c0, hf[c0], hg[c0]
         end = min(c0 + _U4, n)
         if n > _BIG:
-            # a big heap (a long search): branches, so that the next level's loads need
-            # not wait for the last select; the keys come from memory there, and a
-            # mispredicted branch costs less than that wait
+            # a big heap (a long search), whose lower levels come from memory: the
+            # grandchildren of all four children are the 16 entries from 4 c0 + 1, two
+            # cache lines of keys and two of tie-breakers (see _lined), fetched while this
+            # level compares, so that it waits on one miss per level, not two; and
+            # branches, so that the next level's loads need not wait for the last select
+            # (a mispredicted branch costs less than that wait). A small heap sits in the
+            # cache, where the prefetches would only add work.
+            g0 = (c0 << _U2) + _U1
+            if g0 < n:
+                prefetch(hf, g0)
+                prefetch(hf, g0 + _U8)
+                prefetch(hg, g0)
+                prefetch(hg, g0 + _U8)
             for d in range(c0 + _U1, end):
                 df = hf[d]
                 if df < cf or (df == cf and hg[d] > cg):
                     c, cf, cg = d, df, hg[d]
         else:
+            # the best child by selects, not branches (non-short-circuit & and |): which
+            # child wins is a coin toss, and a mispredicted branch costs more than the
+            # loads (one cache line of tie-breakers, see _lined)
             for d in range(c0 + _U1, end):
                 df, dg = hf[d], hg[d]
                 b = (df < cf) | ((df == cf) & (dg > cg))

@@ -47,6 +47,11 @@ THETA, LAZY_THETA = 1, 2  # SearchParams.anyangle (0: lattice A* / Dijkstra)
 #: :func:`search_loop`'s variants (module docstring)
 GENERAL, DENSE_LAZY, DENSE_ASTAR = 0, 1, 2
 _EMPTY = -1
+#: the most moves for which an expansion lists its moves first (below): FCC's 12, BCC's and
+#: MCC's 14 and hex's 20 gain by it; cubic-26 lost 6-10% on the office and on Warframe DA1
+#: (`python benchmarks/lattice_sight.py --segments 0 --maps office`, `python
+#: benchmarks/cpp_anchor.py --maps DA1 geb079 --queries 100`), and keeps the plain loop
+LIST_MOVES = 20
 
 
 # Without the runtime's reference counting: the loop allocates nothing, and each heap
@@ -267,7 +272,7 @@ def search_loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, 
         # them and tests nothing more before the target's g. (A move set of the dense
         # variant has at most MAX_BITS moves: the index fits the entry's low byte.)
         nt = nm
-        listed = astar_v and inner
+        listed = astar_v and inner and nm <= LIST_MOVES
         if listed:
             nt = 0
             for m in range(nm):
