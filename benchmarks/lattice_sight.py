@@ -7,7 +7,6 @@ Usage::
     python benchmarks/lattice_sight.py --maps office    # one map
     python benchmarks/lattice_sight.py --segments 20000 --queries 8 --repeat 3
     python benchmarks/lattice_sight.py --smoke          # tiny sizes, seconds
-    python benchmarks/lattice_sight.py --maps           # the sight and four-key tables only
 
 Sight table: random centre-to-centre sight lines (2 to 40 cells long) in an empty box of
 each lattice at unit cell volume, walked by the line-of-sight test every search and the
@@ -16,13 +15,6 @@ thread CPU time per cell looked up, against the cubic lattice's (goal <= 1.5). E
 runs the same number of lines, in batches of :data:`BATCH`; the lattices take turns batch by
 batch, each batch keeping its fastest of ``--repeat`` rounds, and the ``ratio`` line pairs
 the lattice's batches with cubic's.
-
-Four-key table (``--keys``, on by default): the hexagonal prism's walk stepping on four keys
-(``planner.occupancy.facestep.run_one4``, ``run_mirror4``, the copy the walk takes on a cell
-of at most four facet pairs) against the same walk on eight keys (a scratch made with
-``keys8=True``), on the sight table's hex lines, thread CPU time per batch, both sides taking
-turns; the copy stays only while this ratio shows its speed-up. (It calls the compiled walk
-directly, ``planner.occupancy.facewalk.face_walk``: the public API has no switch for it.)
 
 Planning table: the same queries (world points, quantized on each lattice; kept when a
 path exists on every lattice) on each lattice at the same cell volume and robot radius; per
@@ -47,11 +39,9 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import harness  # noqa: E402  (the sibling module)
-from numba import njit  # noqa: E402
 
 from planner import search as S  # noqa: E402
 from planner.lattice import NAMED_LATTICES, Lattice  # noqa: E402
-from planner.occupancy.facewalk import I_SM, face_scratch, face_walk  # noqa: E402
 from planner.world import World  # noqa: E402
 from planner.world.build import build_world  # noqa: E402
 
@@ -118,48 +108,6 @@ def sight_table(n: int, repeat: int) -> None:
             print(harness.ratio_line(f"sight walk ns per cell {name}/cubic", ns[name],
                                      ns["cubic"], goal="<= 1.5",
                                      note=f"per batch of {batch} lines"))
-
-
-@njit
-def _walk_batch(occ, fd, fi, sf, si, ps, qs):  # pragma: no cover - compiled
-    """The face walk on every line (p, q: (N, 3) int64), its lookups summed."""
-    total = 0
-    for i in range(ps.shape[0]):
-        _, n, _ = face_walk(occ, fd, fi, sf, si, ps[i, 0], ps[i, 1], ps[i, 2], qs[i, 0],
-                            qs[i, 1], qs[i, 2])
-        total += n
-    return total
-
-
-def keys_table(n: int, repeat: int) -> None:
-    batch = min(BATCH, n)
-    nb = max(1, n // batch)
-    lat = Lattice.named("hex", 1.0)
-    chk = World(lat, np.zeros((0, 3), np.int64), np.array([[-60.0] * 3, [60.0] * 3])).checker
-    ps, qs = sight_lines(lat, nb * batch)
-    ps, qs = ps.reshape(nb, batch, 3), qs.reshape(nb, batch, 3)
-    sm = int(chk.walk.fi[I_SM])
-    cells = {}
-
-    def side(keys8):
-        sf, si = face_scratch(sm, keys8=keys8)
-        _walk_batch(chk.occupancy, chk.walk.fd, chk.walk.fi, sf, si, ps[0], qs[0])  # compile
-
-        def run(i):
-            c, t = harness.cpu_result(lambda: _walk_batch(chk.occupancy, chk.walk.fd,
-                                                          chk.walk.fi, sf, si, ps[i], qs[i]))
-            cells[keys8, i] = c
-            return t
-        return run
-
-    best = harness.interleaved({"four": side(False), "eight": side(True)}, range(nb), repeat)
-    assert all(cells[False, i] == cells[True, i] for i in range(nb))  # the same lookups
-    tot = sum(cells[False, i] for i in range(nb))
-    print(f"\nhex sight walk, four-key steps against eight-key steps: {nb * batch:,} lines, "
-          f"{tot / (nb * batch):.1f} cells a line; ns per cell: four "
-          f"{1e9 * best['four'].sum() / tot:.1f}, eight {1e9 * best['eight'].sum() / tot:.1f}")
-    print(harness.ratio_line("hex sight walk time four-key/eight-key steps", best["four"],
-                             best["eight"], note=f"per batch of {batch} lines"))
 
 
 def map_worlds(map_name: str, data: Path) -> dict[str, World]:
@@ -288,8 +236,6 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--maps", nargs="*", default=["office", "geb079"],
                     help="maps of the planning table (bundled names or geb079)")
     ap.add_argument("--queries", type=int, default=8, help="queries per map")
-    ap.add_argument("--no-keys", dest="keys", action="store_false",
-                    help="skip the four-key against eight-key table")
     a = ap.parse_args(argv)
     if a.smoke:
         a.segments, a.queries, a.repeat = 5000, 2, 1
@@ -299,8 +245,6 @@ def main(argv: list[str] | None = None) -> int:
                          command=harness.command_line("lattice_sight.py", argv)):
         if a.segments:
             sight_table(a.segments, a.repeat)
-            if a.keys:
-                keys_table(a.segments, a.repeat)
         for m in a.maps:
             if m == "geb079" and not geb079_path(a.data).is_file():
                 print(f"\nskipped table: no geb079 at {geb079_path(a.data)}")

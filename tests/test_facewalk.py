@@ -193,27 +193,3 @@ def test_one_scratch_serves_lattices_with_other_slot_counts():
             want = face_walk(chk.occupancy, chk.walk.fd, chk.walk.fi, *fresh, *p, *q)
             got = face_walk(chk.occupancy, chk.walk.fd, chk.walk.fi, *shared, *p, *q)
             assert got == want, (name, p.tolist(), q.tolist())
-
-
-@pytest.mark.parametrize("name", ["hex", "hex2d"])
-def test_four_key_steps_agree_with_eight_key_steps(name):
-    """The hexagonal prism's four-key step loops (facestep.run_one4, run_mirror4) give the
-    eight-key loops' verdicts and lookups, line by line, dense and hashed, free and
-    blocked (the copy stays for its speed: benchmarks/lattice_sight.py)."""
-    lat = _lattice(name)
-    rng = np.random.default_rng(7)
-    cand = rng.integers(-25, 26, (20_000, 3))
-    if isinstance(lat, PlanarPrism):
-        cand[:, 2] = 0
-    cells = np.unique(cand[rng.random(len(cand)) < 0.1], axis=0)
-    ps, qs = segments(lat, 4000, 7)
-    for storage in ({}, {"dense_budget": 0}):
-        chk = World(lat, cells, np.array([[-14.0] * 3, [14.0] * 3]), **storage).checker
-        sm = int(chk.walk.fi[I_SM])
-        four, eight = face_scratch(sm), face_scratch(sm, keys8=True)
-        got = [face_walk(chk.occupancy, chk.walk.fd, chk.walk.fi, *four, *p, *q)
-               for p, q in zip(ps, qs, strict=True)]
-        want = [face_walk(chk.occupancy, chk.walk.fd, chk.walk.fi, *eight, *p, *q)
-                for p, q in zip(ps, qs, strict=True)]
-        assert got == want
-        assert 0 < sum(not g[0] for g in got) < len(got)  # both verdicts met

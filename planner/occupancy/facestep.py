@@ -18,9 +18,7 @@ decisions must tolerate: :func:`planner.occupancy.facewalk.face_walk` bounds it.
 
 A cell of at most four facet pairs (the hexagonal prism) steps on four keys
 (:func:`run_one4`, :func:`run_mirror4`: the same loops with half the minimum tree and half
-the additions); the walk picks the pair once per call. A scratch made with ``keys8=True``
-steps on eight keys on every lattice: ``python benchmarks/lattice_sight.py`` times both on
-hex lines (its ``four-key steps`` ratio line), the four-key copy's reason to stay.
+the additions, some 12% of a hex line's time); the walk picks the pair once per call.
 """
 
 from __future__ import annotations
@@ -29,7 +27,7 @@ import numpy as np
 
 from planner._numba import njit_cached
 
-__all__ = ["BLOCKED", "END", "KEY_BITS", "LOW", "MET", "SLOTS", "STEPPED", "S_WIDE", "TIE",
+__all__ = ["BLOCKED", "END", "KEY_BITS", "LOW", "MET", "SLOTS", "STEPPED", "TIE",
            "face_scratch", "first_exit", "key", "recorded",
            "run_mirror", "run_mirror4", "run_one", "run_one4"]
 
@@ -40,25 +38,21 @@ KEY_CAP = 2.0 ** 60  # the key of an empty slot (parallel facets, padding): neve
 # of slot k, the sign of slot k's facet (+1: its pair's first, 0: parallel), sign /
 # |d . w_k|, the first exit time of slot k; the facet of slot k, the flat index step
 # through slot k's facet, the key of slot k, the change of slot k's key on a step through
-# slot i (8, 8), the number of slots the padding (the slots past them) was set for, 1 to
-# step on eight keys on every lattice (face_scratch's keys8), the cells the segment runs
-# along (SM,: flat indices), the number of cells to record and the record.
+# slot i (8, 8), the number of slots the padding (the slots past them) was set for, the
+# cells the segment runs along (SM,: flat indices), the number of cells to record and the
+# record.
 S_IDQ, S_AY, S_SG, S_SY, S_T, S_F = 0, 8, 16, 24, 32, 40
-S_FW, S_STEP, S_KEY, S_KINC, S_NP, S_WIDE, S_CUR = 0, 8, 16, 24, 88, 89, 90
+S_FW, S_STEP, S_KEY, S_KINC, S_NP, S_CUR = 0, 8, 16, 24, 88, 89
 
 END, BLOCKED, TIE, STEPPED, MET = 0, 1, 2, 3, 4  # how run_one and run_mirror stop
 LOW = np.int64(-8)  # clears a key's slot bits
 
 
-def face_scratch(sm: int, record: int = 0,
-                 keys8: bool = False) -> tuple[np.ndarray, np.ndarray]:
+def face_scratch(sm: int, record: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """Scratch ``(sf, si)`` for :func:`planner.occupancy.facewalk.face_walk`: ``sm`` cells
     around a face, ``record`` cells to record in ``si`` (tests; :func:`recorded` reads
-    them); ``keys8``: step on eight keys even where four serve (the benchmark and the
-    agreement test of the four-key loops). A scratch serves one walk at a time, of any
-    lattice."""
+    them). A scratch serves one walk at a time, of any lattice."""
     si = np.zeros(S_CUR + max(sm, 1) + 1 + 3 * record, np.int64)
-    si[S_WIDE] = int(keys8)
     si[S_CUR + max(sm, 1)] = record
     return np.zeros(S_F), si
 

@@ -53,7 +53,6 @@ from planner.occupancy.facestep import (
     S_STEP,
     S_SY,
     S_T,
-    S_WIDE,
     SLOTS,
     STEPPED,
     TIE,
@@ -96,19 +95,6 @@ _NEVER = 1e300  # exit time of an empty slot
 # the tie slack (_ON): past it (long lines with a facet nearly parallel to the segment,
 # whose exit-time bound coarsens the scale) the generic walk decides.
 _KEY_SAFE = 0.1 * _ON
-
-
-@njit_cached(_nrt=False, inline="always")
-def _look(occ, si, o_rec, nrec, lookups, c0, c1, c2):  # pragma: no cover - compiled
-    """Look cell (c0, c1, c2) up in ``occ``, recording it as lookup number ``lookups`` while
-    the scratch records (tests: :func:`recorded`); True iff it is free. Every lookup of the
-    walk by cell indices (off a dense grid's flat-index bit tests) goes through it."""
-    mode, grid, lo, dims, table, tmask, gg, blo, bhi = occ
-    if lookups <= nrec:
-        si[o_rec + 3 * lookups - 3] = c0
-        si[o_rec + 3 * lookups - 2] = c1
-        si[o_rec + 3 * lookups - 1] = c2
-    return cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi, c0, c1, c2)
 
 
 # numpy's error model: a float division by zero (a parallel slot's, selected away) is
@@ -155,7 +141,6 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
     # a product of whole rows: inc[j, k] = v_j . v_k / (d . v_k) = s_j (w_j . w_k) s_k / |y_k|
     # for v_j = s_j w_j (w_j the pair's first facet, y_k = d . w_k, s = sign y).
     npair = nrel // 2
-    four = npair <= 4 and si[S_WIDE] == 0  # four keys serve (facestep)
     o_gp = F_REL + 3 * nrel
     nfw = npair
     fwm = np.int64(0)
@@ -269,7 +254,7 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
     while True:
         if mirroring:
             if dense:
-                if four:
+                if npair <= 4:
                     code, idx, stop, lookups = run_mirror4(grid, si, idx, mir, lookups, gi, li)
                 else:
                     code, idx, stop, lookups = run_mirror(grid, si, idx, mir, lookups, gi, li)
@@ -279,7 +264,7 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
                 code = MET
                 m = first_exit(si, nfw, isc)
                 while m + m < lim:
-                    if four:
+                    if npair <= 4:
                         code, idx, lookups, _ = run_one4(grid, si, idx, lookups, gi, one, False,
                                                          stop)
                     else:
@@ -299,7 +284,12 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
                         c2 = c % d2 + b2
                         c1 = (c // d2) % d1 + b1
                         c0 = c // s0 + b0
-                        if not _look(occ, si, o_rec, nrec, lookups, c0, c1, c2):
+                        if lookups <= nrec:
+                            si[o_rec + 3 * lookups - 3] = c0
+                            si[o_rec + 3 * lookups - 2] = c1
+                            si[o_rec + 3 * lookups - 1] = c2
+                        if not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi,
+                                         c0, c1, c2):
                             return False, lookups, True
                     if stop != mir - idx:
                         break
@@ -311,7 +301,7 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
                 continue
             m = first_exit(si, nfw, isc)
         elif pm == 0:
-            if four:
+            if npair <= 4:
                 code, idx, lookups, mk = run_one4(grid, si, idx, lookups, gi, one, dense, stop)
             else:
                 code, idx, lookups, mk = run_one(grid, si, idx, lookups, gi, one, dense, stop)
@@ -324,7 +314,11 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
                 c2 = idx % d2 + b2
                 c1 = (idx // d2) % d1 + b1
                 c0 = idx // s0 + b0
-                if not _look(occ, si, o_rec, nrec, lookups, c0, c1, c2):
+                if lookups <= nrec:
+                    si[o_rec + 3 * lookups - 3] = c0
+                    si[o_rec + 3 * lookups - 2] = c1
+                    si[o_rec + 3 * lookups - 1] = c2
+                if not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi, c0, c1, c2):
                     return False, lookups, True
                 continue
         else:
@@ -370,7 +364,12 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
                             return False, lookups, True
                     else:
                         c0, c1, c2 = p0 + u0 + f0, p1 + u1 + f1, p2 + u2 + f2
-                        if not _look(occ, si, o_rec, nrec, lookups, c0, c1, c2):
+                        if lookups <= nrec:
+                            si[o_rec + 3 * lookups - 3] = c0
+                            si[o_rec + 3 * lookups - 2] = c1
+                            si[o_rec + 3 * lookups - 1] = c2
+                        if not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi,
+                                         c0, c1, c2):
                             return False, lookups, True
             bm = fi[o_masks + sm * f + j]
             if bm & fwm:
@@ -423,7 +422,12 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
                             return False, lookups, True
                     else:
                         c0, c1, c2 = q0 - u0 - f0, q1 - u1 - f1, q2 - u2 - f2
-                        if not _look(occ, si, o_rec, nrec, lookups, c0, c1, c2):
+                        if lookups <= nrec:
+                            si[o_rec + 3 * lookups - 3] = c0
+                            si[o_rec + 3 * lookups - 2] = c1
+                            si[o_rec + 3 * lookups - 1] = c2
+                        if not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi,
+                                         c0, c1, c2):
                             return False, lookups, True
             stop = mir - idx
     return True, lookups, True
