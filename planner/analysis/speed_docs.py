@@ -186,10 +186,10 @@ def readme_block(run: SpeedRecord) -> str:
            "shortcutting) step from Voronoi cell to Voronoi cell through the facet the "
            "segment leaves by, each step also looking up its mirror image through the "
            "segment's midpoint (the cell the walk from the other end would reach), its exit "
-           f"times integer keys that name their facet: {_span(sight, '.1f')}x the cubic "
+           f"times integer keys that name their facet: {_span(sight)}x the cubic "
            "integer walk's time per cell looked up (goal 1.5x), and Lazy Theta* takes "
-           f"{_span(lazy['office'], '.1f')}x cubic's time on the office and "
-           f"{_span(lazy['geb079'], '.1f')}x on geb079 (goal 1.5x). A* plus smoothing on "
+           f"{_span(lazy['office'])}x cubic's time on the office and "
+           f"{_span(lazy['geb079'])}x on geb079 (goal 1.5x). A* plus smoothing on "
            f"BCC and MCC takes {_and([_f(v) for v in smooth['office']])} of cubic-26's time "
            f"on the office and {_and([_f(v) for v in smooth['geb079']])} on geb079 (goal "
            f"0.8): the search is {_span([100 * s for s in share], '.0f')}% of it")
