@@ -183,7 +183,7 @@ def test_plateau_queue_pops_in_key_order_on_random_sequences(seed):
         elif op < 0.75 and key:
             want = min((f, -g) for f, g in key.values())
             side = sn > 0
-            s, hn, sn2, fcur = H.pq_pop(h, pos, hn, sn, fcur)
+            s, _, hn, sn2, fcur = H.pq_pop(h, pos, hn, sn, fcur)
             side_pops += side and sn2 < sn
             sn = sn2
             pos[s] = -1

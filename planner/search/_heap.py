@@ -46,7 +46,7 @@ _U0, _U1, _U2, _U4, _U8 = (np.uint64(0), np.uint64(1), np.uint64(2), np.uint64(4
 
 __all__ = ["Heap", "fkey", "new_heap", "grown_heap", "push", "pop", "decrease_key",
            "change_key", "remove", "sift_up", "sift_down", "SIDE", "side_index", "pq_push",
-           "pq_pop", "pq_pop_g", "pq_decrease", "pq_flush"]
+           "pq_pop", "pq_decrease", "pq_flush"]
 
 
 class Heap(NamedTuple):
@@ -301,16 +301,9 @@ def pq_push(h, pos, hn, sn, fcur, x, xf, xg):  # pragma: no cover - compiled
 
 @njit_cached(inline="always")
 def pq_pop(h, pos, hn, sn, fcur):  # pragma: no cover - compiled
-    """Take the first entry (``hn + sn > 0``); returns ``(slot, hn, sn, fcur)``. The
-    popped slot's ``pos`` is left for the caller to mark (closed)."""
-    s, _, hn, sn, fcur = pq_pop_g(h, pos, hn, sn, fcur)
-    return s, hn, sn, fcur
-
-
-@njit_cached(inline="always")
-def pq_pop_g(h, pos, hn, sn, fcur):  # pragma: no cover - compiled
-    """:func:`pq_pop` that also returns the entry's tie-breaker: ``(slot, g, hn, sn,
-    fcur)`` (A* keys its entries by g: the node's g without a load from the node table)."""
+    """Take the first entry (``hn + sn > 0``); returns ``(slot, g, hn, sn, fcur)`` with the
+    entry's tie-breaker ``g`` (A* keys its entries by g: the node's g without a load from
+    the node table). The popped slot's ``pos`` is left for the caller to mark (closed)."""
     top = np.uint64(h.slot.shape[0] - 1)
     if sn > 0 and (hn == 0 or not _before(h.f[0], h.g[0], fcur, h.g[top])):
         s, sg = h.slot[top], h.g[top]

@@ -162,7 +162,7 @@ def search_loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, 
         if plain:
             s, hn = _heap.pop(heap, npos, hn)
         else:
-            s, sg, hn, sn, fc = _heap.pq_pop_g(heap, npos, hn, sn, fcur)
+            s, sg, hn, sn, fc = _heap.pq_pop(heap, npos, hn, sn, fcur)
             if plateau:
                 fcur = fc
         su = np.uint64(s)  # unsigned node indices: no negative-index fix-up on each access
