@@ -145,11 +145,8 @@ def _weighted_worlds(run: SpeedRecord) -> list[str]:
 
 
 def _machine(run: SpeedRecord) -> str:
-    head = run.data["header"]
-    commit = next((p.split("commit ", 1)[1].split(";")[0] for p in head[1:]
-                   if "commit " in p), "unknown")
-    return (f"commit `{commit}`; {head[0].removeprefix('machine: ')}; at the end "
-            f"{run.data.get('end', '').removeprefix('load average at end ')}")
+    """The run's CPU and cores (its load and commit are in benchmarks/README.md's block)."""
+    return run.data["header"][0].removeprefix("machine: ").split("; load average")[0]
 
 
 def readme_block(run: SpeedRecord) -> str:
@@ -174,7 +171,8 @@ def readme_block(run: SpeedRecord) -> str:
            f"call on a prebuilt world costs {_f(fc['search_us'], '.1f')} us with a one-move "
            f"query (goal 5), a `plan()` call {_span(plans, '.1f')} us with array, tuple or "
            f"list endpoints (goal 15). Measured by `{run.data['command']}` "
-           f"({_machine(run)}); `{REGENERATE}` rewrites this item and the next from that "
+           f"(on {_machine(run)}; the run's load and commit: benchmarks/README.md); "
+           f"`{REGENERATE}` rewrites this item and the next from that "
            "run's record.")
     sight = [run.fig("sight", k, "vs_cubic") for k in OTHER]
     lazy = {m: [run.fig("plan", m, k, "lazy_vs_cubic") for k in OTHER] for m in PLAN_MAPS}
