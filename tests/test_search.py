@@ -282,19 +282,22 @@ def test_half_facets_give_the_gauge_to_the_bit(name, nb):
     (``DenseTables.hhalf``), is the full facet maximum bit for bit, so A* orders its
     nodes exactly as with every facet."""
     from planner.search import heuristic as H
-    from planner.search.astar.dense import half_facets
     from planner.search.moves import move_set
 
     hmat = move_set(Lattice.named(name, 2.0), nb, False, H.H_GAUGE).hmat
-    half, habs = half_facets(hmat)
+    half, habs = H.half_facets(hmat)
     assert habs and 2 * len(half) == len(hmat)  # lattice move sets are symmetric
     d = np.random.default_rng(7).integers(-60, 60, (500, 3)).astype(np.float64)
-    got = [max(abs(f[0] * e[0] + f[1] * e[1] + f[2] * e[2]) for f in half) for e in d]
+    got = [H.half_gauge(half, habs, *e) for e in d]
     want = [H.gauge(hmat, *e) for e in d]
     assert np.array_equal(got, want)
     lone = np.array([[1.0, 2.0, 3.0], [-1.0, -2.0, -3.0], [0.0, 0.0, 1.0]])
-    back, habs = half_facets(lone)  # a facet without its negation: every facet is kept
+    back, habs = H.half_facets(lone)  # a facet without its negation: every facet is kept
     assert not habs and np.array_equal(back, lone)
+    one_sided = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    back, habs = H.half_facets(one_sided)
+    e = np.array([-1.0, -2.0, 4.0])  # behind every facet: the gauge's floor at 0
+    assert not habs and H.half_gauge(back, habs, *e) == H.gauge(one_sided, *e) == 0.0
 
 
 # -- search ------------------------------------------------------------------------------

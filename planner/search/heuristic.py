@@ -6,7 +6,9 @@ between two cells from their index difference ``e = b - a`` ((3,) int) alone:
 - ``H_GAUGE`` (A*, D* Lite): the move-set gauge ``max(0, max_f hmat[f] . e)`` (m), the exact
   obstacle-free path length with the lattice moves (:mod:`planner.search.moves`). On the
   cubic lattice with 26 neighbours it equals the octile distance, evaluated in closed form
-  (:func:`octile`) when ``MoveSet.octile`` holds the cell size.
+  (:func:`octile`) when ``MoveSet.octile`` holds the cell size. A lattice move set is
+  symmetric, so its facets come in antipodal pairs and the search loop takes the same
+  value to the bit over one facet of each pair (:func:`half_facets`, :func:`half_gauge`).
 - ``H_EUCLID`` (any-angle): the straight-line distance ``|G e|`` (m), ``G`` the lattice
   generator (3, 3) (:func:`length`, also the any-angle loops' step cost).
 - ``H_ZERO`` (Dijkstra): 0.
@@ -27,8 +29,9 @@ import numpy as np
 
 from planner._numba import njit_cached
 
-__all__ = ["H_ZERO", "H_GAUGE", "H_EUCLID", "octile", "gauge", "euclid", "estimate", "rows",
-           "length", "node_estimate", "octile_np", "gauge_np", "euclid_np", "estimate_np"]
+__all__ = ["H_ZERO", "H_GAUGE", "H_EUCLID", "octile", "gauge", "half_facets", "half_gauge",
+           "euclid", "estimate", "rows", "length", "node_estimate", "octile_np", "gauge_np",
+           "euclid_np", "estimate_np"]
 
 H_ZERO, H_GAUGE, H_EUCLID = 0, 1, 2
 
@@ -54,6 +57,47 @@ def gauge(hmat, e0, e1, e2):  # pragma: no cover - compiled
         x = hmat[f, 0] * e0 + hmat[f, 1] * e1 + hmat[f, 2] * e2
         if x > hv:
             hv = x
+    return hv
+
+
+@njit_cached
+def half_facets(hmat):  # pragma: no cover - compiled
+    """The gauge's facets ``hmat`` (F, 3) halved: ``(half, True)`` with one facet of each
+    antipodal pair when every facet's negation is also a facet (a move set closed under
+    negation: its gauge is a symmetric norm), so that ``max(0, max_f hmat[f] . e)`` is
+    ``max_h |half[h] . e|``, to the bit (a negated facet's sum is the negated sum) over
+    half the facets; else ``(hmat, False)``. Made once per move set (the search loop's
+    ``DenseTables``)."""
+    nfac = hmat.shape[0]
+    pair = np.full(nfac, -1, np.int64)
+    for k in range(nfac):
+        for j in range(nfac):
+            if (hmat[j, 0] == -hmat[k, 0] and hmat[j, 1] == -hmat[k, 1]
+                    and hmat[j, 2] == -hmat[k, 2]):
+                pair[k] = j
+                break
+        if pair[k] < 0 or pair[k] == k:
+            return hmat.copy(), False
+    half = np.empty((nfac // 2, 3), np.float64)
+    nh = 0
+    for k in range(nfac):
+        if pair[k] > k:
+            half[nh] = hmat[k]
+            nh += 1
+    return half, True
+
+
+@njit_cached(_nrt=False, inline="always")
+def half_gauge(half, halved, e0, e1, e2):  # pragma: no cover - compiled
+    """:func:`gauge` (m) of index difference e from :func:`half_facets`' ``(half, halved)``:
+    ``max_h |half[h] . e|`` when ``halved``, else ``max(0, max_h half[h] . e)``; the search
+    loop's form, in one pass per new node."""
+    hv = 0.0
+    for k in range(half.shape[0]):
+        x = half[k, 0] * e0 + half[k, 1] * e1 + half[k, 2] * e2
+        if halved:
+            x = abs(x)
+        hv = max(hv, x)
     return hv
 
 

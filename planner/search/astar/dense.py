@@ -1,9 +1,9 @@
 """The dense grid's tables of a move set for the search loop (numba,
 :mod:`planner.search.astar.loop`): each stencil cell and move as one offset into the bit grid,
 the stencil as a few bit windows (one per row of cells along the grid's fastest axis), each
-move's key offset, the gauge's facets halved (:func:`half_facets`), and the one read of the
-union stencil into a mask of free cells (:func:`stencil_mask`). Made once per move set and
-world, kept in the driver's ``Bound``.
+move's key offset, the gauge's facets halved (:func:`planner.search.heuristic.half_facets`),
+and the one read of the union stencil into a mask of free cells (:func:`stencil_mask`). Made
+once per move set and world, kept in the driver's ``Bound``.
 """
 
 from __future__ import annotations
@@ -14,9 +14,9 @@ import numpy as np
 
 from planner._numba import njit_cached
 from planner.occupancy.keys import step3
+from planner.search.heuristic import half_facets
 
-__all__ = ["DenseTables", "dense_tables", "grid_offsets", "half_facets", "stencil_mask",
-           "stencil_rows"]
+__all__ = ["DenseTables", "dense_tables", "grid_offsets", "stencil_mask", "stencil_rows"]
 
 
 @njit_cached
@@ -141,32 +141,6 @@ class DenseTables(NamedTuple):
     hhalf: np.ndarray  # (H, 3) float64 the gauge's facets, one of each antipodal pair
     habs: bool  # hhalf halves the facets: the gauge is max |hhalf . e|, else max(0, .)
     todo: np.ndarray  # (M,) int64 scratch: the moves an expansion goes on to (search loop)
-
-
-@njit_cached
-def half_facets(hmat):  # pragma: no cover - compiled
-    """The gauge's facets ``hmat`` (F, 3) halved: ``(half, True)`` with one facet of each
-    antipodal pair when every facet's negation is also a facet (a move set closed under
-    negation: its gauge is a symmetric norm), so that ``max(0, max_f hmat[f] . e)`` is
-    ``max_h |half[h] . e|``, to the bit (a negated facet's sum is the negated sum) over
-    half the facets; else ``(hmat, False)``."""
-    nfac = hmat.shape[0]
-    pair = np.full(nfac, -1, np.int64)
-    for k in range(nfac):
-        for j in range(nfac):
-            if (hmat[j, 0] == -hmat[k, 0] and hmat[j, 1] == -hmat[k, 1]
-                    and hmat[j, 2] == -hmat[k, 2]):
-                pair[k] = j
-                break
-        if pair[k] < 0 or pair[k] == k:
-            return hmat.copy(), False
-    half = np.empty((nfac // 2, 3), np.float64)
-    nh = 0
-    for k in range(nfac):
-        if pair[k] > k:
-            half[nh] = hmat[k]
-            nh += 1
-    return half, True
 
 
 @njit_cached

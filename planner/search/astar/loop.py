@@ -37,7 +37,7 @@ from planner.search import _heap
 from planner.search._los import DDA_MAX, cubic_walk, dense_walk, is_cubic, sight
 from planner.search._nodes import PAGE, block_key, find_slot, local, new_page
 from planner.search.astar.dense import stencil_mask
-from planner.search.heuristic import H_GAUGE, length, node_estimate, rows
+from planner.search.heuristic import H_GAUGE, half_gauge, length, node_estimate, rows
 from planner.search.moves import MAX_BITS, move_open
 from planner.search.result import RUN_BUDGET, RUN_EXHAUSTED, RUN_FOUND, RUN_GROW, RUN_LIMIT
 
@@ -132,7 +132,6 @@ def search_loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, 
     nu = ust.shape[0]
     nm = moves.shape[0]
     nr = roff.shape[0]
-    nhalf = hhalf.shape[0]
     last = np.uint64(grid.shape[0] - 1)
     bits = fixed or nu <= MAX_BITS  # one mask test per move instead of its cell list
     windows = bits and dt.rows
@@ -368,15 +367,8 @@ def search_loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, 
             x0, x1, x2 = gl0 - v0, gl1 - v1, gl2 - v2
             if lazy_v:  # its move set's heuristic is the straight line (kernel.search_run)
                 hv = hw * length(gm, x0, x1, x2)
-            elif gauge:
-                # max |facet . x| over one facet of each antipodal pair (DenseTables.hhalf):
-                # the gauge to the bit over half the facets, in one pass per new node
-                hv = 0.0
-                for k in range(nhalf):
-                    x = hhalf[k, 0] * x0 + hhalf[k, 1] * x1 + hhalf[k, 2] * x2
-                    if habs:
-                        x = abs(x)
-                    hv = max(hv, x)
+            elif gauge:  # over one facet of each antipodal pair (DenseTables.hhalf)
+                hv = half_gauge(hhalf, habs, x0, x1, x2)
             else:
                 hv = node_estimate(oct_s, hkind, hmat, hw, gm, x0, x1, x2)
             nh[tn] = hv
