@@ -190,10 +190,16 @@ def end_search(nodes, sm, state, path):  # pragma: no cover - compiled
         for i in range(path.shape[0] - 1, -1, -1):
             path[i, 0], path[i, 1], path[i, 2] = unpack3(key[x])
             x = par[x]
-    if sm.dense.shape[0] > 1:
+    dense = sm.dense
+    if dense.shape[0] > 1:
+        # the box's numbers read once, before the loop: a store to ``dense`` may alias
+        # them for all the compiler knows, so read in the loop they were read per node
+        key = nodes.key
+        d1, d2 = sm.dims[1], sm.dims[2]
+        at = (sm.lo[0] * d1 + sm.lo[1]) * d2 + sm.lo[2]
         for i in range(n):
-            v0, v1, v2 = unpack3(nodes.key[i])
-            sm.dense[dense_index(sm, v0, v1, v2)] = 0
+            v0, v1, v2 = unpack3(key[np.uint64(i)])
+            dense[np.uint64((v0 * d1 + v1) * d2 + v2 - at)] = 0
     else:
         btab = sm.btab
         for i in range(btab.shape[0]):

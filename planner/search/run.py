@@ -381,8 +381,14 @@ def search_many(
 
 GOAL_PROBE = 256  # expansions of the search from the goal (the goal probe)
 #: expansions after which a search still going runs the goal probe: most searches end
-#: sooner and skip it; a longer one pays at most GOAL_PROBE / PROBE_AFTER extra
-PROBE_AFTER = 2048
+#: sooner and skip it. The probe costs more than its GOAL_PROBE expansions suggest (each
+#: one generates fresh nodes on the paged slot map, and the pause goes through Python:
+#: the time of several hundred expansions of the main search), so it waits until that is
+#: a few per cent of the search. At 2,048 it cost Warframe Complex a twentieth of its A*
+#: time (`python benchmarks/cpp_anchor.py --maps Complex --queries 200`: ours / floor
+#: overall 0.88-0.90 at 2,048, 0.93-0.94 here); a sealed goal costs at most this many
+#: expansions (a few ms) before the probe stops its search.
+PROBE_AFTER = 16384
 
 
 def _goal_pocket(world: World, ms, start, goal) -> tuple[int, int] | None:
