@@ -230,7 +230,11 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
         si[o_rec + 1] = p1
         si[o_rec + 2] = p2
     lookups = 1
-    if not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi, p0, p1, p2):
+    # On a dense grid (the box holding every touched cell inside it) a bit test.
+    if dense:
+        if (grid[np.uint64(idx) >> np.uint64(3)] >> (idx & 7)) & 1 == 0:
+            return False, lookups, True
+    elif not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi, p0, p1, p2):
         return False, lookups, True
     if fwm == 0:  # p == q
         return True, lookups, True
@@ -246,7 +250,10 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
         si[o_rec + 4] = q1
         si[o_rec + 5] = q2
     lookups += 1
-    if not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi, q0, q1, q2):
+    if dense:
+        if (grid[np.uint64(stop) >> np.uint64(3)] >> (stop & 7)) & 1 == 0:
+            return False, lookups, True
+    elif not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi, q0, q1, q2):
         return False, lookups, True
     lim = 1.0 - 4.0 * gap
     gi = np.int64(gap * sc)  # the tie margin, the midpoint's margin and the end as keys
