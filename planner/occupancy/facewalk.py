@@ -85,7 +85,7 @@ from planner.occupancy.facetable import (
 )
 from planner.occupancy.grid import cell_free
 
-__all__ = ["FaceTable", "face_scratch", "face_table", "face_walk", "recorded"]
+__all__ = ["FaceTable", "face_scratch", "face_table", "face_walk", "face_walk_call", "recorded"]
 
 SEG_TOL = 1e-9  # relative slack on each Voronoi half-space of every walk: contact counts
 _PAR = 1e-12  # |cos| below which a facet is parallel to the segment
@@ -100,8 +100,11 @@ _KEY_SAFE = 0.1 * _ON
 
 
 # numpy's error model: a float division by zero (a parallel slot's, selected away) is
-# not checked (no branch in the set-up's loop).
-@njit_cached(_nrt=False, error_model="numpy")
+# not checked (no branch in the set-up's loop); callers it is inlined into take it too.
+# Inlined (numba's IR inlining) where it is called: a call passes some 90 words of
+# arguments (the arrays of the occupancy, the table and the scratch, seven words each),
+# about 20 ns a line, a sixth of a short line's walk.
+@njit_cached(_nrt=False, error_model="numpy", inline="always")
 def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover - compiled
     """Line of sight between the centres of cells p and q: every cell whose closed Voronoi
     cell the segment touches is looked up, in order along it, until a blocked one.
@@ -447,3 +450,11 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
                             return False, lookups, True
             stop = mir - idx
     return True, lookups, True
+
+
+@njit_cached(_nrt=False, error_model="numpy")
+def face_walk_call(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover
+    """:func:`face_walk` as a compiled function of its own, not inlined: for a small caller
+    that LLVM inlines into a hot loop (the searches' sight test), which a copy of the
+    walk's body would make too big for that."""
+    return face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2)

@@ -20,7 +20,7 @@ from typing import NamedTuple
 import numpy as np
 
 from planner._numba import njit_cached
-from planner.occupancy.facewalk import I_SM, face_scratch, face_walk
+from planner.occupancy.facewalk import I_SM, face_scratch, face_walk, face_walk_call
 from planner.occupancy.grid import cell_free, occ_free
 from planner.occupancy.walk import SEG_TOL, segment_walk, walk_on, walk_scratch
 
@@ -300,7 +300,8 @@ def _generic_los(occ, walk, p, q, sc, gen):  # pragma: no cover - compiled
 
 # Without the runtime: one that counted references would pay an atomic increment and
 # decrement per array of the three structs on every sight line, more than a short walk.
-@njit_cached(_nrt=False)
+# The face walk is inlined here, with its error model (no zero-division checks).
+@njit_cached(_nrt=False, error_model="numpy")
 def los(occ, walk, p, q, sc, gen):  # pragma: no cover - compiled
     """Line of sight between the centres of cells p and q ((3,) int64 each) on scratch ``sc``
     with a fresh generation ``gen``: the cubic integer walk, else the face walk (else, at a
@@ -320,7 +321,8 @@ def sight(occ, walk, sc, st, p0, p1, p2, q0, q1, q2):  # pragma: no cover - comp
     generation counter is the search state's ``stamp`` (:mod:`planner.search._state`)."""
     if is_cubic(walk.g):
         return cubic_walk(occ, p0, p1, p2, q0, q1, q2)
-    free, n, ok = face_walk(occ, walk.fd, walk.fi, sc.sf, sc.si, p0, p1, p2, q0, q1, q2)
+    free, n, ok = face_walk_call(occ, walk.fd, walk.fi, sc.sf, sc.si, p0, p1, p2, q0, q1,
+                                 q2)
     if ok:
         return free, n
     sc.p[0] = p0
