@@ -85,7 +85,7 @@ from planner.occupancy.facetable import (
 )
 from planner.occupancy.grid import cell_free
 
-__all__ = ["FaceTable", "face_scratch", "face_table", "face_walk", "face_walk_call", "recorded"]
+__all__ = ["FaceTable", "face_scratch", "face_table", "face_walk", "recorded"]
 
 SEG_TOL = 1e-9  # relative slack on each Voronoi half-space of every walk: contact counts
 _PAR = 1e-12  # |cos| below which a facet is parallel to the segment
@@ -451,10 +451,3 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
             stop = mir - idx
     return True, lookups, True
 
-
-@njit_cached(_nrt=False, error_model="numpy")
-def face_walk_call(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover
-    """:func:`face_walk` as a compiled function of its own, not inlined: for a small caller
-    that LLVM inlines into a hot loop (the searches' sight test), which a copy of the
-    walk's body would make too big for that."""
-    return face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2)

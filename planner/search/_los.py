@@ -20,7 +20,7 @@ from typing import NamedTuple
 import numpy as np
 
 from planner._numba import njit_cached
-from planner.occupancy.facewalk import I_SM, face_scratch, face_walk, face_walk_call
+from planner.occupancy.facewalk import I_SM, face_scratch, face_walk
 from planner.occupancy.grid import cell_free, occ_free
 from planner.occupancy.walk import SEG_TOL, segment_walk, walk_on, walk_scratch
 
@@ -315,14 +315,15 @@ def los(occ, walk, p, q, sc, gen):  # pragma: no cover - compiled
     return _generic_los(occ, walk, p, q, sc, gen)
 
 
-@njit_cached(_nrt=False)
+# Inlined into the search loop with the face walk: a call of either would pass the
+# arrays of its structs (some 90 words or more) on every sight test of the loop.
+@njit_cached(_nrt=False, error_model="numpy", inline="always")
 def sight(occ, walk, sc, st, p0, p1, p2, q0, q1, q2):  # pragma: no cover - compiled
     """:func:`los` between cells p and q given by components, inside a search: the
     generation counter is the search state's ``stamp`` (:mod:`planner.search._state`)."""
     if is_cubic(walk.g):
         return cubic_walk(occ, p0, p1, p2, q0, q1, q2)
-    free, n, ok = face_walk_call(occ, walk.fd, walk.fi, sc.sf, sc.si, p0, p1, p2, q0, q1,
-                                 q2)
+    free, n, ok = face_walk(occ, walk.fd, walk.fi, sc.sf, sc.si, p0, p1, p2, q0, q1, q2)
     if ok:
         return free, n
     sc.p[0] = p0
