@@ -99,11 +99,10 @@ _NEVER = 1e300  # exit time of an empty slot
 _KEY_SAFE = 0.1 * _ON
 
 
-# numpy's error model: a float division by zero (a parallel slot's, selected away) is
-# not checked (no branch in the set-up's loop); callers it is inlined into take it too.
-# Inlined (numba's IR inlining) where it is called: a call passes some 90 words of
-# arguments (the arrays of the occupancy, the table and the scratch, seven words each),
-# about 20 ns a line, a sixth of a short line's walk.
+# numpy's error model: a float division by zero (a parallel slot's, selected away) is not
+# checked (no branch in the set-up's loop). Inlined where it is called (numba's IR inlining;
+# its callers take its error model): a call passes some 90 words of arguments (the arrays
+# of the occupancy, table and scratch), about 20 ns a line, a sixth of a short line's walk.
 @njit_cached(_nrt=False, error_model="numpy", inline="always")
 def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover - compiled
     """Line of sight between the centres of cells p and q: every cell whose closed Voronoi
@@ -234,10 +233,9 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
         si[o_rec + 2] = p2
     lookups = 1
     # On a dense grid (the box holding every touched cell inside it) a bit test.
-    if dense:
-        if (grid[np.uint64(idx) >> np.uint64(3)] >> (idx & 7)) & 1 == 0:
-            return False, lookups, True
-    elif not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi, p0, p1, p2):
+    free = ((grid[np.uint64(idx) >> np.uint64(3)] >> (idx & 7)) & 1 != 0 if dense
+            else cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi, p0, p1, p2))
+    if not free:
         return False, lookups, True
     if fwm == 0:  # p == q
         return True, lookups, True
@@ -253,10 +251,9 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
         si[o_rec + 4] = q1
         si[o_rec + 5] = q2
     lookups += 1
-    if dense:
-        if (grid[np.uint64(stop) >> np.uint64(3)] >> (stop & 7)) & 1 == 0:
-            return False, lookups, True
-    elif not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi, q0, q1, q2):
+    free = ((grid[np.uint64(stop) >> np.uint64(3)] >> (stop & 7)) & 1 != 0 if dense
+            else cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi, q0, q1, q2))
+    if not free:
         return False, lookups, True
     lim = 1.0 - 4.0 * gap
     gi = np.int64(gap * sc)  # the tie margin, the midpoint's margin and the end as keys
