@@ -28,21 +28,22 @@ import numpy as np
 from planner._numba import njit_cached
 
 __all__ = ["BLOCKED", "END", "KEY_BITS", "LOW", "MET", "SLOTS", "STEPPED", "TIE",
-           "face_scratch", "first_exit", "key", "recorded",
+           "face_scratch", "first_exit", "first_key", "key", "recorded",
            "run_mirror", "run_mirror4", "run_one", "run_one4"]
 
 SLOTS = 8  # exit-time slots: forward facets of a 3D Voronoi cell (at most 7)
 KEY_BITS = 57  # a line's exit times in fixed point stay below 2**KEY_BITS
 KEY_CAP = 2.0 ** 60  # the key of an empty slot (parallel facets, padding): never the next
-# Scratch (``sf`` float64, ``si`` int64, from face_scratch): 1 / |d . v| of slot k, |d . v|
-# of slot k, the sign of slot k's facet (+1: its pair's first, 0: parallel), sign /
-# |d . w_k|, the first exit time of slot k; the facet of slot k, the flat index step
-# through slot k's facet, the key of slot k, the change of slot k's key on a step through
-# slot i (8, 8), the number of slots the padding (the slots past them) was set for, the
-# cells the segment runs along (SM,: flat indices), the number of cells to record and the
-# record.
-S_IDQ, S_AY, S_SG, S_SY, S_T, S_F = 0, 8, 16, 24, 32, 40
-S_FW, S_STEP, S_KEY, S_KINC, S_NP, S_CUR = 0, 8, 16, 24, 88, 89
+# Scratch (``sf`` float64, ``si`` int64, from face_scratch): 1 / |d . v| of slot k, the
+# sign of slot k's facet (+1: its pair's first, 0: parallel), sign / |d . w_k|, the first
+# exit time of slot k; the facet of slot k, the flat index step through slot k's facet,
+# the key of slot k, the change of slot k's key on a step through slot i (8, 8), the bit
+# of slot k's facet (0: parallel, padding), the tie slack of slot k's key (a key within
+# it of the next exit's: that facet passes through the exit point), the number of slots
+# the padding (the slots past them) was set for, the cells the segment runs along (SM,:
+# flat indices), the number of cells to record and the record.
+S_IDQ, S_SG, S_SY, S_T, S_F = 0, 8, 16, 24, 32
+S_FW, S_STEP, S_KEY, S_KINC, S_BIT, S_ON, S_NP, S_CUR = 0, 8, 16, 24, 88, 96, 104, 105
 
 END, BLOCKED, TIE, STEPPED, MET = 0, 1, 2, 3, 4  # how run_one and run_mirror stop
 LOW = np.int64(-8)  # clears a key's slot bits
@@ -66,12 +67,18 @@ def recorded(si, sm, n):  # pragma: no cover - compiled
 
 
 @njit_cached(_nrt=False)
-def first_exit(si, n, isc):  # pragma: no cover - compiled
-    """The earliest exit time of the first ``n`` slots, from their keys."""
+def first_key(si, n):  # pragma: no cover - compiled
+    """The earliest exit of the first ``n`` slots as a key, its slot bits cleared."""
     m = si[S_KEY]
     for k in range(1, n):
         m = min(m, si[S_KEY + k])
-    return np.float64(m & LOW) * isc
+    return m & LOW
+
+
+@njit_cached(_nrt=False)
+def first_exit(si, n, isc):  # pragma: no cover - compiled
+    """The earliest exit time of the first ``n`` slots, from their keys."""
+    return np.float64(first_key(si, n)) * isc
 
 
 @njit_cached(_nrt=False)

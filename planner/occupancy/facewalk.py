@@ -42,13 +42,14 @@ from planner.occupancy.facestep import (
     KEY_BITS,
     LOW,
     MET,
-    S_AY,
+    S_BIT,
     S_CUR,
     S_FW,
     S_IDQ,
     S_KEY,
     S_KINC,
     S_NP,
+    S_ON,
     S_SG,
     S_STEP,
     S_SY,
@@ -58,6 +59,7 @@ from planner.occupancy.facestep import (
     TIE,
     face_scratch,
     first_exit,
+    first_key,
     key,
     recorded,
     run_mirror,
@@ -97,9 +99,11 @@ _NEVER = 1e300  # exit time of an empty slot
 _KEY_SAFE = 0.1 * _ON
 
 
-# numpy's error model: a float division by zero (a parallel slot's, selected away) is
-# not checked (no branch in the set-up's loop).
-@njit_cached(_nrt=False, error_model="numpy")
+# numpy's error model: a float division by zero (a parallel slot's, selected away) is not
+# checked (no branch in the set-up's loop). Inlined where it is called (numba's IR inlining;
+# its callers take its error model): a call passes some 90 words of arguments (the arrays
+# of the occupancy, table and scratch), about 20 ns a line, a sixth of a short line's walk.
+@njit_cached(_nrt=False, error_model="numpy", inline="always")
 def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover - compiled
     """Line of sight between the centres of cells p and q: every cell whose closed Voronoi
     cell the segment touches is looked up, in order along it, until a blocked one.
@@ -152,8 +156,8 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
     if si[S_NP] != npair:  # a fresh scratch (or another lattice's): the padding slots,
         for j in range(npair, SLOTS):  # set once: never the next exit, never moved
             sf[S_T + j] = _NEVER
-            sf[S_IDQ + j] = sf[S_AY + j] = sf[S_SG + j] = sf[S_SY + j] = 0.0
-            si[S_FW + j] = si[S_STEP + j] = 0
+            sf[S_IDQ + j] = sf[S_SG + j] = sf[S_SY + j] = 0.0
+            si[S_FW + j] = si[S_STEP + j] = si[S_BIT + j] = si[S_ON + j] = 0
             si[S_KEY + j] = key(_NEVER, 1.0, j)
             for k in range(SLOTS):
                 si[S_KINC + SLOTS * j + k] = si[S_KINC + SLOTS * k + j] = 0
@@ -174,7 +178,9 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
         sg = np.float64(live * (pos + pos - 1))
         br = fi[I_SLOT + 2 * SLOTS + j]
         bs = fi[I_SLOT + 3 * SLOTS + j]
-        fwm |= ((br & fp) | (bs & ~fp)) & fl
+        fb = ((br & fp) | (bs & ~fp)) & fl  # the forward facet's bit
+        fwm |= fb
+        si[S_BIT + j] = fb
         parm |= (br | bs) & ~fl
         st = (fi[I_SLOT + 4 * SLOTS + j] * s0 + fi[I_SLOT + 5 * SLOTS + j] * s1
               + fi[I_SLOT + 6 * SLOTS + j])
@@ -185,7 +191,6 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
         tmax = max(tmax, fd[F_A + j] * iy)
         sf[S_T + j] = t
         sf[S_IDQ + j] = iy
-        sf[S_AY + j] = ay
         sf[S_SG + j] = sg
         sf[S_SY + j] = sg * iy
     # The keys' scale: a power of two with every exit time of the line below
@@ -199,9 +204,12 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
     nsafe = _KEY_SAFE * t0min * np.float64(np.int64(1) << (KEY_BITS - 6 - ex))
     for j in range(npair):
         si[S_KEY + j] = key(sf[S_T + j], sc, j)
+        # the tie slack (_ON, relative to |v|^2 / 2) of this facet's exit time, in key units
+        si[S_ON + j] = np.int64(_ON * fd[F_H + j] * sf[S_IDQ + j] * sc)
     # The change table in keys (multiples of 8: the slot bits stay), rows of the pairs
     # only: the padding's and parallel slots' products are zeros, so their keys stay
-    # empty. Whole rows from eight locals: eight independent products a row.
+    # empty. Whole rows from eight locals: eight independent products a row; four on a
+    # cell of at most four pairs (its steps read four columns, the padding's are zeros).
     y0, y1, y2, y3 = sf[S_SY] * sc, sf[S_SY + 1] * sc, sf[S_SY + 2] * sc, sf[S_SY + 3] * sc
     y4, y5, y6, y7 = sf[S_SY + 4] * sc, sf[S_SY + 5] * sc, sf[S_SY + 6] * sc, sf[S_SY + 7] * sc
     low = np.int64(-8)
@@ -213,17 +221,21 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
         si[a + np.uint64(1)] = np.int64(sg * fd[b + np.uint64(1)] * y1) & low
         si[a + np.uint64(2)] = np.int64(sg * fd[b + np.uint64(2)] * y2) & low
         si[a + np.uint64(3)] = np.int64(sg * fd[b + np.uint64(3)] * y3) & low
-        si[a + np.uint64(4)] = np.int64(sg * fd[b + np.uint64(4)] * y4) & low
-        si[a + np.uint64(5)] = np.int64(sg * fd[b + np.uint64(5)] * y5) & low
-        si[a + np.uint64(6)] = np.int64(sg * fd[b + np.uint64(6)] * y6) & low
-        si[a + np.uint64(7)] = np.int64(sg * fd[b + np.uint64(7)] * y7) & low
+        if npair > 4:
+            si[a + np.uint64(4)] = np.int64(sg * fd[b + np.uint64(4)] * y4) & low
+            si[a + np.uint64(5)] = np.int64(sg * fd[b + np.uint64(5)] * y5) & low
+            si[a + np.uint64(6)] = np.int64(sg * fd[b + np.uint64(6)] * y6) & low
+            si[a + np.uint64(7)] = np.int64(sg * fd[b + np.uint64(7)] * y7) & low
     idx = ((p0 - b0) * d1 + (p1 - b1)) * d2 + (p2 - b2)
     if nrec > 0:
         si[o_rec] = p0
         si[o_rec + 1] = p1
         si[o_rec + 2] = p2
     lookups = 1
-    if not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi, p0, p1, p2):
+    # On a dense grid (the box holding every touched cell inside it) a bit test.
+    free = ((grid[np.uint64(idx) >> np.uint64(3)] >> (idx & 7)) & 1 != 0 if dense
+            else cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi, p0, p1, p2))
+    if not free:
         return False, lookups, True
     if fwm == 0:  # p == q
         return True, lookups, True
@@ -239,7 +251,9 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
         si[o_rec + 4] = q1
         si[o_rec + 5] = q2
     lookups += 1
-    if not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi, q0, q1, q2):
+    free = ((grid[np.uint64(stop) >> np.uint64(3)] >> (stop & 7)) & 1 != 0 if dense
+            else cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi, q0, q1, q2))
+    if not free:
         return False, lookups, True
     lim = 1.0 - 4.0 * gap
     gi = np.int64(gap * sc)  # the tie margin, the midpoint's margin and the end as keys
@@ -299,13 +313,15 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
                 if idx == stop:
                     break
                 continue
-            m = first_exit(si, nfw, isc)
+            mk = first_key(si, nfw)
+            m = np.float64(mk) * isc
         elif pm == 0:
             if npair <= 4:
                 code, idx, lookups, mk = run_one4(grid, si, idx, lookups, gi, one, dense, stop)
             else:
                 code, idx, lookups, mk = run_one(grid, si, idx, lookups, gi, one, dense, stop)
-            m = np.float64(mk & LOW) * isc
+            mk &= LOW
+            m = np.float64(mk) * isc
             if code == END or code == MET:
                 break
             if code == BLOCKED:
@@ -322,7 +338,8 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
                     return False, lookups, True
                 continue
         else:
-            m = first_exit(si, nfw, isc)
+            mk = first_key(si, nfw)
+            m = np.float64(mk) * isc
             if m >= 1.0:
                 break
         # An edge or a vertex, or a facet the segment runs in: the face table. Its cells
@@ -335,12 +352,11 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
             u2 = idx % d2 + b2 - p2
             u1 = (idx // d2) % d1 + b1 - p1
             u0 = idx // s0 + b0 - p0
+        # The facets through the exit point: each forward one whose key is within its slack
+        # of the exit's (no branch per facet: which are is not predictable).
         am = pm
         for k in range(nfw):
-            r = si[S_FW + k]
-            t = np.float64(si[S_KEY + k] & LOW) * isc
-            if fwm >> r & 1 and sf[S_AY + k] * (t - m) <= _ON * fd[F_H + k]:
-                am |= np.int64(1) << r
+            am |= si[S_BIT + k] & (((si[S_KEY + k] & LOW) - mk - si[S_ON + k] - 1) >> 63)
         f = fi[fi[I_FMASK] + am]
         if f < 0:
             return True, lookups, False
@@ -431,3 +447,4 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
                             return False, lookups, True
             stop = mir - idx
     return True, lookups, True
+

@@ -300,7 +300,8 @@ def _generic_los(occ, walk, p, q, sc, gen):  # pragma: no cover - compiled
 
 # Without the runtime: one that counted references would pay an atomic increment and
 # decrement per array of the three structs on every sight line, more than a short walk.
-@njit_cached(_nrt=False)
+# The face walk is inlined here, with its error model (no zero-division checks).
+@njit_cached(_nrt=False, error_model="numpy")
 def los(occ, walk, p, q, sc, gen):  # pragma: no cover - compiled
     """Line of sight between the centres of cells p and q ((3,) int64 each) on scratch ``sc``
     with a fresh generation ``gen``: the cubic integer walk, else the face walk (else, at a
@@ -314,7 +315,9 @@ def los(occ, walk, p, q, sc, gen):  # pragma: no cover - compiled
     return _generic_los(occ, walk, p, q, sc, gen)
 
 
-@njit_cached(_nrt=False)
+# Inlined into the search loop with the face walk: a call of either would pass the
+# arrays of its structs (some 90 words or more) on every sight test of the loop.
+@njit_cached(_nrt=False, error_model="numpy", inline="always")
 def sight(occ, walk, sc, st, p0, p1, p2, q0, q1, q2):  # pragma: no cover - compiled
     """:func:`los` between cells p and q given by components, inside a search: the
     generation counter is the search state's ``stamp`` (:mod:`planner.search._state`)."""
