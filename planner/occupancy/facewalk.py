@@ -447,4 +447,3 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
                             return False, lookups, True
             stop = mir - idx
     return True, lookups, True
-
