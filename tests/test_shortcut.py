@@ -163,3 +163,28 @@ def test_the_scratch_kept_between_calls_answers_as_a_fresh_one(name):
             keep, looked, _ = shortcut_kernel(chk.occupancy, chk.walk, r.cells, fresh, 0)
             assert np.array_equal(cut, r.cells[keep])
             assert world.cell_checks - before == looked
+
+
+def test_shortcut_alternating_between_lattices_keeps_each_lattices_scratch():
+    """Comparing lattices on one map alternates between worlds: each non-cubic walk keeps
+    its own scratch (built once, reused while the store holds it), and the answers are
+    those of a fresh scratch."""
+    from planner.search._kept import KEEP, kept_scratch
+
+    worlds = [World(Lattice.named(name, 1.0), np.zeros((0, 3), np.int64), [[0, 0, 0], [9, 9, 9]])
+              for name in ("bcc", "fcc", "hex")]
+    paths = [S.search(w, w.lattice.quantize([[1.0, 1, 1]])[0],
+                      w.lattice.quantize([[8.0, 7, 6]])[0]).cells for w in worlds]
+    first = [S.shortcut(w, c) for w, c in zip(worlds, paths, strict=True)]
+    for _ in range(3):
+        for w, c, kept in zip(worlds, paths, first, strict=True):
+            np.testing.assert_array_equal(S.shortcut(w, c), kept)
+    store: dict = {}
+    walks = [w.checker.walk for w in worlds]
+    built = [kept_scratch(store, wk, 5.0) for wk in walks]
+    assert [kept_scratch(store, wk, 4.0) for wk in walks] == built  # kept, same objects
+    assert kept_scratch(store, walks[0], 50.0) is not built[0]  # longer lines: rebuilt
+    for k in range(KEEP):  # more walks than the store keeps: the oldest go
+        kept_scratch(store, World(Lattice.named("bcc", 2.0 + k), np.zeros((0, 3), np.int64),
+                                  [[0, 0, 0], [9, 9, 9]]).checker.walk, 1.0)
+    assert len(store) == KEEP and all(id(wk) not in store for wk in walks)

@@ -15,12 +15,12 @@ Examples
 from __future__ import annotations
 
 import threading
-from typing import NamedTuple
 
 import numpy as np
 
 from planner.occupancy.walk import as_cells
-from planner.search._los import SightScratch, is_cubic, new_scratch, reach, shortcut_kernel
+from planner.search._kept import Kept, kept_scratch
+from planner.search._los import is_cubic, new_scratch, reach, shortcut_kernel
 from planner.world.world import World
 
 __all__ = ["shortcut"]
@@ -60,30 +60,19 @@ def shortcut(world: World, cells: np.ndarray) -> np.ndarray:
     return c[keep]
 
 
-class _Kept(NamedTuple):
-    """A sight scratch kept for the next call on this thread: built for ``walk`` and sight
-    lines up to ``span`` m, and the last generation stamped in it (a reused scratch needs
-    fresh stamps: :func:`planner.occupancy.walk.walk_on`)."""
-
-    walk: object
-    span: float
-    sc: SightScratch
-    gen: list[int]  # one element, updated in place
+_LOCAL = threading.local()  # per thread: its store of non-cubic scratches (_kept)
+_CUBIC: list[Kept] = []  # one for all threads: the cubic integer walk never touches it
 
 
-_LOCAL = threading.local()  # per thread: its _Kept for non-cubic lattices
-_CUBIC: list[_Kept] = []  # one for all threads: the cubic integer walk never touches it
-
-
-def _scratch(walk, cells: np.ndarray) -> _Kept:
+def _scratch(walk, cells: np.ndarray) -> Kept:
     """Scratch for shortcutting ``cells`` on ``walk``: building one costs several
-    microseconds, a fair part of a short path's smoothing, so a thread keeps its last."""
+    microseconds, a fair part of a short path's smoothing, so a thread keeps one per walk
+    (:mod:`planner.search._kept`)."""
     if is_cubic(walk.g):
         if not _CUBIC:
-            _CUBIC.append(_Kept(walk, 0.0, new_scratch(0.0, walk), [0]))
+            _CUBIC.append(Kept(walk, 0.0, new_scratch(0.0, walk), [0]))
         return _CUBIC[0]
-    span = reach(walk.g, cells)
-    kept = getattr(_LOCAL, "kept", None)
-    if kept is None or kept.walk is not walk or kept.span < span:
-        kept = _LOCAL.kept = _Kept(walk, span, new_scratch(span, walk), [0])
-    return kept
+    store = getattr(_LOCAL, "store", None)
+    if store is None:
+        store = _LOCAL.store = {}
+    return kept_scratch(store, walk, reach(walk.g, cells))

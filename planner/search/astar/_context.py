@@ -18,6 +18,7 @@ import numpy as np
 from planner.lattice import Lattice
 from planner.occupancy.walk import walk_of
 from planner.search._heap import new_heap
+from planner.search._kept import kept_scratch
 from planner.search._los import is_cubic, new_scratch
 from planner.search._nodes import ASTAR_STATE, new_nodes, new_slots
 from planner.search._state import new_state
@@ -86,8 +87,8 @@ class _Points:
 class _Context:
     """One thread's kernel arrays, reused by its next search (module docstring)."""
 
-    __slots__ = ("nodes", "heap", "slots", "state", "ufree", "ends", "end0", "end1", "sc",
-                 "sc_key", "bound", "owner", "held", "fast", "points", "__weakref__")
+    __slots__ = ("nodes", "heap", "slots", "state", "ufree", "ends", "end0", "end1",
+                 "scratch", "bound", "owner", "held", "fast", "points", "__weakref__")
 
     def __init__(self):
         self.nodes = new_nodes(_CAP)
@@ -97,8 +98,7 @@ class _Context:
         self.ufree = np.empty(64, np.bool_)
         self.ends = np.empty((2, 3), np.int64)
         self.end0, self.end1 = self.ends  # its rows: ``row[...] = cell`` is the fastest copy
-        self.sc = _no_sight()
-        self.sc_key = None
+        self.scratch: dict = {}  # any-angle sight scratch per walk (_sight)
         self.bound: _Memo | None = None  # the Bound of the last world searched
         self.owner = 0  # id of the owner of the bound world (see run)
         self.held: _Held | None = None  # the dense slot array of the last grid: _dense
@@ -158,14 +158,12 @@ def _no_sight():
 
 
 def _sight(ctx: _Context, walk, span: float):
-    """The any-angle sight scratch for ``walk`` and ``span``: kept in the context while the
-    thread searches the same world."""
+    """The any-angle sight scratch for ``walk`` and ``span``, kept in the context for the
+    walks it searches (:mod:`planner.search._kept`; the search state's ``stamp``, which
+    keeps counting, stamps every one of them)."""
     if span <= 0 or is_cubic(walk.g):
         return _no_sight()  # cubic sight lines need no scratch
-    key = (id(walk), span)
-    if ctx.sc_key != key:
-        ctx.sc, ctx.sc_key = new_scratch(span, walk), key
-    return ctx.sc
+    return kept_scratch(ctx.scratch, walk, span).sc
 
 
 def _settle(ctx: _Context, owner) -> None:
