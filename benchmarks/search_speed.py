@@ -10,8 +10,9 @@ Usage::
     python benchmarks/search_speed.py --smoke         # tiny sizes, well under a minute
 
 The per-lattice tables (sight walk per cell against the cubic integer walk, A* + smoothing
-and Lazy Theta* per lattice against cubic on the office map and geb079) are
-``benchmarks/lattice_sight.py``'s, printed here too (``--no-lattice-sight`` skips them).
+and Lazy Theta* per lattice against cubic on the office map, geb079 and the Warframe maps
+DA1 and Complex at 2-voxel cells) are ``benchmarks/lattice_sight.py``'s, printed here too
+(``--no-lattice-sight`` skips them).
 
 Ours against the C++ floor is ``benchmarks/cpp_anchor.py``'s table (compiled at run time
 with the system compiler, called in this process; skipped with a line when there is none).
@@ -432,13 +433,16 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--check-lengths", type=Path, metavar="JSON",
                     help="compare Lazy Theta* path lengths with a --save-lengths file")
     a = ap.parse_args(argv)
-    segments, plan_maps, plan_queries = 20_000, ["office", "geb079"], 8
+    segments, plan_maps, plan_queries = 20_000, ["office", "geb079", "DA1", "Complex"], 8
     if a.smoke:  # tiny sizes; geb079 (five lattice builds) left out
         a.sample, a.compare, a.da1, a.anyangle, a.repeat = 4, 1, 20, 3, 1
         a.maps, a.geb079, a.all_warframe = ["Simple"], False, False
         segments, plan_maps, plan_queries = 5000, ["office"], 2
     if not a.geb079:
         plan_maps = [m for m in plan_maps if m != "geb079"]
+    files = {"geb079": a.data / "octomap" / "geb079.bt"}
+    plan_maps = [m for m in plan_maps  # the maps present (office is bundled)
+                 if m == "office" or files.get(m, a.data / "warframe" / f"{m}.3dmap").is_file()]
     with harness.session("search engine speed: ours vs the C++ floor, per lattice, "
                          "any-angle vs A*", smoke=a.smoke, json=a.json,
                          command=harness.command_line("search_speed.py", argv)):

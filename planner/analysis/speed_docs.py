@@ -40,7 +40,7 @@ BENCH_START = "<!-- speed:start -->"
 BENCH_END = "<!-- speed:end -->"
 REGENERATE = "python -m planner.analysis.speed_docs benchmarks/speed.json"
 OTHER = ("bcc", "fcc", "mcc", "hex")  # the non-cubic lattices, in the tables' order
-PLAN_MAPS = ("office", "geb079")
+PLAN_MAPS = ("office", "geb079", "DA1", "Complex")  # those in the record, in this order
 
 
 class SpeedRecord:
@@ -175,28 +175,74 @@ def readme_block(run: SpeedRecord) -> str:
            f"`{REGENERATE}` rewrites this item and the next from that "
            "run's record.")
     sight = [run.fig("sight", k, "vs_cubic") for k in OTHER]
-    lazy = {m: [run.fig("plan", m, k, "lazy_vs_cubic") for k in OTHER] for m in PLAN_MAPS}
+    maps = _plan_maps(run)
+    lazy = {m: [run.fig("plan", m, k, "lazy_vs_cubic") for k in OTHER] for m in maps}
     smooth = {m: [run.fig("plan", m, k, "astar_smooth_vs_cubic") for k in ("bcc", "mcc")]
-              for m in PLAN_MAPS}
+              for m in maps}
     share = [1 - run.fig("plan", m, k, "smooth_s") / run.fig("plan", m, k, "astar_smooth_s")
-             for m in PLAN_MAPS for k in ("bcc", "mcc")]
+             for m in maps for k in ("bcc", "mcc")]
+    per_map = "; ".join(
+        f"{_plan_place(m)}: Lazy Theta* {_span(lazy[m])}x, A* plus smoothing BCC "
+        f"{_f(smooth[m][0])} and MCC {_f(smooth[m][1])}" for m in maps)
     two = ("Sight lines on the non-cubic lattices (Theta*, Lazy Theta*, `weighted-theta`, "
            "shortcutting) step from Voronoi cell to Voronoi cell through the facet the "
            "segment leaves by, each step also looking up its mirror image through the "
            "segment's midpoint (the cell the walk from the other end would reach), its exit "
            f"times integer keys that name their facet: {_span(sight)}x the cubic "
-           "integer walk's time per cell looked up (goal 1.5x), and Lazy Theta* takes "
-           f"{_span(lazy['office'])}x cubic's time on the office and "
-           f"{_span(lazy['geb079'])}x on geb079 (goal 1.5x). A* plus smoothing on "
-           f"BCC and MCC takes {_and([_f(v) for v in smooth['office']])} of cubic-26's time "
-           f"on the office and {_and([_f(v) for v in smooth['geb079']])} on geb079 (goal "
-           f"0.8): the search is {_span([100 * s for s in share], '.0f')}% of it")
-    if run.has("lattice_expansion", "bcc") and run.has("lattice_expansion", "mcc"):
-        per = [run.fig("lattice_expansion", k, "vs_cubic") for k in ("bcc", "mcc")]
-        two += (f", and a BCC or MCC expansion costs {_and([_f(v) for v in per])} of a cubic "
-                "one on geb079 although it has 14 moves to 26")
-    two += " (the same run's per-lattice tables: sums over the queries)."
+           "integer walk's time per cell looked up (goal 1.5x). Time against cubic-26's on "
+           "the same queries (sums over the queries; goals: Lazy Theta* 1.5x on every "
+           f"lattice, A* plus smoothing 0.8 on BCC and MCC): {per_map}; the search is "
+           f"{_span([100 * s for s in share], '.0f')}% of A* plus smoothing")
+    if all(run.has("plan", m, "cubic", "astar_search_s") for m in maps):
+        exp, cost = _per_expansion(run, maps, ("bcc", "mcc"), "astar")
+        lexp, lcost = _per_expansion(run, maps, OTHER, "lazy")
+        excess = _path_excess()
+        two += (f". A time ratio is an expansions ratio times a cost-per-expansion ratio: "
+                f"BCC and MCC A* expand {_span(exp)}x cubic-26's nodes at {_span(cost)}x its "
+                f"cost per expansion, the non-cubic Lazy Theta* {_span(lexp)}x at "
+                f"{_span(lcost)}x; the path metrics of BCC's and MCC's 14 moves stray further "
+                f"from the straight line than cubic-26's (up to {_f(excess['bcc'])}x and "
+                f"{_f(excess['mcc'])}x its length, against {_f(excess['cubic'])}x)")
+    two += " (the same run's per-lattice tables)."
     return _bullet(one) + "\n" + _bullet(two)
+
+
+def _plan_maps(run: SpeedRecord) -> list[str]:
+    """The planning tables' maps in the record (office and geb079 at least)."""
+    maps = [m for m in PLAN_MAPS if run.has("plan", m)]
+    for m in ("office", "geb079"):
+        if m not in maps:
+            run.fig("plan", m)  # the error that names it
+    return maps
+
+
+def _plan_place(m: str) -> str:
+    return {"office": "on the office", "geb079": "on geb079"}.get(
+        m, f"on Warframe {m} (2-voxel cells, radius 1 voxel)")
+
+
+def _per_expansion(run: SpeedRecord, maps: list[str], names, method: str
+                   ) -> tuple[list[float], list[float]]:
+    """Per map and lattice of ``names``: expansions / cubic's and time per expansion /
+    cubic's, of A*'s search (``method`` "astar") or of Lazy Theta* ("lazy")."""
+    secs = "astar_search_s" if method == "astar" else "lazy_s"
+    exp, cost = [], []
+    for m in maps:
+        c = run.fig("plan", m, "cubic")
+        for k in names:
+            p = run.fig("plan", m, k)
+            e = p[f"{method}_expansions"] / c[f"{method}_expansions"]
+            exp.append(e)
+            cost.append(p[secs] / c[secs] / e)
+    return exp, cost
+
+
+def _path_excess() -> dict[str, float]:
+    """Per named lattice, :func:`planner.search.moves.path_excess` of its full move set."""
+    from planner.lattice import NAMED_LATTICES, Lattice  # (numba: only this figure needs it)
+    from planner.search.moves import path_excess  # (numba, scipy: only this figure)
+
+    return {name: path_excess(Lattice.named(name, 1.0)) for name in NAMED_LATTICES}
 
 
 def _row(what: str, figure: str) -> str:
@@ -302,7 +348,8 @@ def _plan_row(run: SpeedRecord, m: str) -> str:
     p = run.fig("plan", m)
     names = [k for k in p if k != "cubic"]
     c = p["cubic"]
-    what = (f"planning per lattice on {m} (cell volume {c['cell_volume']:.3g} m^3, "
+    place = m if m in ("office", "geb079") else f"Warframe {m} (2-voxel cells, radius 1 voxel)"
+    what = (f"planning per lattice on {place} (cell volume {c['cell_volume']:.3g} m^3, "
             f"{c['queries']} queries solved on every lattice): A* + smoothing (`search` + "
             "`shortcut`) and Lazy Theta*, time / cubic-26's on the same queries")
     share = ", ".join(f"{k} {_f(100 * p[k]['smooth_s'] / p[k]['astar_smooth_s'], '.0f')}%"
@@ -317,6 +364,15 @@ def _plan_row(run: SpeedRecord, m: str) -> str:
            + " (goal 1.5); median of the per-query ratios "
            + ", ".join(f"{k} {_ci(run.ratio(f'Lazy Theta* time {k}/cubic, {m}'))}"
                        for k in names))
+    if "astar_search_s" in c:
+        exp, cost = _per_expansion(run, [m], names, "astar")
+        lexp, lcost = _per_expansion(run, [m], names, "lazy")
+        fig += (". Expansions / cubic's and time per expansion / cubic's: A* "
+                + ", ".join(f"{k} {_f(e)}, {_f(t)}" for k, e, t in zip(names, exp, cost,
+                                                                       strict=True))
+                + "; Lazy Theta* "
+                + ", ".join(f"{k} {_f(e)}, {_f(t)}" for k, e, t in zip(names, lexp, lcost,
+                                                                       strict=True)))
     return _row(what, fig)
 
 
@@ -332,7 +388,7 @@ def bench_block(run: SpeedRecord) -> str:
              "per-query ratios\" is the Hodges-Lehmann median of the paired ratios with its "
              "95% signed-rank interval, as the `ratio` lines print it (`harness.py`).")
     rows = [_floor_row(run), _lattice_row(run), _fixed_row(run), _anyangle_row(run),
-            _sight_row(run), *(_plan_row(run, m) for m in PLAN_MAPS)]
+            _sight_row(run), *(_plan_row(run, m) for m in _plan_maps(run))]
     return "\n".join([intro, "", "| what | figure |", "|---|---|",
                       *(r for r in rows if r is not None)])
 

@@ -37,7 +37,7 @@ from planner.occupancy.walk import segment_walk, walk_of
 from planner.search.heuristic import H_GAUGE
 
 __all__ = ["MoveSet", "move_allowed", "move_set", "move_stencils", "move_heuristic",
-           "carries_guarantee"]
+           "path_excess", "carries_guarantee"]
 
 
 
@@ -170,6 +170,17 @@ def move_heuristic(lattice: Lattice, neighbors: str = "full") -> np.ndarray:
         obstacle-free shortest path length with these moves. Read-only.
     """
     return _readonly(_facets_cached(lattice.generator.tobytes(), neighbors, lattice))
+
+
+def path_excess(lattice: Lattice, neighbors: str = "full") -> float:
+    """The most an obstacle-free shortest path with these moves is longer than the straight
+    line, as a ratio over every direction (1 would be the straight line itself): the
+    largest facet normal of the move-set gauge in world coordinates, ``max_f |F[f] G^-1|``
+    with ``F`` :func:`move_heuristic`'s facets and ``G`` the generator (the gauge of a
+    direction along that normal is its length times the normal's length). Cubic with 26
+    neighbours: sqrt(1 + (sqrt 2 - 1)^2 + (sqrt 3 - sqrt 2)^2), about 1.13."""
+    normals = move_heuristic(lattice, neighbors) @ np.linalg.inv(lattice.generator)
+    return float(np.linalg.norm(normals, axis=1).max())
 
 
 _NO_FACETS = np.zeros((1, 3))
