@@ -255,6 +255,24 @@ def test_heuristic_admissible_and_tight_on_moves(name, nb):
 
 
 @pytest.mark.parametrize("name", NAMED_LATTICES)
+def test_path_excess_is_the_longest_path_over_the_straight_line(name):
+    """``path_excess``: no direction's free-space path is longer than the straight line by
+    more (random directions come close), and the shortest moves' directions are exact."""
+    from planner.search.moves import path_excess
+
+    lat = Lattice.named(name, 2.0)
+    excess = path_excess(lat)
+    hm = S.move_heuristic(lat, "full")
+    rng = np.random.default_rng(3)
+    x = rng.normal(size=(20_000, 3))  # world directions, in index coordinates below
+    ratio = (x @ np.linalg.inv(lat.generator).T @ hm.T).max(axis=1) / np.linalg.norm(x, axis=1)
+    assert ratio.max() <= excess * (1 + 1e-12) and ratio.max() > excess - 0.01
+    if name == "cubic":
+        assert np.isclose(excess, np.sqrt(1 + (np.sqrt(2) - 1) ** 2
+                                          + (np.sqrt(3) - np.sqrt(2)) ** 2))
+
+
+@pytest.mark.parametrize("name", NAMED_LATTICES)
 def test_compiled_and_numpy_heuristics_agree(name):
     """Every engine's heuristic (gauge / octile for A* and D* Lite, Euclidean for the
     any-angle methods, zero for Dijkstra) gives the same value compiled and in numpy."""
