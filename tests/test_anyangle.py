@@ -56,9 +56,11 @@ def test_paths_are_valid_and_close_to_lazy_theta(name):
         ratios.append(r.cost / lt.cost)
     ratios = np.array(ratios)
     assert len(ratios) >= 30
-    # measured on these worlds: at least 93% within 0.5%, the worst 5.3% longer
+    # measured on these worlds: at least 92.5% within 0.5%, the worst 6.0% longer (FCC;
+    # against Lazy Theta* on its f grid of L / 1000, which finds some paths up to 0.8%
+    # shorter than the fine grid did, and none more than 0.3% longer)
     assert np.mean(ratios <= 1.005) >= 0.9
-    assert ratios.max() <= 1.06
+    assert ratios.max() <= 1.065
     assert np.median(ratios) == pytest.approx(1.0, abs=1e-9)
 
 
@@ -212,3 +214,24 @@ def test_turned_cubic_world_searches_as_the_unturned_one(method):
         assert c.cost == pytest.approx(a.cost, rel=1e-12)
         way = turned.lattice.to_world(c.cells)
         assert all(turned.segment_free(u, v) for u, v in zip(way[:-1], way[1:], strict=True))
+
+
+def test_lazy_theta_dives_along_a_free_straight_line():
+    """In free space Lazy Theta* returns the straight line, and finds it by diving along
+    it (the open list's f grid of a thousandth of the line: loop.F_STEP_ANY_ANGLE) instead
+    of expanding the thin ellipsoid of nearly straight f around it: a median of about one
+    expansion per neighbour distance along 300-cell lines (28 on lattice A*'s fine grid;
+    hex's 3D diagonals still expand about 37)."""
+    per_cell = []
+    for name in NAMED_LATTICES:
+        lat = Lattice.named(name, 1.0)
+        world = World(lat, np.zeros((0, 3), np.int64), [[0, 0, 0], [240, 160, 80]])
+        rng = np.random.default_rng(0)
+        for _ in range(5):
+            ends = np.array([[2.0, 2, 2], [238, 158, 78]]) + rng.uniform(-1, 1, (2, 3))
+            s, g = lat.quantize(ends)
+            r = S.search(world, s, g, method="lazy-theta")
+            line = np.linalg.norm(lat.to_world(g) - lat.to_world(s))
+            assert r.found and r.cost == pytest.approx(line, rel=1e-12)
+            per_cell.append(r.expansions / (line / (2 * lat.packing_radius)))
+    assert np.median(per_cell) < 2

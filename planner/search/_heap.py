@@ -89,9 +89,10 @@ def _lined(cap: int, dtype) -> np.ndarray:
 
 @njit_cached(_nrt=False)
 def fkey(x, fq, fq_inv):  # pragma: no cover - compiled
-    """``x`` (an f value, m) on the A* loops' f grid of step ``fq`` (1e-9 of the shortest
-    move; ``fq_inv`` its inverse): equal-cost paths tie exactly (float noise would otherwise
-    decide), so the larger-g tie-break can dive; costs stay exact."""
+    """``x`` (an f value, m) on the A* loops' f grid of step ``fq`` (``fq_inv`` its
+    inverse; :data:`planner.search.astar.loop.F_STEP`): equal-cost paths tie exactly (float
+    noise would otherwise decide), so the larger-g tie-break can dive; the node table keeps
+    the exact costs."""
     return np.floor(x * fq_inv + 0.5) * fq
 
 @njit_cached(inline="always")
