@@ -206,10 +206,10 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
         si[S_ON + j] = np.int64(_ON * fd[F_H + j] * sf[S_IDQ + j] * sc)
     # The change table in keys (multiples of 8: the slot bits stay), rows of the pairs
     # only: the padding's and parallel slots' products are zeros, so their keys stay
-    # empty. Whole rows from eight locals: eight independent products a row; four on a
-    # cell of at most four pairs (its steps read four columns, the padding's are zeros).
+    # empty. Whole rows from locals: independent products, the columns of the pairs only
+    # (at most seven: the eighth is padding; the padding's columns stay zeros, set once).
     y0, y1, y2, y3 = sf[S_SY] * sc, sf[S_SY + 1] * sc, sf[S_SY + 2] * sc, sf[S_SY + 3] * sc
-    y4, y5, y6, y7 = sf[S_SY + 4] * sc, sf[S_SY + 5] * sc, sf[S_SY + 6] * sc, sf[S_SY + 7] * sc
+    y4, y5, y6 = sf[S_SY + 4] * sc, sf[S_SY + 5] * sc, sf[S_SY + 6] * sc
     low = np.int64(-8)
     for j in range(npair):
         sg = sf[S_SG + j]
@@ -222,8 +222,8 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
         if npair > 4:
             si[a + np.uint64(4)] = np.int64(sg * fd[b + np.uint64(4)] * y4) & low
             si[a + np.uint64(5)] = np.int64(sg * fd[b + np.uint64(5)] * y5) & low
-            si[a + np.uint64(6)] = np.int64(sg * fd[b + np.uint64(6)] * y6) & low
-            si[a + np.uint64(7)] = np.int64(sg * fd[b + np.uint64(7)] * y7) & low
+            if npair > 6:
+                si[a + np.uint64(6)] = np.int64(sg * fd[b + np.uint64(6)] * y6) & low
     idx = ((p0 - b0) * d1 + (p1 - b1)) * d2 + (p2 - b2)
     if nrec > 0:
         si[o_rec] = p0
