@@ -30,7 +30,7 @@ import numpy as np
 from planner._numba import njit_cached
 
 __all__ = ["BLOCKED", "END", "KEY_BITS", "LOW", "MET", "SLOTS", "STEPPED", "TIE",
-           "face_scratch", "first_exit", "first_key", "key", "mirror_steps", "pad", "recorded",
+           "face_scratch", "first_exit", "first_key", "key", "mirror_steps", "recorded",
            "run_mirror", "run_mirror4", "run_mirror6", "run_one", "run_one4", "run_one6",
            "steps"]
 
@@ -89,20 +89,6 @@ def first_exit(si, n, isc):  # pragma: no cover - compiled
 def key(t, sc, k):  # pragma: no cover - compiled
     """Slot ``k``'s key of exit time ``t`` at scale ``sc`` (an empty slot's: KEY_CAP)."""
     return (np.int64(min(t * sc, KEY_CAP)) & LOW) | k
-
-
-@njit_cached(_nrt=False)
-def pad(sf, si, npair, never):  # pragma: no cover - compiled
-    """Set the slots past a cell's ``npair`` pairs (the padding) once per scratch and
-    lattice: exit time ``never``, keys empty, no facet, no step, no change."""
-    for j in range(npair, SLOTS):
-        sf[S_T + j] = never
-        sf[S_IDQ + j] = sf[S_SG + j] = sf[S_SY + j] = 0.0
-        si[S_FW + j] = si[S_STEP + j] = si[S_BIT + j] = si[S_ON + j] = 0
-        si[S_KEY + j] = key(never, 1.0, j)
-        for k in range(SLOTS):
-            si[S_KINC + SLOTS * j + k] = si[S_KINC + SLOTS * k + j] = 0
-    si[S_NP] = npair
 
 
 @njit_cached(_nrt=False)

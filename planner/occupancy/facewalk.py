@@ -62,7 +62,6 @@ from planner.occupancy.facestep import (
     first_key,
     key,
     mirror_steps,
-    pad,
     recorded,
     steps,
 )
@@ -152,31 +151,29 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
     tmax = 0.0  # a bound on every exit time of the line (facetable: F_A)
     t0min = _NEVER
     par2 = 2.0 * _PAR * _PAR * dn2
-    if si[S_NP] != npair:  # a fresh scratch (or another lattice's)
-        pad(sf, si, npair, _NEVER)
+    if si[S_NP] != npair:  # a fresh scratch (or another lattice's): the padding slots,
+        for j in range(npair, SLOTS):  # set once: never the next exit, never moved
+            sf[S_T + j] = _NEVER
+            sf[S_IDQ + j] = sf[S_SG + j] = sf[S_SY + j] = 0.0
+            si[S_FW + j] = si[S_STEP + j] = si[S_BIT + j] = si[S_ON + j] = 0
+            si[S_KEY + j] = key(_NEVER, 1.0, j)
+            for k in range(SLOTS):
+                si[S_KINC + SLOTS * j + k] = si[S_KINC + SLOTS * k + j] = 0
+        si[S_NP] = npair
     # Every pair's slot alike, and no branch: the selects by which of a pair faces forward
     # (unpredictable) are arithmetic, as the compiler made branches of conditional
-    # expressions. The floats first, then the integers from the signs: two loops with
-    # fewer live values each (one spilled registers, 4% of a BCC line's time).
+    # expressions.
     for j in range(npair):
         y = x0 * fd[F_W + j] + x1 * fd[F_W + SLOTS + j] + x2 * fd[F_W + 2 * SLOTS + j]
         h = fd[F_H + j]
-        live = np.float64(y * y > par2 * h)  # not parallel
-        iy = live / max(abs(y), 1e-300)  # parallel: 0
-        t = h * iy + (1.0 - live) * _NEVER  # exact (no tolerance): ties to rounding
-        sg = live * np.float64(np.int64(y > 0.0) * 2 - 1)  # +1: the first faces forward
-        gap = max(gap, _GAP * h * iy)
-        t0min = min(t0min, t)
-        tmax = max(tmax, fd[F_A + j] * iy)
-        sf[S_T + j] = t
-        sf[S_IDQ + j] = iy
-        sf[S_SG + j] = sg
-        sf[S_SY + j] = sg * iy
-    for j in range(npair):  # (a parallel pair's step and facet: never read)
-        sg = sf[S_SG + j]
-        pos = np.int64(sg > 0.0)
+        ay = abs(y)
+        pos = np.int64(y > 0.0)
+        live = np.int64(y * y > par2 * h)  # not parallel
         fp = -pos  # all ones if the pair's first faces forward
-        fl = -np.int64(sg != 0.0)
+        fl = -live
+        iy = np.float64(live) / max(ay, 1e-300)  # parallel: 0
+        t = h * iy + np.float64(1 - live) * _NEVER  # exact (no tolerance): ties to rounding
+        sg = np.float64(live * (pos + pos - 1))
         br = fi[I_SLOT + 2 * SLOTS + j]
         bs = fi[I_SLOT + 3 * SLOTS + j]
         fb = ((br & fp) | (bs & ~fp)) & fl  # the forward facet's bit
@@ -187,6 +184,13 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
               + fi[I_SLOT + 6 * SLOTS + j])
         si[S_STEP + j] = st * (pos + pos - 1)
         si[S_FW + j] = (fi[I_SLOT + j] & fp) | (fi[I_SLOT + SLOTS + j] & ~fp)
+        gap = max(gap, _GAP * h * iy)
+        t0min = min(t0min, t)
+        tmax = max(tmax, fd[F_A + j] * iy)
+        sf[S_T + j] = t
+        sf[S_IDQ + j] = iy
+        sf[S_SG + j] = sg
+        sf[S_SY + j] = sg * iy
     # The keys' scale: a power of two with every exit time of the line below
     # 2**KEY_BITS units, and the lookups after which a tie is past their precision (each
     # step moves a key by its rounded change: < 16 units, a lookup at most a step).
@@ -198,7 +202,8 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
     nsafe = _KEY_SAFE * t0min * np.float64(np.int64(1) << (KEY_BITS - 6 - ex))
     for j in range(npair):
         si[S_KEY + j] = key(sf[S_T + j], sc, j)
-    ons = False  # the tie slacks: set at the line's first tie (most lines have none)
+        # the tie slack (_ON, relative to |v|^2 / 2) of this facet's exit time, in key units
+        si[S_ON + j] = np.int64(_ON * fd[F_H + j] * sf[S_IDQ + j] * sc)
     # The change table in keys (multiples of 8: the slot bits stay), rows of the pairs
     # only: the padding's and parallel slots' products are zeros, so their keys stay
     # empty. Whole rows from locals: independent products, the columns of the pairs only
@@ -339,10 +344,6 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
         # The facets through the exit point: each forward one whose key is within its slack
         # of the exit's (no branch per facet: which are is not predictable; all eight slots,
         # the padding's bits 0: a loop of nfw cost a mispredicted exit, 8% of FCC's time).
-        if not ons:  # the tie slack (_ON of |v|^2 / 2) of each facet's exit, in key units
-            for j in range(npair):
-                si[S_ON + j] = np.int64(_ON * fd[F_H + j] * sf[S_IDQ + j] * sc)
-            ons = True
         am = pm
         for k in range(SLOTS):
             u = np.uint64(k)
