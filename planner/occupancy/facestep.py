@@ -19,7 +19,8 @@ decisions must tolerate: :func:`planner.occupancy.facewalk.face_walk` bounds it.
 A cell of at most four facet pairs (the hexagonal prism) steps on four keys
 (:func:`run_one4`, :func:`run_mirror4`: the same loops with half the minimum tree and half
 the additions, some 12% of a hex line's time), one of at most six (FCC) on six
-(:func:`run_one6`, :func:`run_mirror6`: some 4% of an FCC line's); :func:`steps` and
+(:func:`run_one6`, :func:`run_mirror6`: ``python benchmarks/lattice_sight.py`` put FCC's
+walk at 1.52-1.61 x cubic per cell, at 1.69 on eight keys); :func:`steps` and
 :func:`mirror_steps` pick the variant.
 """
 

@@ -343,7 +343,7 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
             u0 = idx // s0 + b0 - p0
         # The facets through the exit point: each forward one whose key is within its slack
         # of the exit's (no branch per facet: which are is not predictable; all eight slots,
-        # the padding's bits 0: a loop of nfw cost a mispredicted exit, 8% of FCC's time).
+        # the padding's bits 0: a loop of nfw slots cost a mispredicted exit per tie).
         am = pm
         for k in range(SLOTS):
             u = np.uint64(k)
