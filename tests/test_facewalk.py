@@ -13,6 +13,15 @@ from numba import njit
 
 from planner.lattice import NAMED_LATTICES, Lattice
 from planner.lattice.planar import PlanarPrism, planar_prism
+from planner.occupancy.facetable import (
+    I_FMASK,
+    I_NF,
+    I_R,
+    I_STARMASK,
+    I_STARN,
+    I_STAROFF,
+    face_table,
+)
 from planner.occupancy.facewalk import I_SM, face_scratch, face_walk, recorded
 from planner.occupancy.grid import occ_free
 from planner.occupancy.keys import pack3
@@ -193,3 +202,20 @@ def test_one_scratch_serves_lattices_with_other_slot_counts():
             want = face_walk(chk.occupancy, chk.walk.fd, chk.walk.fi, *fresh, *p, *q)
             got = face_walk(chk.occupancy, chk.walk.fd, chk.walk.fi, *shared, *p, *q)
             assert got == want, (name, p.tolist(), q.tolist())
+
+
+@pytest.mark.parametrize("name", LATTICES)
+def test_each_face_lists_the_chain_cell_first(name):
+    """The walk skips the first cell around a face (the cell it is in, which it leaves
+    there) when it looks the face's cells up: the table lists the origin's cell first, with
+    the face's own facets, and no other cell at the origin."""
+    fi = face_table(_lattice(name)).fi
+    nf, sm = int(fi[I_NF]), int(fi[I_SM])
+    off = fi[fi[I_STAROFF]:fi[I_STAROFF] + 3 * nf * sm].reshape(nf, sm, 3)
+    masks = fi[fi[I_STARMASK]:fi[I_STARMASK] + nf * sm].reshape(nf, sm)
+    faces = fi[fi[I_FMASK]:fi[I_FMASK] + (1 << int(fi[I_R]))]
+    for m in np.flatnonzero(faces >= 0):
+        f = faces[m]
+        n = fi[fi[I_STARN] + f]
+        assert n >= 2 and not off[f, 0].any() and masks[f, 0] == m
+        assert off[f, 1:n].any(axis=1).all()

@@ -28,8 +28,8 @@ __all__ = ["FaceTable", "face_table"]
 # 1 << r, 1 << s (0: padding) at I_SLOT + 2 SLOTS and w as index offsets (3, SLOTS) at
 # I_SLOT + 4 SLOTS; then the face id of each facet set (2**R,; -1: no face) at
 # fi[I_FMASK], the number of cells around each face (NF,) at fi[I_STARN], their offsets
-# (NF, SM, 3) at fi[I_STAROFF], and each one's facets through the face (NF, SM; bit r:
-# facet r) at fi[I_STARMASK].
+# (NF, SM, 3) at fi[I_STAROFF] (the origin's cell first: the walk skips it), and each
+# one's facets through the face (NF, SM; bit r: facet r) at fi[I_STARMASK].
 I_R, I_NF, I_SM, I_REACH = 0, 1, 2, 3  # reach: |index - segment point| bound, 3 axes
 I_FMASK, I_STARN, I_STAROFF, I_STARMASK, I_SLOT = 6, 7, 8, 9, 10
 F_W, F_H, F_A, F_REL = 0, 3 * SLOTS, 4 * SLOTS, 5 * SLOTS
@@ -78,6 +78,7 @@ def face_table(lattice: Lattice) -> FaceTable:
             continue
         d = np.linalg.norm(x - cen, axis=1)
         near = np.flatnonzero(np.abs(d - np.linalg.norm(x)) <= 1e-7 * cell.covering_radius)
+        near = near[np.argsort(cand[near].any(axis=1), kind="stable")]  # the origin's first
         faces[m] = [(cand[k], _active(x - cen[k], rel, rhs, 1e-7)) for k in near]
     sm = max(len(s) for s in faces.values())
     nf = len(faces)

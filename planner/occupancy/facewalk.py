@@ -61,11 +61,9 @@ from planner.occupancy.facestep import (
     first_exit,
     first_key,
     key,
+    mirror_steps,
     recorded,
-    run_mirror,
-    run_mirror4,
-    run_one,
-    run_one4,
+    steps,
 )
 from planner.occupancy.facetable import (
     F_A,
@@ -208,10 +206,10 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
         si[S_ON + j] = np.int64(_ON * fd[F_H + j] * sf[S_IDQ + j] * sc)
     # The change table in keys (multiples of 8: the slot bits stay), rows of the pairs
     # only: the padding's and parallel slots' products are zeros, so their keys stay
-    # empty. Whole rows from eight locals: eight independent products a row; four on a
-    # cell of at most four pairs (its steps read four columns, the padding's are zeros).
+    # empty. Whole rows from locals: independent products, the columns of the pairs only
+    # (at most seven: the eighth is padding; the padding's columns stay zeros, set once).
     y0, y1, y2, y3 = sf[S_SY] * sc, sf[S_SY + 1] * sc, sf[S_SY + 2] * sc, sf[S_SY + 3] * sc
-    y4, y5, y6, y7 = sf[S_SY + 4] * sc, sf[S_SY + 5] * sc, sf[S_SY + 6] * sc, sf[S_SY + 7] * sc
+    y4, y5, y6 = sf[S_SY + 4] * sc, sf[S_SY + 5] * sc, sf[S_SY + 6] * sc
     low = np.int64(-8)
     for j in range(npair):
         sg = sf[S_SG + j]
@@ -224,8 +222,8 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
         if npair > 4:
             si[a + np.uint64(4)] = np.int64(sg * fd[b + np.uint64(4)] * y4) & low
             si[a + np.uint64(5)] = np.int64(sg * fd[b + np.uint64(5)] * y5) & low
-            si[a + np.uint64(6)] = np.int64(sg * fd[b + np.uint64(6)] * y6) & low
-            si[a + np.uint64(7)] = np.int64(sg * fd[b + np.uint64(7)] * y7) & low
+            if npair > 6:
+                si[a + np.uint64(6)] = np.int64(sg * fd[b + np.uint64(6)] * y6) & low
     idx = ((p0 - b0) * d1 + (p1 - b1)) * d2 + (p2 - b2)
     if nrec > 0:
         si[o_rec] = p0
@@ -268,22 +266,16 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
     while True:
         if mirroring:
             if dense:
-                if npair <= 4:
-                    code, idx, stop, lookups = run_mirror4(grid, si, idx, mir, lookups, gi, li)
-                else:
-                    code, idx, stop, lookups = run_mirror(grid, si, idx, mir, lookups, gi, li)
+                code, idx, stop, lookups = mirror_steps(grid, si, idx, mir, lookups, gi, li,
+                                                        npair)
                 if code == BLOCKED:
                     return False, lookups, True
             else:
                 code = MET
                 m = first_exit(si, nfw, isc)
                 while m + m < lim:
-                    if npair <= 4:
-                        code, idx, lookups, _ = run_one4(grid, si, idx, lookups, gi, one, False,
-                                                         stop)
-                    else:
-                        code, idx, lookups, _ = run_one(grid, si, idx, lookups, gi, one, False,
-                                                        stop)
+                    code, idx, lookups, _ = steps(grid, si, idx, lookups, gi, one, False, stop,
+                                                  npair)
                     if code != STEPPED:  # a tie
                         break
                     code = MET
@@ -316,10 +308,7 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
             mk = first_key(si, nfw)
             m = np.float64(mk) * isc
         elif pm == 0:
-            if npair <= 4:
-                code, idx, lookups, mk = run_one4(grid, si, idx, lookups, gi, one, dense, stop)
-            else:
-                code, idx, lookups, mk = run_one(grid, si, idx, lookups, gi, one, dense, stop)
+            code, idx, lookups, mk = steps(grid, si, idx, lookups, gi, one, dense, stop, npair)
             mk &= LOW
             m = np.float64(mk) * isc
             if code == END or code == MET:
@@ -353,40 +342,44 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
             u1 = (idx // d2) % d1 + b1 - p1
             u0 = idx // s0 + b0 - p0
         # The facets through the exit point: each forward one whose key is within its slack
-        # of the exit's (no branch per facet: which are is not predictable).
+        # of the exit's (no branch per facet: which are is not predictable; all eight slots,
+        # the padding's bits 0: a loop of nfw slots cost a mispredicted exit per tie).
         am = pm
-        for k in range(nfw):
-            am |= si[S_BIT + k] & (((si[S_KEY + k] & LOW) - mk - si[S_ON + k] - 1) >> 63)
+        for k in range(SLOTS):
+            u = np.uint64(k)
+            am |= si[np.uint64(S_BIT) + u] & (((si[np.uint64(S_KEY) + u] & LOW) - mk
+                                                - si[np.uint64(S_ON) + u] - 1) >> 63)
         f = fi[fi[I_FMASK] + am]
         if f < 0:
             return True, lookups, False
         nxt = -1  # the next chain cell: the one entered, else one the segment runs along
         inner = False
         ns = fi[fi[I_STARN] + f]
-        for j in range(ns):
+        # The star's first cell is the chain cell (facetable), which the segment leaves
+        # here (the exit's facet is forward): never the next one.
+        for j in range(1, ns):
             a = o_cells + 3 * (sm * f + j)
             f0, f1, f2 = fi[a], fi[a + 1], fi[a + 2]
-            if f0 != 0 or f1 != 0 or f2 != 0:
-                c = idx + f0 * s0 + f1 * s1 + f2
-                seen = c == stop  # the far end's cell: looked up by its walk
-                for i in range(ncur):
-                    if si[S_CUR + i] == c:
-                        seen = True
-                        break
-                if not seen:
-                    lookups += 1
-                    if dense:
-                        if (grid[np.uint64(c) >> np.uint64(3)] >> (c & 7)) & 1 == 0:
-                            return False, lookups, True
-                    else:
-                        c0, c1, c2 = p0 + u0 + f0, p1 + u1 + f1, p2 + u2 + f2
-                        if lookups <= nrec:
-                            si[o_rec + 3 * lookups - 3] = c0
-                            si[o_rec + 3 * lookups - 2] = c1
-                            si[o_rec + 3 * lookups - 1] = c2
-                        if not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi,
-                                         c0, c1, c2):
-                            return False, lookups, True
+            c = idx + f0 * s0 + f1 * s1 + f2
+            seen = c == stop  # the far end's cell: looked up by its walk
+            for i in range(ncur):
+                if si[S_CUR + i] == c:
+                    seen = True
+                    break
+            if not seen:
+                lookups += 1
+                if dense:
+                    if (grid[np.uint64(c) >> np.uint64(3)] >> (c & 7)) & 1 == 0:
+                        return False, lookups, True
+                else:
+                    c0, c1, c2 = p0 + u0 + f0, p1 + u1 + f1, p2 + u2 + f2
+                    if lookups <= nrec:
+                        si[o_rec + 3 * lookups - 3] = c0
+                        si[o_rec + 3 * lookups - 2] = c1
+                        si[o_rec + 3 * lookups - 1] = c2
+                    if not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi,
+                                     c0, c1, c2):
+                        return False, lookups, True
             bm = fi[o_masks + sm * f + j]
             if bm & fwm:
                 continue  # the segment leaves it here
@@ -400,7 +393,7 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
         # The cells it runs along from here (their lookups done): the dedup list.
         ncur = 0
         if not inner:
-            for j in range(ns):
+            for j in range(1, ns):
                 bm = fi[o_masks + sm * f + j]
                 if bm & fwm == 0 and bm & parm != 0:
                     a = o_cells + 3 * (sm * f + j)
@@ -415,11 +408,13 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
             break
         # The exit times from the next chain cell: moved by the offset (c_u . v), as the
         # fast steps move them (a change rounded the same way).
-        # (A parallel slot's 1 / |d . v| is 0: its key stays.)
-        for k in range(nfw):
-            w = F_REL + 3 * si[S_FW + k]
-            si[S_KEY + k] += np.int64((fd[w] * g0 + fd[w + 1] * g1 + fd[w + 2] * g2)
-                                      * sf[S_IDQ + k] * sc) & LOW
+        # (A parallel or padding slot's 1 / |d . v| is 0: its key stays. All eight slots.)
+        for k in range(SLOTS):
+            u = np.uint64(k)
+            w = np.uint64(F_REL + 3 * si[np.uint64(S_FW) + u])
+            si[np.uint64(S_KEY) + u] += np.int64(
+                (fd[w] * g0 + fd[w + np.uint64(1)] * g1 + fd[w + np.uint64(2)] * g2)
+                * sf[np.uint64(S_IDQ) + u] * sc) & LOW
         if mirroring:
             # The tie's mirror image: its cells' images, when the next chain cell's exit
             # keeps the two walks apart (the segment in its interior: no facet run along).
@@ -427,23 +422,22 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
             if not inner or mn + m >= lim:
                 mirroring = False
                 continue
-            for j in range(ns):
+            for j in range(1, ns):
                 a = o_cells + 3 * (sm * f + j)
                 f0, f1, f2 = fi[a], fi[a + 1], fi[a + 2]
-                if f0 != 0 or f1 != 0 or f2 != 0:
-                    lookups += 1
-                    if dense:
-                        c = mir - old - f0 * s0 - f1 * s1 - f2
-                        if (grid[np.uint64(c) >> np.uint64(3)] >> (c & 7)) & 1 == 0:
-                            return False, lookups, True
-                    else:
-                        c0, c1, c2 = q0 - u0 - f0, q1 - u1 - f1, q2 - u2 - f2
-                        if lookups <= nrec:
-                            si[o_rec + 3 * lookups - 3] = c0
-                            si[o_rec + 3 * lookups - 2] = c1
-                            si[o_rec + 3 * lookups - 1] = c2
-                        if not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi,
-                                         c0, c1, c2):
-                            return False, lookups, True
+                lookups += 1
+                if dense:
+                    c = mir - old - f0 * s0 - f1 * s1 - f2
+                    if (grid[np.uint64(c) >> np.uint64(3)] >> (c & 7)) & 1 == 0:
+                        return False, lookups, True
+                else:
+                    c0, c1, c2 = q0 - u0 - f0, q1 - u1 - f1, q2 - u2 - f2
+                    if lookups <= nrec:
+                        si[o_rec + 3 * lookups - 3] = c0
+                        si[o_rec + 3 * lookups - 2] = c1
+                        si[o_rec + 3 * lookups - 1] = c2
+                    if not cell_free(mode, grid, lo, dims, table, tmask, gg, blo, bhi,
+                                     c0, c1, c2):
+                        return False, lookups, True
             stop = mir - idx
     return True, lookups, True
