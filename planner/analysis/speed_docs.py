@@ -182,7 +182,7 @@ def readme_block(run: SpeedRecord) -> str:
     share = [1 - run.fig("plan", m, k, "smooth_s") / run.fig("plan", m, k, "astar_smooth_s")
              for m in maps for k in ("bcc", "mcc")]
     per_map = "; ".join(
-        f"{_plan_place(m)}: Lazy Theta* {_span(lazy[m])}x, A* plus smoothing BCC "
+        f"on {_plan_place(m)}: Lazy Theta* {_span(lazy[m])}x, A* plus smoothing BCC "
         f"{_f(smooth[m][0])} and MCC {_f(smooth[m][1])}" for m in maps)
     two = ("Sight lines on the non-cubic lattices (Theta*, Lazy Theta*, `weighted-theta`, "
            "shortcutting) step from Voronoi cell to Voronoi cell through the facet the "
@@ -217,8 +217,9 @@ def _plan_maps(run: SpeedRecord) -> list[str]:
 
 
 def _plan_place(m: str) -> str:
-    return {"office": "on the office", "geb079": "on geb079"}.get(
-        m, f"on Warframe {m} (2-voxel cells, radius 1 voxel)")
+    """The planning table's map as a sentence names it."""
+    return {"office": "the office", "geb079": "geb079"}.get(
+        m, f"Warframe {m} (2-voxel cells, radius 1 voxel)")
 
 
 def _per_expansion(run: SpeedRecord, maps: list[str], names, method: str
@@ -348,8 +349,7 @@ def _plan_row(run: SpeedRecord, m: str) -> str:
     p = run.fig("plan", m)
     names = [k for k in p if k != "cubic"]
     c = p["cubic"]
-    place = m if m in ("office", "geb079") else f"Warframe {m} (2-voxel cells, radius 1 voxel)"
-    what = (f"planning per lattice on {place} (cell volume {c['cell_volume']:.3g} m^3, "
+    what = (f"planning per lattice on {_plan_place(m)} (cell volume {c['cell_volume']:.3g} m^3, "
             f"{c['queries']} queries solved on every lattice): A* + smoothing (`search` + "
             "`shortcut`) and Lazy Theta*, time / cubic-26's on the same queries")
     share = ", ".join(f"{k} {_f(100 * p[k]['smooth_s'] / p[k]['astar_smooth_s'], '.0f')}%"
