@@ -56,9 +56,8 @@ def test_paths_are_valid_and_close_to_lazy_theta(name):
         ratios.append(r.cost / lt.cost)
     ratios = np.array(ratios)
     assert len(ratios) >= 30
-    # measured on these worlds: at least 92.5% within 0.5%, the worst 6.0% longer (FCC;
-    # against Lazy Theta* on its f grid of L / 1000, which finds some paths up to 0.8%
-    # shorter than the fine grid did, and none more than 0.3% longer)
+    # measured on these worlds: at least 90% within 0.5% (BCC), the worst 5.1% longer
+    # (FCC; against Lazy Theta* on its f grid, test_lazy_theta_against_a_plain_python_...)
     assert np.mean(ratios <= 1.005) >= 0.9
     assert ratios.max() <= 1.065
     assert np.median(ratios) == pytest.approx(1.0, abs=1e-9)
@@ -216,22 +215,52 @@ def test_turned_cubic_world_searches_as_the_unturned_one(method):
         assert all(turned.segment_free(u, v) for u, v in zip(way[:-1], way[1:], strict=True))
 
 
-def test_lazy_theta_dives_along_a_free_straight_line():
-    """In free space Lazy Theta* returns the straight line, and finds it by diving along
-    it (the open list's f grid of a thousandth of the line: loop.F_STEP_ANY_ANGLE) instead
-    of expanding the thin ellipsoid of nearly straight f around it: a median of about one
-    expansion per neighbour distance along 300-cell lines (28 on lattice A*'s fine grid;
-    hex's 3D diagonals still expand about 37)."""
-    per_cell = []
+@pytest.mark.parametrize("method", ["lazy-theta", "theta"])
+def test_any_angle_dives_along_a_free_straight_line(method):
+    """In free space Theta* and Lazy Theta* return the straight line, and find it by diving
+    along it instead of expanding the thin ellipsoid of nearly straight f around it (the
+    open list's f grid anchored at the start's f, with the end allowance:
+    loop.F_STEP_ANY_ANGLE, loop.END_SLACK): fewer than two expansions per neighbour
+    distance on every line, 8 to 150 neighbour distances long in random directions (up to
+    13 without the allowance, 28 on lattice A*'s fine grid)."""
+    rng = np.random.default_rng(0)
     for name in NAMED_LATTICES:
         lat = Lattice.named(name, 1.0)
-        world = World(lat, np.zeros((0, 3), np.int64), [[0, 0, 0], [240, 160, 80]])
-        rng = np.random.default_rng(0)
-        for _ in range(5):
-            ends = np.array([[2.0, 2, 2], [238, 158, 78]]) + rng.uniform(-1, 1, (2, 3))
-            s, g = lat.quantize(ends)
-            r = S.search(world, s, g, method="lazy-theta")
+        step = 2 * lat.packing_radius
+        world = World(lat, np.zeros((0, 3), np.int64), [[-160, -160, -160], [160, 160, 160]])
+        for _ in range(8):
+            way = rng.normal(size=3)
+            ends = np.stack([np.zeros(3), way / np.linalg.norm(way) * rng.uniform(8, 150) * step])
+            s, g = lat.quantize(ends + rng.uniform(-0.5, 0.5, (2, 3)))
+            r = S.search(world, s, g, method=method)
             line = np.linalg.norm(lat.to_world(g) - lat.to_world(s))
             assert r.found and r.cost == pytest.approx(line, rel=1e-12)
-            per_cell.append(r.expansions / (line / (2 * lat.packing_radius)))
-    assert np.median(per_cell) < 2
+            assert r.expansions < 2 * line / step, (name, s, g)
+
+
+@pytest.mark.parametrize("name", NAMED_LATTICES)
+def test_lazy_theta_against_a_plain_python_lazy_theta(name):
+    """The compiled Lazy Theta* against a plain-Python one (tests/_lazy_theta.py) on 40
+    small random worlds per lattice. Filing nodes as the loop does (its f grid and end
+    allowance), the oracle finds the same path length but where nodes tie exactly in key
+    and g (each heap then picks its own); in an exact f order, lengths differ both ways on
+    a few queries and not on average: which of nearly tied nodes comes out first changes,
+    not what Lazy Theta* finds."""
+    from tests._lazy_theta import lazy_theta  # the oracle: slow, only here
+
+    same, ratios = [], []
+    for seed in range(40):
+        world, s, g = _random_world(name, seed)
+        r = S.search(world, s, g, method="lazy-theta")
+        filed, exact = lazy_theta(world, s, g, grid=True), lazy_theta(world, s, g)
+        assert r.found == np.isfinite(filed) == np.isfinite(exact)
+        if r.found:
+            same.append(r.cost == pytest.approx(filed, rel=1e-12))
+            ratios.append(filed / exact)
+    ratios = np.array(ratios)
+    assert len(ratios) >= 30
+    assert np.mean(same) >= 0.95  # measured: 39 or 40 of 40 on every lattice
+    # measured on these worlds: 82-95% equal, 3.4% shorter to 2.4% longer, means 0.998-1.0003
+    assert np.mean(np.abs(ratios - 1) < 1e-9) >= 0.8
+    assert 0.96 <= ratios.min() and ratios.max() <= 1.03
+    assert abs(ratios.mean() - 1) <= 0.003

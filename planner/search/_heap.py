@@ -88,12 +88,12 @@ def _lined(cap: int, dtype) -> np.ndarray:
 
 
 @njit_cached(_nrt=False)
-def fkey(x, fq, fq_inv):  # pragma: no cover - compiled
-    """``x`` (an f value, m) on the A* loops' f grid of step ``fq`` (``fq_inv`` its
-    inverse; :data:`planner.search.astar.loop.F_STEP`): equal-cost paths tie exactly (float
-    noise would otherwise decide), so the larger-g tie-break can dive; the node table keeps
-    the exact costs."""
-    return np.floor(x * fq_inv + 0.5) * fq
+def fkey(x, f0, fq, fq_inv):  # pragma: no cover - compiled
+    """``x`` (an f value, m) on the A* loops' f grid of step ``fq`` through ``f0`` (m;
+    ``fq_inv`` the step's inverse; :data:`planner.search.astar.loop.F_STEP`): equal-cost
+    paths tie exactly (float noise would otherwise decide), so the larger-g tie-break can
+    dive; the node table keeps the exact costs."""
+    return f0 + np.floor((x - f0) * fq_inv + 0.5) * fq
 
 @njit_cached(inline="always")
 def _put(h, pos, i, x, xf, xg):  # pragma: no cover - compiled

@@ -54,21 +54,34 @@ _EMPTY = -1
 LIST_MOVES = 20
 #: the f grid of the open list (planner.search._heap.fkey): lattice A*, Dijkstra and
 #: weighted-theta, a fraction of the shortest move's length; Theta* and Lazy Theta*, a
-#: fraction of the start's straight-line distance to the goal. On the lattice, equal-cost
-#: paths tie to the bit on a fine grid. Any angle, f = g + |goal - v| grows only
-#: quadratically off the straight line (by about 2 d^2 / L for a node d beside the middle
-#: of a line of length L), so on a fine grid the search expands a thin ellipsoid of nearly
-#: straight f around the line before it reaches the goal, wider the longer the line; on a
-#: grid of L / 1000 the nodes up to about L / 45 beside it tie with the line's and the
-#: larger-g tie-break dives along it. The goal comes out once its key is the least, its f
-#: within a step of every open node's: about 0.1% of the length. Measured against the
-#: fine grid: Lazy Theta* expansions -54% to -71% on Warframe DA1 at 2-voxel cells (MCC
-#: -4%), -11% to -20% on Complex, -2% to -10% on geb079, under -1% on the office where
-#: obstacles set the count, summed lengths within 0.06% (`python
-#: benchmarks/lattice_sight.py --maps DA1 Complex geb079 office --segments 0`, "LT* exp");
-#: 1/25 to 1/40 of the expansions on free 300-cell lines except on hex, whose 3D diagonal
-#: lines do not dive (tests/test_anyangle.py).
-F_STEP, F_STEP_ANY_ANGLE = 1e-9, 1e-3
+#: fraction of the start's straight-line distance to the goal, with the start's f at the
+#: foot of its step. On the lattice, equal-cost paths tie to the bit on a fine grid. Any
+#: angle, f = g + |goal - v| grows only quadratically off the straight line of length L
+#: (by d^2 / 2 (1/a + 1/b) for a node d beside it, a and b from its ends), so on a fine
+#: grid the search expands a thin ellipsoid of nearly straight f around the line before it
+#: reaches the goal; on a grid of L / 2000 the nodes up to about L / 60 beside its middle
+#: tie with the line's and the larger-g tie-break dives along it. Near the ends (a or b a
+#: few moves) the cells a chain of moves must cross lie up to a cell's circumradius beside
+#: the line, an excess of a sizable fraction of a move that no grid of L / 2000 covers:
+#: the search would flood the whole tied ellipsoid before it steps off the start or onto
+#: the goal. So the open list files a node under f less an end allowance (END_SLACK):
+#: END_SLACK * c^2 / max(min(g, h), c), c the shortest move, at most END_SLACK * c a move
+#: from either end and fading as 1/a or 1/b, like the excess. Free lines of 8 to 150 moves
+#: then take fewer than two expansions per move on every lattice (tests/test_anyangle.py),
+#: and the lengths found match an exact f order's on average (`pytest
+#: tests/test_anyangle.py -k plain_python`). Planning maps: `python
+#: benchmarks/lattice_sight.py --maps DA1 Complex geb079 office --segments 0` ("LT* exp").
+F_STEP, F_STEP_ANY_ANGLE, END_SLACK = 1e-9, 5e-4, 0.25
+
+
+@njit_cached(_nrt=False, inline="always")
+def filed_f(g, h, ends, cmin):  # pragma: no cover - compiled
+    """The f (m) the open list files a node of cost ``g`` and estimate ``h`` (m) under: f
+    less the end allowance ``ends / max(min(g, h), cmin)`` (:data:`END_SLACK`; ``ends``
+    0 but any angle)."""
+    if ends > 0.0:
+        return g + h - ends / max(min(g, h), cmin)
+    return g + h
 
 
 # Without the runtime's reference counting: the loop allocates nothing, and each heap
@@ -157,8 +170,12 @@ def search_loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, 
     for m in range(nm):  # not mcost.min(): it needs the runtime
         cmin = min(cmin, mcost[m])
     fq = F_STEP * cmin  # the f grid (F_STEP)
+    f0 = 0.0
+    ends = 0.0  # END_SLACK * cmin^2: the end allowance's scale (m^2)
     if anyangle != 0 and hw == 1.0:  # (weighted-theta's inflated heuristic dives already)
         fq = max(fq, F_STEP_ANY_ANGLE * nh[0])  # the start's estimate (slot 0)
+        f0 = nh[0] + (0.5 - 1e-6) * fq  # its f at the foot of its step, within float noise
+        ends = END_SLACK * cmin * cmin
     fq_inv = 1.0 / fq
     base = np.int64(0)
     n = st.nodes
@@ -367,7 +384,7 @@ def search_loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, 
             if t >= 0:
                 if gt < ng[tu]:
                     ng[tu] = gt
-                    fv = _heap.fkey(gt + nh[tu], fq, fq_inv)
+                    fv = _heap.fkey(filed_f(gt, nh[tu], ends, cmin), f0, fq, fq_inv)
                     npar[tu] = par
                     if plain:
                         _heap.decrease_key(heap, npos, t, fv, gt)
@@ -393,7 +410,7 @@ def search_loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, 
             nh[tn] = hv
             ng[tn] = gt
             npar[tn] = par
-            fv = _heap.fkey(gt + hv, fq, fq_inv)
+            fv = _heap.fkey(filed_f(gt, hv, ends, cmin), f0, fq, fq_inv)
             if plain:
                 hn = _heap.push(heap, npos, hn, t, fv, gt)
             else:
