@@ -42,10 +42,10 @@ def lazy_theta(world, start: np.ndarray, goal: np.ndarray, grid: bool = False) -
     step = max(F_STEP * shortest, F_STEP_ANY_ANGLE * f_start)
     origin = f_start + (0.5 - 1e-6) * step
 
-    def key(g, h):
+    def key(g, h, a):
         if not grid:
             return g + h
-        f = g + h - END_SLACK * shortest**2 / max(min(g, h), shortest)
+        f = g + h - END_SLACK * shortest**2 / max(min(a, h), shortest)
         return origin + np.floor((f - origin) * (1.0 / step) + 0.5) * step
     cost, parent, closed = {first: 0.0}, {first: first}, set()
     heap = [(f_start, -0.0, first)]
@@ -65,8 +65,10 @@ def lazy_theta(world, start: np.ndarray, goal: np.ndarray, grid: bool = False) -
         for v, _ in allowed(cell):
             if v in closed:
                 continue
-            g = cost[up] + float(np.linalg.norm(centre(v) - centre(up)))
+            a = float(np.linalg.norm(centre(v) - centre(up)))
+            g = cost[up] + a
             if g < cost.get(v, np.inf):
                 cost[v], parent[v] = g, up
-                heapq.heappush(heap, (key(g, float(np.linalg.norm(goal_point - centre(v)))), -g, v))
+                h = float(np.linalg.norm(goal_point - centre(v)))
+                heapq.heappush(heap, (key(g, h, a), -g, v))
     return float("inf")

@@ -58,29 +58,31 @@ LIST_MOVES = 20
 #: foot of its step. On the lattice, equal-cost paths tie to the bit on a fine grid. Any
 #: angle, f = g + |goal - v| grows only quadratically off the straight line of length L
 #: (by d^2 / 2 (1/a + 1/b) for a node d beside it, a and b from its ends), so on a fine
-#: grid the search expands a thin ellipsoid of nearly straight f around the line before it
-#: reaches the goal; on a grid of L / 2000 the nodes up to about L / 60 beside its middle
-#: tie with the line's and the larger-g tie-break dives along it. Near the ends (a or b a
-#: few moves) the cells a chain of moves must cross lie up to a cell's circumradius beside
-#: the line, an excess of a sizable fraction of a move that no grid of L / 2000 covers:
-#: the search would flood the whole tied ellipsoid before it steps off the start or onto
-#: the goal. So the open list files a node under f less an end allowance (END_SLACK):
-#: END_SLACK * c^2 / max(min(g, h), c), c the shortest move, at most END_SLACK * c a move
-#: from either end and fading as 1/a or 1/b, like the excess. Free lines of 8 to 150 moves
-#: then take fewer than two expansions per move on every lattice (tests/test_anyangle.py),
-#: and the lengths found match an exact f order's on average (`pytest
-#: tests/test_anyangle.py -k plain_python`). Planning maps: `python
-#: benchmarks/lattice_sight.py --maps DA1 Complex geb079 office --segments 0` ("LT* exp").
+#: grid the search expands a thin ellipsoid of nearly straight f around the line before
+#: it reaches the goal; on a grid of L / 2000 the nodes up to about L / 60 beside its
+#: middle tie with the line's and the larger-g tie-break dives along it. Near the ends (a
+#: or b a few moves) the cells a chain of moves must cross lie up to a cell's
+#: circumradius beside the line, an excess of a sizable fraction of a move that no grid
+#: of L / 2000 covers: the search would flood the whole tied ellipsoid before it steps
+#: off the start or onto the goal, and again past each corner a detour turns at (a new
+#: line starts at the parent). So the open list files a node under f less an end
+#: allowance (END_SLACK): END_SLACK * c^2 / max(min(a, h), c), a the node's straight line
+#: from its parent and c the shortest move; at most END_SLACK * c a move from a parent or
+#: the goal, it fades as 1/a or 1/h, like the excess. Free lines of 8 to 150 moves then
+#: take fewer than two expansions per move on every lattice (tests/test_anyangle.py), and
+#: the lengths found match an exact f order's on average (`pytest tests/test_anyangle.py
+#: -k plain_python`). Planning maps: `python benchmarks/lattice_sight.py --maps DA1
+#: Complex geb079 office --segments 0` ("LT* exp").
 F_STEP, F_STEP_ANY_ANGLE, END_SLACK = 1e-9, 5e-4, 0.25
 
 
 @njit_cached(_nrt=False, inline="always")
-def filed_f(g, h, ends, cmin):  # pragma: no cover - compiled
-    """The f (m) the open list files a node of cost ``g`` and estimate ``h`` (m) under: f
-    less the end allowance ``ends / max(min(g, h), cmin)`` (:data:`END_SLACK`; ``ends``
-    0 but any angle)."""
+def filed_f(g, h, hop, ends, cmin):  # pragma: no cover - compiled
+    """The f (m) the open list files a node of cost ``g``, estimate ``h`` and straight
+    line ``hop`` (m) from its parent under: f less the end allowance ``ends / max(min(hop,
+    h), cmin)`` (:data:`END_SLACK`; ``ends`` 0 but any angle)."""
     if ends > 0.0:
-        return g + h - ends / max(min(g, h), cmin)
+        return g + h - ends / max(min(hop, h), cmin)
     return g + h
 
 
@@ -364,8 +366,10 @@ def search_loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, 
             if anyangle == 0:
                 gt = gs + mcost[m]
                 par = s
+                hop = 0.0  # (unread: no end allowance)
             else:
-                gt = gp + length(gm, v0 - p0, v1 - p1, v2 - p2)  # through s's parent
+                hop = length(gm, v0 - p0, v1 - p1, v2 - p2)
+                gt = gp + hop  # through s's parent
                 par = ps
                 if theta and ps != s:
                     g1 = gs + mcost[m]
@@ -381,10 +385,11 @@ def search_loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, 
                     if not ok:
                         gt = g1
                         par = s
+                        hop = mcost[m]
             if t >= 0:
                 if gt < ng[tu]:
                     ng[tu] = gt
-                    fv = _heap.fkey(filed_f(gt, nh[tu], ends, cmin), f0, fq, fq_inv)
+                    fv = _heap.fkey(filed_f(gt, nh[tu], hop, ends, cmin), f0, fq, fq_inv)
                     npar[tu] = par
                     if plain:
                         _heap.decrease_key(heap, npos, t, fv, gt)
@@ -410,7 +415,7 @@ def search_loop(occ, walk, ms, nodes, heap, slots, sc, ufree, params, goal, st, 
             nh[tn] = hv
             ng[tn] = gt
             npar[tn] = par
-            fv = _heap.fkey(filed_f(gt, hv, ends, cmin), f0, fq, fq_inv)
+            fv = _heap.fkey(filed_f(gt, hv, hop, ends, cmin), f0, fq, fq_inv)
             if plain:
                 hn = _heap.push(heap, npos, hn, t, fv, gt)
             else:
