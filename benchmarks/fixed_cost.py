@@ -10,7 +10,9 @@ share: the figure is what every call pays whatever its length (argument checks, 
 checks, the kernel call, building the result). ``plan()`` is timed with its endpoints given
 three ways, as users write them: a tuple of floats (the README's example), a list, and a
 float64 array. The same search with the goal at the start (one expansion, no node
-generated) is the fixed cost with no expansion work at all.
+generated) is the fixed cost with no expansion work at all. Taking turns between this
+world and a second one (the same query on a BCC world of the same box), each ``search()``
+also pays for the switch of world: what a query loop comparing lattices query by query pays.
 
 Timing (``benchmarks/harness.py``): this thread's CPU time over batches of 100 calls, the
 median per call over the batches (a CPU clock read costs about a microsecond, so single
@@ -72,12 +74,29 @@ def _per_call(named: dict, calls: int) -> dict:
     return {k: float(np.median(v)) for k, v in per.items()}
 
 
+def _second(world: World, s: np.ndarray) -> tuple[World, np.ndarray, np.ndarray]:
+    """The one-move query on a BCC world of ``world``'s box and obstacle points."""
+    lat = Lattice.named("bcc", 1.0)
+    other = World(lat, lat.quantize(world.lattice.to_world(world.blocked)), world.bounds)
+    a = lat.quantize(world.lattice.to_world(s[None]))[0]
+    b = a + np.array([1, 0, 0])
+    assert other.is_free(np.array([a, b])).all()
+    return other, a, b
+
+
 def fixed_cost(calls: int = 3000) -> dict:
     """Median thread CPU seconds per call of ``search()`` (``search``), of the engine time it
     reports (``engine``, ``SearchResult.seconds``), of ``search()`` from a cell to itself
-    (``same``) and of ``plan()`` with tuple, list and array endpoints (``plan tuple``,
-    ``plan list``, ``plan array``)."""
+    (``same``), of ``search()`` taking turns between two worlds (``turns``, per call) and
+    of ``plan()`` with tuple, list and array endpoints (``plan tuple``, ``plan list``,
+    ``plan array``)."""
     world, s, g = _query()
+    other, s2, g2 = _second(world, s)
+
+    def turns():
+        S.search(world, s, g)
+        S.search(other, s2, g2)
+
     ps, pg = world.lattice.to_world(np.array([s, g]))
     ts, tg = tuple(float(v) for v in ps), tuple(float(v) for v in pg)
     ls, lg = list(ts), list(tg)
@@ -89,9 +108,11 @@ def fixed_cost(calls: int = 3000) -> dict:
         plan(world, ps, pg)
     out = _per_call({"search": lambda: S.search(world, s, g),
                      "same": lambda: S.search(world, s, s),
+                     "turns": turns,
                      "plan tuple": lambda: plan(world, ts, tg),
                      "plan list": lambda: plan(world, ls, lg),
                      "plan array": lambda: plan(world, ps, pg)}, calls)
+    out["turns"] /= 2  # two searches per call
     out["engine"] = float(np.median([S.search(world, s, g).seconds for _ in range(BATCH)]))
     return out
 
@@ -105,7 +126,8 @@ def line(calls: int = 3000) -> str:
     return (f"fixed cost per call on a prebuilt world (one-move query; thread CPU time, median "
             f"per call over batches of {BATCH}, {calls} calls): search() "
             f"{r['search'] * 1e6:.1f} us (goal <= 5; its engine call "
-            f"{r['engine'] * 1e6:.1f} us; {r['same'] * 1e6:.1f} us from a cell to itself), "
+            f"{r['engine'] * 1e6:.1f} us; {r['same'] * 1e6:.1f} us from a cell to itself; "
+            f"{r['turns'] * 1e6:.1f} us taking turns between two worlds), "
             f"plan() with tuple / list / array endpoints {r['plan tuple'] * 1e6:.1f} / "
             f"{r['plan list'] * 1e6:.1f} / {r['plan array'] * 1e6:.1f} us (goal <= 15 each)")
 
@@ -122,6 +144,7 @@ def main(argv: list[str] | None = None) -> int:
         r = fixed_cost(calls)
         print(f"search()            {r['search'] * 1e6:7.2f} us   (goal <= 5)")
         print(f"search() to itself  {r['same'] * 1e6:7.2f} us")
+        print(f"search(), two worlds taking turns  {r['turns'] * 1e6:7.2f} us")
         for k in ("tuple", "list", "array"):
             print(f"plan() {k:5s} ends   {r['plan ' + k] * 1e6:7.2f} us   (goal <= 15)")
         if a.parts:

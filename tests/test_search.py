@@ -412,6 +412,7 @@ def test_searches_do_not_keep_a_freed_world_alive():
     for method in ("astar", "lazy-theta"):
         assert S.search(w, [0, 0, 0], [7, 7, 7], method=method).found
     other = _box_world(blocked=[(1, 1, 1)], n=6)
+    assert S.search(other, [0, 0, 0], [3, 3, 3]).found  # w's bound kept, not the last
     grid = weakref.ref(w.checker.occupancy.grid)
     del w
     gc.collect()

@@ -1,6 +1,7 @@
 """A thread's search arrays between searches (``planner.search.astar._context``): a query
 loop on one dense grid grows them once, not on every long query; elsewhere a long search's
-arrays are dropped afterwards."""
+arrays are dropped afterwards. A query loop that takes turns between worlds makes each
+world's bound once."""
 
 from __future__ import annotations
 
@@ -46,3 +47,19 @@ def test_long_search_arrays_are_dropped_without_room():
     ctx.nodes = big
     ctx.keep(10**9)  # room enough: kept
     assert ctx.nodes is big
+
+
+def test_taking_turns_between_worlds_makes_each_bound_once():
+    worlds = [_open_box((12, 10, 8)), _open_box((9, 9, 9))]
+    s, g = np.array([1, 1, 1]), np.array([7, 7, 7])
+    for w in worlds:  # (a context that held grown arrays drops them, and its bounds, once)
+        S.search(w, s, g)
+        S.search(w, s, g)
+    ctx = next(c for c in C._CONTEXTS if c.held is not None and c.bound.occ is
+               worlds[-1].checker.occupancy)
+    made = {id(m.occ): m.bound for m in ctx.bounds.values()}
+    assert {id(w.checker.occupancy) for w in worlds} <= made.keys()
+    for _ in range(3):
+        for w in worlds:
+            assert S.search(w, s, g).found
+            assert ctx.bound.bound is made[id(w.checker.occupancy)]  # the kept one

@@ -300,7 +300,8 @@ def _fixed_row(run: SpeedRecord) -> str:
             f"batches of {fc['batch']}; {fc['calls']:,} calls)")
     fig = (f"`search()` {_f(fc['search_us'])} us (goal 5; its engine call, "
            f"`SearchResult.seconds`, {_f(fc['engine_us'])} us; from a cell to itself "
-           f"{_f(fc['same_us'])} us); `plan()` with tuple endpoints "
+           f"{_f(fc['same_us'])} us; taking turns between two worlds {_f(fc['turns_us'])} "
+           f"us); `plan()` with tuple endpoints "
            f"{_f(fc['plan_tuple_us'], '.1f')} us, list {_f(fc['plan_list_us'], '.1f')} us, "
            f"float64 array {_f(fc['plan_array_us'], '.1f')} us (goal 15 each)")
     return _row(what, fig)

@@ -3,8 +3,9 @@
 A :class:`_Context` holds one search's node table, heap, paged slot map, state and scratch;
 a thread keeps up to two free contexts (a search run inside another, such as the goal
 probe, takes a second) and its next search reuses them. A context also keeps the compiled
-:class:`~planner.search.astar.bound.Bound` of the world it last searched, until the
-world's structs' owner is freed (:func:`_unbind`, registered by :func:`_settle`).
+:class:`~planner.search.astar.bound.Bound` of each of the last :data:`BOUNDS_KEPT` worlds it
+searched, until the world's structs' owner is freed (:func:`_unbind`, registered by
+:func:`_settle`).
 """
 
 from __future__ import annotations
@@ -56,7 +57,7 @@ class _Memo:
     from (compared by identity before it is reused), with its two compiled entry points."""
 
     __slots__ = ("occ", "walk", "ms", "sc", "dense", "nodes", "slots", "ufree", "params",
-                 "ptypes", "bound", "search", "cells")
+                 "ptypes", "bound", "search", "cells", "owner")
 
     def __init__(self, occ, walk, ms, sc, dense, nodes, slots, ufree, params, ptypes, bound,
                  search, cells):
@@ -64,6 +65,19 @@ class _Memo:
         self.nodes, self.slots, self.ufree = nodes, slots, ufree
         self.params, self.ptypes = params, ptypes  # the settings and their field types
         self.bound, self.search, self.cells = bound, search, cells
+        self.owner = 0  # id of the owner of the world's structs (see run); 0 not yet known
+
+    def made_of(self, occ, walk, ms, sc, dense, nodes, slots, ufree) -> bool:
+        """Made from exactly these objects."""
+        return (self.occ is occ and self.walk is walk and self.ms is ms and self.sc is sc
+                and self.dense is dense and self.nodes is nodes and self.slots is slots
+                and self.ufree is ufree)
+
+
+#: Bounds a context keeps for the worlds it searched last (:attr:`_Context.bounds`): a
+#: query loop that takes turns between worlds (a comparison of lattices, query by query)
+#: then makes each once instead of on every search (about 20 us each).
+BOUNDS_KEPT = 8
 
 
 class _Held(NamedTuple):
@@ -88,7 +102,7 @@ class _Context:
     """One thread's kernel arrays, reused by its next search (module docstring)."""
 
     __slots__ = ("nodes", "heap", "slots", "state", "ufree", "ends", "end0", "end1",
-                 "scratch", "bound", "owner", "held", "fast", "points", "__weakref__")
+                 "scratch", "bound", "bounds", "held", "fast", "points", "__weakref__")
 
     def __init__(self):
         self.nodes = new_nodes(_CAP)
@@ -100,7 +114,7 @@ class _Context:
         self.end0, self.end1 = self.ends  # its rows: ``row[...] = cell`` is the fastest copy
         self.scratch: dict = {}  # any-angle sight scratch per walk (_sight)
         self.bound: _Memo | None = None  # the Bound of the last world searched
-        self.owner = 0  # id of the owner of the bound world (see run)
+        self.bounds: dict[tuple, _Memo] = {}  # the last BOUNDS_KEPT, by their objects' ids
         self.held: _Held | None = None  # the dense slot array of the last grid: _dense
         self.fast: _Fast | None = None  # how run's short path repeats the last search
         self.points: _Points | None = None  # the last search_points (run_points)
@@ -120,7 +134,28 @@ class _Context:
             self.slots = new_slots(_PCAP)
             dropped = True
         if dropped:
-            self.bound = self.fast = None
+            self.forget()
+
+    def forget(self) -> None:
+        """Drop the kept bounds (their arrays are no longer the context's)."""
+        self.bound = self.fast = None
+        self.bounds.clear()
+
+    def remember(self, memo: _Memo) -> None:
+        """Keep ``memo`` among the last :data:`BOUNDS_KEPT` bounds, as the current one."""
+        key = (id(memo.occ), id(memo.ms), id(memo.sc), id(memo.dense))
+        self.bounds.pop(key, None)
+        if len(self.bounds) >= BOUNDS_KEPT:
+            del self.bounds[next(iter(self.bounds))]  # the least recently made
+        self.bounds[key] = self.bound = memo
+
+    def recall(self, occ, walk, ms, sc, dense) -> _Memo | None:
+        """The kept bound made from these objects and the context's arrays, or None."""
+        memo = self.bounds.get((id(occ), id(ms), id(sc), id(dense)))
+        if memo is None or not memo.made_of(occ, walk, ms, sc, dense, self.nodes, self.slots,
+                                            self.ufree):
+            return None
+        return memo
 
 
 _LOCAL = threading.local()
@@ -169,17 +204,22 @@ def _sight(ctx: _Context, walk, span: float):
 def _settle(ctx: _Context, owner) -> None:
     """After a search of ``ctx`` for ``owner`` (see :func:`run`): keep its bound for the
     owner's next search, or drop what only the owner's lifetime would free; release it."""
+    bd = ctx.bound
     if owner is None:
+        if bd is not None:  # nothing would drop it when the world is freed
+            ctx.bounds = {k: m for k, m in ctx.bounds.items() if m is not bd}
         ctx.bound = ctx.fast = None
         h = ctx.held
         if h is not None:  # nothing would drop it when the grid is freed: back to the pool
             ctx.held = None
             give(h.grid, h.slots)
     else:
-        ctx.owner = id(owner)
-        if ctx.owner not in _OWNERS:
-            _OWNERS.add(ctx.owner)
-            weakref.finalize(owner, _unbind, ctx.owner)
+        oid = id(owner)
+        if bd is not None:
+            bd.owner = oid
+        if oid not in _OWNERS:
+            _OWNERS.add(oid)
+            weakref.finalize(owner, _unbind, oid)
     _release(ctx)  # not after an exception: a context left mid-search is dropped
 
 
@@ -189,8 +229,13 @@ def _unbind(owner_id: int) -> None:
     them, which would otherwise outlive the world)."""
     _OWNERS.discard(owner_id)
     for ctx in list(_CONTEXTS):
-        if ctx.owner == owner_id:
-            ctx.bound, ctx.fast, ctx.owner = None, None, 0
+        gone = [k for k, m in ctx.bounds.items() if m.owner == owner_id]
+        for k in gone:
+            del ctx.bounds[k]
+        if ctx.bound is not None and ctx.bound.owner == owner_id:
+            ctx.bound = None
+        if ctx.fast is not None and ctx.fast.owner == owner_id:
+            ctx.fast = None
         h = ctx.held
         if h is not None and h.owner == owner_id:
             ctx.held = ctx.fast = None

@@ -254,7 +254,7 @@ def _run(ctx, occ, walk, ms, start, goal, params, span, owner, dense, pause_at, 
     nu = len(ms.union)
     if nu > len(ctx.ufree):
         ctx.ufree = np.empty(nu, np.bool_)
-        ctx.fast = None
+        ctx.forget()  # the kept bounds hold the old array
     dslot = _dense(ctx, occ, owner) if dense else None
     first = params
     if keep_going is not None and pause_at > 0 and not 0 < params.max_expansions <= pause_at:
@@ -333,13 +333,15 @@ _CALLS: dict[object, tuple] = {}
 def _bound(ctx: _Context, occ, walk, ms, sc, dslot, params):
     """``(b, f)``: the context's :class:`Bound` of these structs and its arrays, and ``f``
     the compiled :func:`search_bound` for its type and ``params``'s field types. Made again
-    only when one of them is another object than last time (another world or move set,
-    grown arrays)."""
+    only when none of the context's kept bounds is of these objects (another world or move
+    set than the last :data:`~planner.search.astar._context.BOUNDS_KEPT`, grown arrays)."""
     dense = _NO_DENSE if dslot is None else dslot
     bd = ctx.bound
-    if (bd is not None and bd.occ is occ and bd.walk is walk and bd.ms is ms and bd.sc is sc
-            and bd.dense is dense and bd.nodes is ctx.nodes and bd.slots is ctx.slots
-            and bd.ufree is ctx.ufree):
+    if bd is None or not bd.made_of(occ, walk, ms, sc, dense, ctx.nodes, ctx.slots,
+                                    ctx.ufree):
+        bd = ctx.recall(occ, walk, ms, sc, dense)
+    if bd is not None:
+        ctx.bound = bd
         if bd.params is params:  # the same settings object: no need to compare their types
             return bd.bound, bd.search
         ptypes = tuple(map(type, params))  # the entry point takes exactly these
@@ -357,8 +359,8 @@ def _bound(ctx: _Context, occ, walk, ms, sc, dslot, params):
                                raw_entry_point(search_cells, (b, params, False, 0, 0, 0, 0,
                                                               0, 0)))
     search, cells = calls
-    ctx.bound = _Memo(occ, walk, ms, sc, dense, ctx.nodes, ctx.slots, ctx.ufree, params,
-                      ptypes, b, search, cells)
+    ctx.remember(_Memo(occ, walk, ms, sc, dense, ctx.nodes, ctx.slots, ctx.ufree, params,
+                       ptypes, b, search, cells))
     return b, search
 
 
@@ -389,7 +391,8 @@ def _loop(ctx: _Context, occ, walk, ms, sc, dslot, params, pausing, out=None):
         status, *_ = out
         if status != RUN_GROW:
             return out
-        out = ctx.fast = None  # the arrays grow: the short path's bound is stale
+        out = None
+        ctx.forget()  # the arrays grow: every kept bound (and the short path's) is stale
         state, nodes, slots = ctx.state, ctx.nodes, ctx.slots
         n, npg = int(state[0]["nodes"]), int(state[0]["pages"])
         cap, pcap = len(nodes.key), len(slots.bkeys)
