@@ -1,0 +1,141 @@
+"""Where lattice A*'s expansions lie: below the optimal cost C*, or on the plateau f = C*.
+
+Usage::
+
+    python benchmarks/plateau.py [--maps DA1 Complex geb079 office] [--queries 8]
+
+The planning maps and queries of ``lattice_sight.py`` (the same worlds, the same query
+points quantized on each lattice). A plain-Python A* with the engine's move set, safe rule,
+move-set gauge heuristic, f grid and larger-g tie-break runs each query again and files
+each expansion by its f: below C* (nodes any A* with this heuristic expands: a detour
+makes the path longer than the gauge) or at C* (the plateau of paths as short as the
+gauge, where the tie-break decides how many). Its expansion counts are printed beside
+the engine's; they differ only where nodes tie in both f and g (each heap then picks its
+own). ``backtrack``: the most the g of an expansion fell below the largest g expanded
+before it (m), summed over the queries: a dive into a dead end of the plateau that the
+search had to back out of.
+
+The ratio lines pair each lattice's engine expansions with cubic-26's per query.
+Pure Python: about a minute per 100,000 expansions.
+"""
+
+from __future__ import annotations
+
+import argparse
+import heapq
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import harness  # noqa: E402  (the sibling modules)
+import lattice_sight  # noqa: E402
+
+from planner import search as S  # noqa: E402
+
+F_STEP = 1e-9  # the engine's f grid for lattice A*, in shortest moves
+
+
+def plain_astar(world, start: np.ndarray, goal: np.ndarray) -> tuple[float, list, list]:
+    """A* on ``world`` from cell ``start`` to ``goal`` ((3,) int64), full move set, safe
+    rule: ``(C*, f of each expansion, g of each expansion)`` (m; C* inf when no path)."""
+    moves, mcost, union, _, _, per_move = S.move_stencils(world.lattice, "full", False)
+    facets = S.move_heuristic(world.lattice, "full")
+    index = {tuple(c): i for i, c in enumerate(union.tolist())}
+    need = [[index[tuple(c)] for c in pm.tolist()] for pm in per_move]
+    step = F_STEP * float(mcost.min())
+    end = tuple(int(x) for x in goal)
+
+    def key(f):
+        return math.floor(f / step + 0.5) * step
+
+    def h(c):
+        return max(0.0, float((facets @ (np.asarray(goal) - c)).max()))
+
+    first = tuple(int(x) for x in start)
+    cost, closed, fs, gs = {first: 0.0}, set(), [], []
+    heap = [(key(h(np.asarray(first))), -0.0, first)]
+    while heap:
+        f, minus_g, cell = heapq.heappop(heap)
+        if cell in closed:
+            continue
+        closed.add(cell)
+        fs.append(f)
+        gs.append(-minus_g)
+        if cell == end:
+            return cost[cell], fs, gs
+        u = np.asarray(cell)
+        free = world.is_free(u + union)
+        for m, cells in enumerate(need):
+            if not free[cells].all():
+                continue
+            v = tuple(int(x) for x in u + moves[m])
+            g = cost[cell] + float(mcost[m])
+            if v not in closed and g < cost.get(v, math.inf):
+                cost[v] = g
+                heapq.heappush(heap, (key(g + h(u + moves[m])), -g, v))
+    return math.inf, fs, gs
+
+
+def plateau_table(map_name: str, n: int, data: Path) -> None:
+    worlds = lattice_sight.map_worlds(map_name, data)
+    pts = lattice_sight.query_points(worlds, n)
+    print(f"\n{map_name}: {len(pts)} queries (lattice_sight.py's), A* full move set; "
+          "expansions summed over the queries")
+    print(f"{'lattice':8s} {'engine':>8s} {'python':>8s} {'below C*':>9s} {'at C*':>8s} "
+          f"{'at C* %':>7s} {'backtrack m':>11s}")
+    engine = {}
+    for name, w in worlds.items():
+        q = w.lattice.quantize(pts.reshape(-1, 3)).reshape(-1, 2, 3)
+        ours = np.zeros(len(q), np.int64)
+        below = at = python = 0
+        back = 0.0
+        for i in range(len(q)):
+            r = S.search(w, q[i, 0], q[i, 1])
+            ours[i] = r.expansions
+            c, fs, gs = plain_astar(w, q[i, 0], q[i, 1])
+            assert math.isclose(c, r.cost, rel_tol=1e-9), (name, i, c, r.cost)
+            fs = np.asarray(fs)
+            tol = 1e-9 * max(c, 1.0)
+            below += int((fs < c - tol).sum())
+            at += int((np.abs(fs - c) <= tol).sum())
+            python += len(fs)
+            gs = np.asarray(gs)
+            back += float((np.maximum.accumulate(gs) - gs).max())
+        engine[name] = ours
+        print(f"{name:8s} {ours.sum():8d} {python:8d} {below:9d} {at:8d} "
+              f"{100 * at / max(python, 1):7.1f} {back:11.1f}")
+        harness.record(f"plateau/{map_name}/{name}", dict(
+            engine_expansions=int(ours.sum()), python_expansions=python, below_cost=below,
+            at_cost=at, backtrack_m=back))
+    for name in worlds:
+        if name != "cubic":
+            print(harness.ratio_line(f"A* expansions {name}/cubic, {map_name}", engine[name],
+                                     engine["cubic"], note="per query, the engine's counts"))
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    harness.add_arguments(ap, repeat=None, data=True, json=True)
+    ap.add_argument("--maps", nargs="*", default=["DA1", "Complex"],
+                    help="maps (bundled names, geb079, or Warframe names under DATA/warframe)")
+    ap.add_argument("--queries", type=int, default=8, help="queries per map")
+    a = ap.parse_args(argv)
+    if a.smoke:
+        a.maps, a.queries = ["narrow_passage"], 2
+    with harness.session("where lattice A*'s expansions lie: below C* or on its plateau",
+                         smoke=a.smoke, json=a.json,
+                         command=harness.command_line("plateau.py", argv)):
+        for m in a.maps:
+            src = lattice_sight.map_source(m, a.data)[0]
+            if isinstance(src, Path) and not src.is_file():
+                print(f"\nskipped: no {m} at {src}")
+                continue
+            plateau_table(m, a.queries, a.data)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
