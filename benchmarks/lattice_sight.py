@@ -69,6 +69,17 @@ def map_source(map_name: str, data: Path) -> tuple[Path | str, dict]:
     return map_name, {}
 
 
+def each_map(maps, data: Path, table) -> None:
+    """``table(name)`` for each map of ``maps`` that can be read; a line for each one
+    whose file is missing."""
+    for m in maps:
+        src = map_source(m, data)[0]
+        if isinstance(src, Path) and not src.is_file():
+            print(f"\nskipped map: no {m} at {src}")
+            continue
+        table(m)
+
+
 def sight_lines(lat: Lattice, n: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """``n`` random centre-to-centre sight lines of 2 to 40 cells (in index space of
     ``lat``, around the box centre)."""
@@ -269,12 +280,7 @@ def main(argv: list[str] | None = None) -> int:
                          command=harness.command_line("lattice_sight.py", argv)):
         if a.segments:
             sight_table(a.segments, a.repeat)
-        for m in a.maps:
-            src = map_source(m, a.data)[0]
-            if m == "geb079" and not src.is_file():
-                print(f"\nskipped table: no geb079 at {src}")
-                continue
-            plan_table(m, a.queries, a.repeat, a.data)
+        each_map(a.maps, a.data, lambda m: plan_table(m, a.queries, a.repeat, a.data))
     return 0
 
 

@@ -128,12 +128,7 @@ def main(argv: list[str] | None = None) -> int:
     with harness.session("where lattice A*'s expansions lie: below C* or on its plateau",
                          smoke=a.smoke, json=a.json,
                          command=harness.command_line("plateau.py", argv)):
-        for m in a.maps:
-            src = lattice_sight.map_source(m, a.data)[0]
-            if isinstance(src, Path) and not src.is_file():
-                print(f"\nskipped: no {m} at {src}")
-                continue
-            plateau_table(m, a.queries, a.data)
+        lattice_sight.each_map(a.maps, a.data, lambda m: plateau_table(m, a.queries, a.data))
     return 0
 
 

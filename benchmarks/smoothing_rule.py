@@ -118,11 +118,7 @@ def main(argv: list[str] | None = None) -> int:
         a.maps = [m for m in a.maps if m != "geb079"][:1] or ["office"]
     with harness.session("shortcutting's rule against the forward scan: delivered length "
                          "and lookups", smoke=a.smoke):
-        for m in a.maps:
-            if m == "geb079" and not lattice_sight.geb079_path(a.data).is_file():
-                print(f"\nskipped map: no geb079 at {lattice_sight.geb079_path(a.data)}")
-                continue
-            compare(m, a.queries, a.data)
+        lattice_sight.each_map(a.maps, a.data, lambda m: compare(m, a.queries, a.data))
     return 0
 
 

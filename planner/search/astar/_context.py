@@ -144,10 +144,11 @@ class _Context:
     def remember(self, memo: _Memo) -> None:
         """Keep ``memo`` among the last :data:`BOUNDS_KEPT` bounds, as the current one."""
         key = (id(memo.occ), id(memo.ms), id(memo.sc), id(memo.dense))
-        self.bounds.pop(key, None)
-        if len(self.bounds) >= BOUNDS_KEPT:
-            del self.bounds[next(iter(self.bounds))]  # the least recently made
-        self.bounds[key] = self.bound = memo
+        kept = self.bounds  # (_unbind, on any thread, replaces the dict: never changes it)
+        kept.pop(key, None)
+        if len(kept) >= BOUNDS_KEPT:
+            kept.pop(next(iter(kept)), None)  # the least recently made
+        kept[key] = self.bound = memo
 
     def recall(self, occ, walk, ms, sc, dense) -> _Memo | None:
         """The kept bound made from these objects and the context's arrays, or None."""
@@ -229,9 +230,9 @@ def _unbind(owner_id: int) -> None:
     them, which would otherwise outlive the world)."""
     _OWNERS.discard(owner_id)
     for ctx in list(_CONTEXTS):
-        gone = [k for k, m in ctx.bounds.items() if m.owner == owner_id]
-        for k in gone:
-            del ctx.bounds[k]
+        kept = list(ctx.bounds.items())  # (one C call: atomic against the context's thread)
+        if any(m.owner == owner_id for _, m in kept):
+            ctx.bounds = {k: m for k, m in kept if m.owner != owner_id}  # replaced, not changed
         if ctx.bound is not None and ctx.bound.owner == owner_id:
             ctx.bound = None
         if ctx.fast is not None and ctx.fast.owner == owner_id:
