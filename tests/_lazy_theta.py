@@ -47,6 +47,7 @@ def lazy_theta(world, start: np.ndarray, goal: np.ndarray, grid: bool = False) -
             return g + h
         f = g + h - END_SLACK * shortest**2 / max(min(a, h), shortest)
         return origin + np.floor((f - origin) * (1.0 / step) + 0.5) * step
+
     cost, parent, closed = {first: 0.0}, {first: first}, set()
     heap = [(f_start, -0.0, first)]
     while heap:

@@ -221,8 +221,7 @@ def test_any_angle_dives_along_a_free_straight_line(method):
     along it instead of expanding the thin ellipsoid of nearly straight f around it (the
     open list's f grid anchored at the start's f, with the end allowance:
     loop.F_STEP_ANY_ANGLE, loop.END_SLACK): fewer than two expansions per neighbour
-    distance on every line, 8 to 150 neighbour distances long in random directions (up to
-    13 without the allowance, 28 on lattice A*'s fine grid)."""
+    distance on every line, 8 to 150 neighbour distances long in random directions."""
     rng = np.random.default_rng(0)
     for name in NAMED_LATTICES:
         lat = Lattice.named(name, 1.0)
