@@ -5,15 +5,15 @@ Usage::
     python benchmarks/plateau.py [--maps DA1 Complex geb079 office] [--queries 8]
 
 The planning maps and queries of ``lattice_sight.py`` (the same worlds, the same query
-points quantized on each lattice). A plain-Python A* with the engine's move set, safe rule,
-move-set gauge heuristic, f grid and larger-g tie-break runs each query again and files
-each expansion by its f: below C* (nodes any A* with this heuristic expands: a detour
-makes the path longer than the gauge) or at C* (the plateau of paths as short as the
-gauge, where the tie-break decides how many). Its expansion counts are printed beside
-the engine's; they differ only where nodes tie in both f and g (each heap then picks its
-own). ``backtrack``: the most the g of an expansion fell below the largest g expanded
-before it (m), summed over the queries: a dive into a dead end of the plateau that the
-search had to back out of.
+points quantized on each lattice). A plain-Python A* (``search_speed.python_astar``) with
+the engine's move set, safe rule, move-set gauge heuristic, f grid and larger-g tie-break
+runs each query again and files each expansion by its f: below C* (nodes any A* with this
+heuristic expands: a detour makes the path longer than the gauge) or at C* (the plateau of
+paths as short as the gauge, where the tie-break decides how many). Its expansion counts
+are printed beside the engine's; they differ only where nodes tie in both f and g (each
+heap then picks its own). ``backtrack``: the most the g of an expansion fell below the
+largest g expanded before it (m), summed over the queries: a dive into a dead end of the
+plateau that the search had to back out of.
 
 The ratio lines pair each lattice's engine expansions with cubic-26's per query.
 Pure Python: about a minute per 100,000 expansions.
@@ -22,7 +22,6 @@ Pure Python: about a minute per 100,000 expansions.
 from __future__ import annotations
 
 import argparse
-import heapq
 import math
 import sys
 from pathlib import Path
@@ -32,51 +31,9 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import harness  # noqa: E402  (the sibling modules)
 import lattice_sight  # noqa: E402
+import search_speed  # noqa: E402
 
 from planner import search as S  # noqa: E402
-
-F_STEP = 1e-9  # the engine's f grid for lattice A*, in shortest moves
-
-
-def plain_astar(world, start: np.ndarray, goal: np.ndarray) -> tuple[float, list, list]:
-    """A* on ``world`` from cell ``start`` to ``goal`` ((3,) int64), full move set, safe
-    rule: ``(C*, f of each expansion, g of each expansion)`` (m; C* inf when no path)."""
-    moves, mcost, union, _, _, per_move = S.move_stencils(world.lattice, "full", False)
-    facets = S.move_heuristic(world.lattice, "full")
-    index = {tuple(c): i for i, c in enumerate(union.tolist())}
-    need = [[index[tuple(c)] for c in pm.tolist()] for pm in per_move]
-    step = F_STEP * float(mcost.min())
-    end = tuple(int(x) for x in goal)
-
-    def key(f):
-        return math.floor(f / step + 0.5) * step
-
-    def h(c):
-        return max(0.0, float((facets @ (np.asarray(goal) - c)).max()))
-
-    first = tuple(int(x) for x in start)
-    cost, closed, fs, gs = {first: 0.0}, set(), [], []
-    heap = [(key(h(np.asarray(first))), -0.0, first)]
-    while heap:
-        f, minus_g, cell = heapq.heappop(heap)
-        if cell in closed:
-            continue
-        closed.add(cell)
-        fs.append(f)
-        gs.append(-minus_g)
-        if cell == end:
-            return cost[cell], fs, gs
-        u = np.asarray(cell)
-        free = world.is_free(u + union)
-        for m, cells in enumerate(need):
-            if not free[cells].all():
-                continue
-            v = tuple(int(x) for x in u + moves[m])
-            g = cost[cell] + float(mcost[m])
-            if v not in closed and g < cost.get(v, math.inf):
-                cost[v] = g
-                heapq.heappush(heap, (key(g + h(u + moves[m])), -g, v))
-    return math.inf, fs, gs
 
 
 def plateau_table(map_name: str, n: int, data: Path) -> None:
@@ -95,14 +52,14 @@ def plateau_table(map_name: str, n: int, data: Path) -> None:
         for i in range(len(q)):
             r = S.search(w, q[i, 0], q[i, 1])
             ours[i] = r.expansions
-            c, fs, gs = plain_astar(w, q[i, 0], q[i, 1])
+            trace = []
+            c, _ = search_speed.python_astar(w, q[i, 0], q[i, 1], trace=trace)
             assert math.isclose(c, r.cost, rel_tol=1e-9), (name, i, c, r.cost)
-            fs = np.asarray(fs)
+            fs, gs = np.asarray(trace).T
             tol = 1e-9 * max(c, 1.0)
             below += int((fs < c - tol).sum())
             at += int((np.abs(fs - c) <= tol).sum())
             python += len(fs)
-            gs = np.asarray(gs)
             back += float((np.maximum.accumulate(gs) - gs).max())
         engine[name] = ours
         print(f"{name:8s} {ours.sum():8d} {python:8d} {below:9d} {at:8d} "

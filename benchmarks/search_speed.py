@@ -62,11 +62,14 @@ def load_warframe(name: str, data: Path = harness.DATA) -> tuple[World, np.ndarr
     return World(Lattice.named("cubic", 1.0), blocked, np.array([[0, 0, 0], dims - 1.0])), scen
 
 
-def python_astar(world: World, s: np.ndarray, gl: np.ndarray, neighbors: str = "full"):
-    """Plain Python heapq A* over the implicit graph, same moves / rule / heuristic.
+def python_astar(world: World, s: np.ndarray, gl: np.ndarray, neighbors: str = "full",
+                 trace: list | None = None):
+    """Plain Python heapq A* over the implicit graph, same moves / rule / heuristic, f grid
+    (1e-9 of the shortest move) and larger-g tie-break as the engine.
 
-    Returns (cost, expansions)."""
+    Returns (cost, expansions); ``trace`` gets ``(f, g)`` (m) of each expansion in order."""
     moves, mcost, _, _, _, per_move = S.move_stencils(world.lattice, neighbors, False)
+    step = 1e-9 * float(mcost.min())  # the engine's f grid for lattice A*
     hm = S.move_heuristic(world.lattice, neighbors).tolist()
     mv = [tuple(m) for m in moves.tolist()]
     need = [[tuple(c) for c in pm.tolist()] for pm in per_move]
@@ -90,14 +93,19 @@ def python_astar(world: World, s: np.ndarray, gl: np.ndarray, neighbors: str = "
         d = (goal[0] - c[0], goal[1] - c[1], goal[2] - c[2])
         return max(0.0, max(f[0] * d[0] + f[1] * d[1] + f[2] * d[2] for f in hm))
 
+    def key(f):
+        return math.floor(f / step + 0.5) * step
+
     start = tuple(s.tolist())
     gs = {start: 0.0}
     closed = set()
-    heap = [(h(start), 0.0, start)]
+    heap = [(key(h(start)), 0.0, start)]
     while heap:
-        _, _, u = heapq.heappop(heap)
+        f, minus_g, u = heapq.heappop(heap)
         if u in closed:
             continue
+        if trace is not None:
+            trace.append((f, -minus_g))
         if u == goal:
             return gs[u], len(closed) + 1
         closed.add(u)
@@ -109,7 +117,7 @@ def python_astar(world: World, s: np.ndarray, gl: np.ndarray, neighbors: str = "
             gv = gu + cost[m]
             if gv < gs.get(v, math.inf):
                 gs[v] = gv
-                heapq.heappush(heap, (gv + h(v), -gv, v))
+                heapq.heappush(heap, (key(gv + h(v)), -gv, v))
     return math.inf, len(closed)
 
 
