@@ -145,7 +145,7 @@ def _weighted_worlds(run: SpeedRecord) -> list[str]:
 
 
 def _machine(run: SpeedRecord) -> str:
-    """The run's CPU and cores (its load and commit are in benchmarks/README.md's block)."""
+    """The run's CPU and cores (its load, commit and date stay in the record's header)."""
     return run.data["header"][0].removeprefix("machine: ").split("; load average")[0]
 
 
@@ -171,7 +171,7 @@ def readme_block(run: SpeedRecord) -> str:
            f"call on a prebuilt world costs {_f(fc['search_us'], '.1f')} us with a one-move "
            f"query (goal 5), a `plan()` call {_span(plans, '.1f')} us with array, tuple or "
            f"list endpoints (goal 15). Measured by `{run.data['command']}` "
-           f"(on {_machine(run)}; the run's load and commit: benchmarks/README.md); "
+           f"(on {_machine(run)}; the run's load and commit: the record's header); "
            f"`{REGENERATE}` rewrites this item and the next from that "
            "run's record.")
     sight = [run.fig("sight", k, "vs_cubic") for k in OTHER]
@@ -382,8 +382,8 @@ def bench_block(run: SpeedRecord) -> str:
     head = run.data["header"]
     intro = (f"Generated from `benchmarks/speed.json` by `{REGENERATE}` (from the "
              "checkout's root); never edited by hand. The run: "
-             f"`{run.data['command']}`; {head[0]}; {head[1]}; "
-             f"{run.data.get('end', '')}. Thread CPU time per call, the sides of each "
+             f"`{run.data['command']}` on {_machine(run)} with "
+             f"{head[1].split('; commit')[0]}. Thread CPU time per call, the sides of each "
              "comparison taking turns query by query (batch by batch for the sight walk), "
              f"each its fastest of {run.fig('floor_checked', 'repeat')} rounds; \"median of the "
              "per-query ratios\" is the Hodges-Lehmann median of the paired ratios with its "

@@ -424,8 +424,7 @@ def readme_section(suite, rows: list[dict], command: str, *, partial: str | None
     prov = prov or provenance(suite, rows, command)
     lines = [f"Generated from a run of the suite `{suite.name}`"
              + (" (PARTIAL)" if partial else "") + f" (suite file sha256 "
-             f"`{prov['suite_sha256'][:12]}`, lattice-planner {prov['version']}, commit "
-             f"`{prov['commit']}`, {prov['date']}) by `python -m "
+             f"`{prov['suite_sha256'][:12]}`, lattice-planner {prov['version']}) by `python -m "
              "planner.analysis.readme_results RUN_DIR`; the full tables, statistics and "
              "figures are in [benchmarks/results.md](benchmarks/results.md).", "",
              parts["delivered"], ""]
