@@ -155,28 +155,22 @@ def sift_down(h, pos, i0, n0):  # pragma: no cover - compiled
                 if df < cf or (df == cf and hg[d] > cg):
                     c, cf, cg = d, df, hg[d]
         elif end == c0 + _U4:
-            # four children (all but one family of the heap): the best by selects, not
-            # branches (non-short-circuit & and |; which child wins is a coin toss, and a
+            # four children (all but one family of the heap): the best without branches
+            # (non-short-circuit & and |; which child wins is a coin toss, and a
             # mispredicted branch costs more than the loads: one cache line of
             # tie-breakers, see _lined), as a tournament: the two pairs at once, then
-            # their winners, two selects deep instead of three. The earlier child wins a
-            # tie, as in the scan below.
-            d1, d2, d3 = c0 + _U1, c0 + _U2, c0 + _U3
-            f1, g1 = hf[d1], hg[d1]
-            f2, g2 = hf[d2], hg[d2]
-            f3, g3 = hf[d3], hg[d3]
-            b = (f1 < cf) | ((f1 == cf) & (g1 > cg))
-            ca = d1 if b else c0
-            fa = f1 if b else cf
-            ga = g1 if b else cg
-            b = (f3 < f2) | ((f3 == f2) & (g3 > g2))
-            cb = d3 if b else d2
-            fb = f3 if b else f2
-            gb = g3 if b else g2
-            b = (fb < fa) | ((fb == fa) & (gb > ga))
-            c = cb if b else ca
-            cf = fb if b else fa
-            cg = gb if b else ga
+            # their winners, two compares deep instead of three; each winner an index
+            # (compare results added), its keys loaded again from the line just read, as
+            # the floor does it (float selects compiled to branches). The earlier child
+            # wins a tie, as in the scan below.
+            f1, g1 = hf[c0 + _U1], hg[c0 + _U1]
+            f2, g2 = hf[c0 + _U2], hg[c0 + _U2]
+            f3, g3 = hf[c0 + _U3], hg[c0 + _U3]
+            ca = c0 + np.uint64((f1 < cf) | ((f1 == cf) & (g1 > cg)))
+            cb = c0 + _U2 + np.uint64((f3 < f2) | ((f3 == f2) & (g3 > g2)))
+            fa, ga, fb, gb = hf[ca], hg[ca], hf[cb], hg[cb]
+            c = ca + (cb - ca) * np.uint64((fb < fa) | ((fb == fa) & (gb > ga)))
+            cf, cg = hf[c], hg[c]
         else:
             for d in range(c0 + _U1, end):
                 df, dg = hf[d], hg[d]
