@@ -17,11 +17,11 @@ table to the scale's unit (at most 16 units a step and slot) is what the walk's 
 decisions must tolerate: :func:`planner.occupancy.facewalk.face_walk` bounds it.
 
 A cell of at most four facet pairs (the hexagonal prism) steps on four keys
-(:func:`run_one4`, :func:`run_mirror4`: the same loops with half the minimum tree and half
-the additions, some 12% of a hex line's time), one of at most six (FCC) on six
-(:func:`run_one6`, :func:`run_mirror6`: ``python benchmarks/lattice_sight.py`` put FCC's
-walk at 1.52-1.61 x cubic per cell, at 1.69 on eight keys); :func:`steps` and
-:func:`mirror_steps` pick the variant.
+(:func:`run_one4`: the same loop with half the minimum tree and half the additions, some
+12% of a hex line's time), one of at most six (FCC) on six (:func:`run_one6`: ``python
+benchmarks/lattice_sight.py`` put FCC's walk at 1.52-1.61 x cubic per cell, at 1.69 on
+eight keys); :func:`steps` picks the variant. The steps from both ends at once are in
+:mod:`planner.occupancy.facemirror`.
 """
 
 from __future__ import annotations
@@ -30,10 +30,9 @@ import numpy as np
 
 from planner._numba import njit_cached
 
-__all__ = ["BLOCKED", "END", "KEY_BITS", "LOW", "MET", "SLOTS", "STEPPED", "TIE",
-           "face_scratch", "first_exit", "first_key", "key", "mirror_steps", "recorded",
-           "run_mirror", "run_mirror4", "run_mirror6", "run_one", "run_one4", "run_one6",
-           "steps"]
+__all__ = ["BLOCKED", "END", "KEY_BITS", "LOW", "MET", "SLOTS", "STEPPED", "TIE", "TIE_P",
+           "face_scratch", "first_exit", "first_key", "key", "recorded", "run_one", "run_one4",
+           "run_one6", "steps"]
 
 SLOTS = 8  # exit-time slots: forward facets of a 3D Voronoi cell (at most 7)
 KEY_BITS = 57  # a line's exit times in fixed point stay below 2**KEY_BITS
@@ -49,7 +48,8 @@ KEY_CAP = 2.0 ** 60  # the key of an empty slot (parallel facets, padding): neve
 S_IDQ, S_SG, S_SY, S_T, S_F = 0, 8, 16, 24, 32
 S_FW, S_STEP, S_KEY, S_KINC, S_BIT, S_ON, S_NP, S_CUR = 0, 8, 16, 24, 88, 96, 104, 105
 
-END, BLOCKED, TIE, STEPPED, MET = 0, 1, 2, 3, 4  # how run_one and run_mirror stop
+# how run_one and run_mirror stop (TIE_P: run_mirror's tie on the walk from p alone)
+END, BLOCKED, TIE, STEPPED, MET, TIE_P = 0, 1, 2, 3, 4, 5
 LOW = np.int64(-8)  # clears a key's slot bits
 
 
@@ -150,60 +150,6 @@ def run_one(grid, si, idx, lookups, gi, one, dense, stop):  # pragma: no cover -
 
 
 @njit_cached(_nrt=False)
-def run_mirror(grid, si, idx, mir, lookups, gi, li):  # pragma: no cover - compiled
-    """:func:`run_one` on a dense grid, each step looking up the cell stepped into (flat
-    index ``idx``) and its mirror image through the segment's midpoint (``mir - idx``), the
-    cell the same step from q reaches: the walk from q need not be taken. Steps while the
-    next exit's key ``m`` is below ``li / 2`` (just under the midpoint) and is one facet's
-    alone; the mirror image is looked up while the exit after the step plus ``m`` stays
-    below ``li`` (the walks from both ends have not met: every cell is new).
-    Returns ``(code, idx, stop, lookups)``: ``MET``, ``TIE`` or ``BLOCKED``; ``stop``
-    the last mirror image looked up (q at first): the walk from p goes on until it reaches
-    it (the segment is in its interior from there on, its later crossings single facets,
-    the mirror images of this walk's). The keys back in ``si``."""
-    t0, t1, t2, t3 = si[S_KEY], si[S_KEY + 1], si[S_KEY + 2], si[S_KEY + 3]
-    t4, t5, t6, t7 = si[S_KEY + 4], si[S_KEY + 5], si[S_KEY + 6], si[S_KEY + 7]
-    m = min(min(min(t0, t1), min(t2, t3)), min(min(t4, t5), min(t6, t7)))
-    stop = mir - idx
-    code = MET
-    while m + m < li:
-        lm = m + gi
-        at = (((t0 - lm - 1) >> 63) + ((t1 - lm - 1) >> 63) + ((t2 - lm - 1) >> 63)
-              + ((t3 - lm - 1) >> 63) + ((t4 - lm - 1) >> 63) + ((t5 - lm - 1) >> 63)
-              + ((t6 - lm - 1) >> 63) + ((t7 - lm - 1) >> 63))
-        if at < -1:
-            code = TIE
-            break
-        st = np.uint64(m & 7)
-        idx += si[np.uint64(S_STEP) + st]
-        a = np.uint64(S_KINC) + np.uint64(SLOTS) * st
-        t0 += si[a]
-        t1 += si[a + np.uint64(1)]
-        t2 += si[a + np.uint64(2)]
-        t3 += si[a + np.uint64(3)]
-        t4 += si[a + np.uint64(4)]
-        t5 += si[a + np.uint64(5)]
-        t6 += si[a + np.uint64(6)]
-        t7 += si[a + np.uint64(7)]
-        lookups += 1
-        if (grid[np.uint64(idx) >> np.uint64(3)] >> (idx & 7)) & 1 == 0:
-            code = BLOCKED
-            break
-        mn = min(min(min(t0, t1), min(t2, t3)), min(min(t4, t5), min(t6, t7)))
-        if mn + m >= li:
-            break
-        stop = mir - idx
-        lookups += 1
-        if (grid[np.uint64(stop) >> np.uint64(3)] >> (stop & 7)) & 1 == 0:
-            code = BLOCKED
-            break
-        m = mn
-    si[S_KEY], si[S_KEY + 1], si[S_KEY + 2], si[S_KEY + 3] = t0, t1, t2, t3
-    si[S_KEY + 4], si[S_KEY + 5], si[S_KEY + 6], si[S_KEY + 7] = t4, t5, t6, t7
-    return code, idx, stop, lookups
-
-
-@njit_cached(_nrt=False)
 def run_one4(grid, si, idx, lookups, gi, one, dense, stop):  # pragma: no cover - compiled
     """:func:`run_one` for a cell of at most four facet pairs (hex prisms): four keys."""
     t0, t1, t2, t3 = si[S_KEY], si[S_KEY + 1], si[S_KEY + 2], si[S_KEY + 3]
@@ -241,44 +187,6 @@ def run_one4(grid, si, idx, lookups, gi, one, dense, stop):  # pragma: no cover 
             break
     si[S_KEY], si[S_KEY + 1], si[S_KEY + 2], si[S_KEY + 3] = t0, t1, t2, t3
     return code, idx, lookups, m
-
-
-@njit_cached(_nrt=False)
-def run_mirror4(grid, si, idx, mir, lookups, gi, li):  # pragma: no cover - compiled
-    """:func:`run_mirror` for a cell of at most four facet pairs (hex prisms): four keys."""
-    t0, t1, t2, t3 = si[S_KEY], si[S_KEY + 1], si[S_KEY + 2], si[S_KEY + 3]
-    m = min(min(t0, t1), min(t2, t3))
-    stop = mir - idx
-    code = MET
-    while m + m < li:
-        lm = m + gi
-        at = (((t0 - lm - 1) >> 63) + ((t1 - lm - 1) >> 63) + ((t2 - lm - 1) >> 63)
-              + ((t3 - lm - 1) >> 63))
-        if at < -1:
-            code = TIE
-            break
-        st = np.uint64(m & 7)
-        idx += si[np.uint64(S_STEP) + st]
-        a = np.uint64(S_KINC) + np.uint64(SLOTS) * st
-        t0 += si[a]
-        t1 += si[a + np.uint64(1)]
-        t2 += si[a + np.uint64(2)]
-        t3 += si[a + np.uint64(3)]
-        lookups += 1
-        if (grid[np.uint64(idx) >> np.uint64(3)] >> (idx & 7)) & 1 == 0:
-            code = BLOCKED
-            break
-        mn = min(min(t0, t1), min(t2, t3))
-        if mn + m >= li:
-            break
-        stop = mir - idx
-        lookups += 1
-        if (grid[np.uint64(stop) >> np.uint64(3)] >> (stop & 7)) & 1 == 0:
-            code = BLOCKED
-            break
-        m = mn
-    si[S_KEY], si[S_KEY + 1], si[S_KEY + 2], si[S_KEY + 3] = t0, t1, t2, t3
-    return code, idx, stop, lookups
 
 
 @njit_cached(_nrt=False)
@@ -322,53 +230,11 @@ def run_one6(grid, si, idx, lookups, gi, one, dense, stop):  # pragma: no cover 
     return code, idx, lookups, m
 
 
-@njit_cached(_nrt=False)
-def run_mirror6(grid, si, idx, mir, lookups, gi, li):  # pragma: no cover - compiled
-    """:func:`run_mirror` for a cell of at most six facet pairs (FCC's rhombic dodecahedron):
-    six keys."""
-    t0, t1, t2, t3 = si[S_KEY], si[S_KEY + 1], si[S_KEY + 2], si[S_KEY + 3]
-    t4, t5 = si[S_KEY + 4], si[S_KEY + 5]
-    m = min(min(min(t0, t1), min(t2, t3)), min(t4, t5))
-    stop = mir - idx
-    code = MET
-    while m + m < li:
-        lm = m + gi
-        at = (((t0 - lm - 1) >> 63) + ((t1 - lm - 1) >> 63) + ((t2 - lm - 1) >> 63)
-              + ((t3 - lm - 1) >> 63) + ((t4 - lm - 1) >> 63) + ((t5 - lm - 1) >> 63))
-        if at < -1:
-            code = TIE
-            break
-        st = np.uint64(m & 7)
-        idx += si[np.uint64(S_STEP) + st]
-        a = np.uint64(S_KINC) + np.uint64(SLOTS) * st
-        t0 += si[a]
-        t1 += si[a + np.uint64(1)]
-        t2 += si[a + np.uint64(2)]
-        t3 += si[a + np.uint64(3)]
-        t4 += si[a + np.uint64(4)]
-        t5 += si[a + np.uint64(5)]
-        lookups += 1
-        if (grid[np.uint64(idx) >> np.uint64(3)] >> (idx & 7)) & 1 == 0:
-            code = BLOCKED
-            break
-        mn = min(min(min(t0, t1), min(t2, t3)), min(t4, t5))
-        if mn + m >= li:
-            break
-        stop = mir - idx
-        lookups += 1
-        if (grid[np.uint64(stop) >> np.uint64(3)] >> (stop & 7)) & 1 == 0:
-            code = BLOCKED
-            break
-        m = mn
-    si[S_KEY], si[S_KEY + 1], si[S_KEY + 2], si[S_KEY + 3] = t0, t1, t2, t3
-    si[S_KEY + 4], si[S_KEY + 5] = t4, t5
-    return code, idx, stop, lookups
-
-
-# The two pickers are inlined (numba's IR inlining) where the walk calls them: as calls of
-# their own, each a call level that passes both arrays again, they cost the walk some 20 ns
-# a line, an eighth of a short line's time (`python benchmarks/lattice_sight.py`, the sight
-# table: bcc 1.62 -> 1.45 x the cubic walk per cell).
+# The picker is inlined (numba's IR inlining) where the walk calls it, as is
+# planner.occupancy.facemirror.mirror_steps: as calls of their own, each a call level that
+# passes both arrays again, the two cost the walk some 20 ns a line, an eighth of a short
+# line's time (`python benchmarks/lattice_sight.py`, the sight table: bcc 1.62 -> 1.45 x
+# the cubic walk per cell).
 @njit_cached(_nrt=False, inline="always")
 def steps(grid, si, idx, lookups, gi, one, dense, stop, npair):  # pragma: no cover
     """:func:`run_one` on the fewest keys that hold a cell's ``npair`` facet pairs."""
@@ -378,12 +244,3 @@ def steps(grid, si, idx, lookups, gi, one, dense, stop, npair):  # pragma: no co
         return run_one6(grid, si, idx, lookups, gi, one, dense, stop)
     return run_one(grid, si, idx, lookups, gi, one, dense, stop)
 
-
-@njit_cached(_nrt=False, inline="always")
-def mirror_steps(grid, si, idx, mir, lookups, gi, li, npair):  # pragma: no cover
-    """:func:`run_mirror` on the fewest keys that hold a cell's ``npair`` facet pairs."""
-    if npair <= 4:
-        return run_mirror4(grid, si, idx, mir, lookups, gi, li)
-    if npair <= 6:
-        return run_mirror6(grid, si, idx, mir, lookups, gi, li)
-    return run_mirror(grid, si, idx, mir, lookups, gi, li)

@@ -21,7 +21,7 @@ caller walks the generic way.
 Every walk is taken from both ends at no extra cost: the reflection through the segment's
 midpoint maps the lattice's Voronoi cells and the segment onto themselves, so each fast
 step from p looks up the cell it steps into and that cell's mirror image, the cell the same
-step from q would reach (:func:`planner.occupancy.facestep.run_mirror`), until the two are
+step from q would reach (:func:`planner.occupancy.facemirror.run_mirror`), until the two are
 about to meet; a tie met on the way looks up its cells' mirror images too, and the walk
 goes on from both ends when the segment enters the next cell's interior. Then the walk
 from p goes on as above and ends where it reaches the last mirror image (the segment is in
@@ -36,6 +36,7 @@ import numpy as np
 from numba.cpython.unsafe.numbers import leading_zeros
 
 from planner._numba import njit_cached
+from planner.occupancy.facemirror import mirror_steps
 from planner.occupancy.facestep import (
     BLOCKED,
     END,
@@ -57,11 +58,11 @@ from planner.occupancy.facestep import (
     SLOTS,
     STEPPED,
     TIE,
+    TIE_P,
     face_scratch,
     first_exit,
     first_key,
     key,
-    mirror_steps,
     recorded,
     steps,
 )
@@ -267,9 +268,13 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
         if mirroring:
             if dense:
                 code, idx, stop, lookups = mirror_steps(grid, si, idx, mir, lookups, gi, li,
-                                                        npair)
+                                                        one, npair)
                 if code == BLOCKED:
                     return False, lookups, True
+                if code == MET or code == END:  # the walk from p reached the last image
+                    break
+                if code == TIE_P:  # a tie on the walk from p alone: no images from here
+                    mirroring = False
             else:
                 code = MET
                 m = first_exit(si, nfw, isc)
@@ -300,7 +305,7 @@ def face_walk(occ, fd, fi, sf, si, p0, p1, p2, q0, q1, q2):  # pragma: no cover 
                     if stop != mir - idx:
                         break
                     m = mn
-            if code != TIE:  # met: from here on from p only
+            if code != TIE and code != TIE_P:  # met: from here on from p only
                 mirroring = False
                 if idx == stop:
                     break
