@@ -8,6 +8,7 @@ Usage::
     python benchmarks/cpp_anchor.py --check-all          # the floor on all Warframe costs
     python benchmarks/cpp_anchor.py --axes natural       # both sides in the map's own order
     python benchmarks/cpp_anchor.py --variants           # the floor with each trick off
+    python benchmarks/cpp_anchor.py --floor "children in turn"   # against one variant
     python benchmarks/cpp_anchor.py --smoke              # a small synthetic map, seconds
 
 The floor: cubic lattice, 26 neighbours with MovingAI's no-corner-cutting rule (a move is
@@ -737,12 +738,14 @@ def maps(data: Path, names, queries: int, geb_queries: int):
 
 def floor_rows(data: Path = harness.DATA, names=WARFRAME_MAPS + ("geb079",),
                queries: int = 100, geb_queries: int = 20, repeat: int = 3,
-               axes: str = "longest") -> list[Row]:
-    """Ours against the floor on each named map present (:func:`compare`); print the rows
-    with :func:`print_rows`. What ``search_speed.py`` can call for its floor table."""
+               axes: str = "longest",
+               grids: tuple[str, ...] = ("strongest", "byte grid")) -> list[Row]:
+    """Ours against the floor (the fastest of its variants ``grids`` per query) on each
+    named map present (:func:`compare`); print the rows with :func:`print_rows`. What
+    ``search_speed.py`` can call for its floor table."""
     rows = []
     for m in maps(data, names, queries, geb_queries):
-        rows.append(compare(m, repeat, axes))
+        rows.append(compare(m, repeat, axes, grids))
         print(f"{m.name} done", file=sys.stderr, flush=True)
     return rows
 
@@ -761,6 +764,12 @@ def main(argv: list[str] | None = None) -> int:
                     help="the floor alone on every query of each Warframe map present")
     ap.add_argument("--variants", action="store_true",
                     help="the floor alone with each trick switched off, per map")
+    ap.add_argument("--floor", nargs="+", choices=list(VARIANTS),
+                    default=["strongest", "byte grid"], metavar="VARIANT",
+                    help="the floor's variants ours is set against, the fastest per query "
+                         "(default: strongest, byte grid); e.g. 'children in turn': a "
+                         "yardstick that stays put while our heap changes (run it with "
+                         "PYTHONPATH=OTHER_CHECKOUT for that checkout's planner)")
     a = ap.parse_args(argv)
     with harness.session("A*, cubic-26, ours vs the strongest C++ floor (in process, "
                          "thread CPU time)", smoke=a.smoke):
@@ -785,7 +794,8 @@ def main(argv: list[str] | None = None) -> int:
             for m in maps(a.data, a.maps, a.queries, a.geb_queries):
                 variants(m, a.repeat)
             return 0
-        rows = floor_rows(a.data, a.maps, a.queries, a.geb_queries, a.repeat, a.axes)
+        rows = floor_rows(a.data, a.maps, a.queries, a.geb_queries, a.repeat, a.axes,
+                          tuple(a.floor))
         if not rows:
             return harness.skip(f"no maps under {a.data}")
         print_rows(rows)
