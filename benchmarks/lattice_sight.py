@@ -7,6 +7,7 @@ Usage::
     python benchmarks/lattice_sight.py --maps office    # one map
     python benchmarks/lattice_sight.py --maps DA1 Complex --segments 0   # Warframe maps
     python benchmarks/lattice_sight.py --segments 20000 --queries 8 --repeat 3
+    python benchmarks/lattice_sight.py --segments 20000 --maps --by-length   # set-up vs cells
     python benchmarks/lattice_sight.py --smoke          # tiny sizes, seconds
 
 Sight table: random centre-to-centre sight lines (2 to 40 cells long) in an empty box of
@@ -143,6 +144,41 @@ def sight_table(n: int, repeat: int) -> None:
                                      note=f"per batch of {batch} lines"))
 
 
+def length_table(n: int, repeat: int, lengths=(2, 10, 20, 40)) -> None:
+    """The sight walk's time per line split into a part per line (the set-up) and a part
+    per cell looked up: per lattice, ``n`` random lines of each length in ``lengths``
+    (cell spacings), thread CPU ns per line (one batch each, its fastest of ``repeat``),
+    and a least-squares line through (cells per line, ns per line)."""
+    print(f"\nsight walk by line length: {n:,} random lines of each length (cell spacings), "
+          f"empty box, unit cell volume; thread CPU ns per line, fastest of {repeat}; the "
+          "fit: ns per line = set-up + slope x cells")
+    print(f"{'lattice':8s} " + " ".join(f"{'L' + str(k):>8s}" for k in lengths)
+          + f" {'set-up':>8s} {'ns/cell':>8s}")
+    for name in NAMED_LATTICES:
+        lat = Lattice.named(name, 1.0)
+        w = World(lat, np.zeros((0, 3), np.int64), np.array([[-60.0] * 3, [60.0] * 3]))
+        rng = np.random.default_rng(0)
+        step = 2 * lat.packing_radius
+        cells, ns = [], []
+        for k in lengths:
+            p = lat.quantize(rng.uniform(-5, 5, (n, 3)) * step)
+            d = rng.normal(size=(n, 3))
+            d *= (k * step / np.linalg.norm(d, axis=1))[:, None]
+            q = lat.quantize(lat.to_world(p) + d)
+            S.sight_many(w, p[:10], q[:10])  # compile / load
+            best = np.inf
+            for _ in range(repeat):
+                r, t = harness.cpu_result(lambda w=w, p=p, q=q: S.sight_many(w, p, q))
+                best = min(best, t)
+            cells.append(r.lookups.mean())
+            ns.append(1e9 * best / n)
+        slope, setup = np.polyfit(cells, ns, 1)
+        print(f"{name:8s} " + " ".join(f"{x:8.0f}" for x in ns)
+              + f" {setup:8.0f} {slope:8.2f}")
+        harness.record(f"sight_by_length/{name}", dict(ns_per_line=ns, cells_per_line=cells,
+                                                       setup_ns=setup, ns_per_cell=slope))
+
+
 def map_worlds(map_name: str, data: Path) -> dict[str, World]:
     """The map on every lattice."""
     src, kw = map_source(map_name, data)
@@ -271,6 +307,9 @@ def main(argv: list[str] | None = None) -> int:
                     help="maps of the planning table (bundled names, geb079, or Warframe "
                          "names under DATA/warframe)")
     ap.add_argument("--queries", type=int, default=8, help="queries per map")
+    ap.add_argument("--by-length", action="store_true",
+                    help="also the sight walk's time per line by line length, split into a "
+                         "set-up per line and a cost per cell (2,500 lines per length)")
     a = ap.parse_args(argv)
     if a.smoke:
         a.segments, a.queries, a.repeat = 5000, 2, 1
@@ -280,6 +319,8 @@ def main(argv: list[str] | None = None) -> int:
                          command=harness.command_line("lattice_sight.py", argv)):
         if a.segments:
             sight_table(a.segments, a.repeat)
+        if a.by_length:
+            length_table(500 if a.smoke else 2500, max(a.repeat, 1))
         each_map(a.maps, a.data, lambda m: plan_table(m, a.queries, a.repeat, a.data))
     return 0
 
