@@ -319,7 +319,7 @@ def main(argv: list[str] | None = None) -> int:
                          command=harness.command_line("lattice_sight.py", argv)):
         if a.segments:
             sight_table(a.segments, a.repeat)
-        if a.by_length:
+        if a.by_length or a.smoke:  # (the smoke run keeps this path exercised)
             length_table(500 if a.smoke else 2500, max(a.repeat, 1))
         each_map(a.maps, a.data, lambda m: plan_table(m, a.queries, a.repeat, a.data))
     return 0
