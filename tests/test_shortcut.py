@@ -188,3 +188,21 @@ def test_shortcut_alternating_between_lattices_keeps_each_lattices_scratch():
         kept_scratch(store, World(Lattice.named("bcc", 2.0 + k), np.zeros((0, 3), np.int64),
                                   [[0, 0, 0], [9, 9, 9]]).checker.walk, 1.0)
     assert len(store) == KEEP and all(id(wk) not in store for wk in walks)
+
+
+def test_every_kind_of_path_array_gets_the_same_answer():
+    """The compiled call skips numba's argument typing, so it must never see another type:
+    a read-only path, a list, a Fortran-ordered or int32 copy, and a world that went through
+    pickle (a worker's) all give the answer of the plain int64 array."""
+    import pickle
+
+    world = World(Lattice.named("bcc", 1.0), np.zeros((0, 3), np.int64), [[0, 0, 0], [9, 9, 9]])
+    cells = S.search(world, world.lattice.quantize([[1.0, 1, 1]])[0],
+                     world.lattice.quantize([[8.0, 7, 2]])[0]).cells
+    want = S.shortcut(world, cells)
+    assert len(want) < len(cells)
+    frozen = cells.copy()
+    frozen.flags.writeable = False
+    for kind in (frozen, cells.tolist(), np.asfortranarray(cells), cells.astype(np.int32)):
+        np.testing.assert_array_equal(S.shortcut(world, kind), want)
+    np.testing.assert_array_equal(S.shortcut(pickle.loads(pickle.dumps(world)), cells), want)

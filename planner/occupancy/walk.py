@@ -222,8 +222,14 @@ def motion_free(occ, walk, quant, a0, a1, a2, b0, b1, b2, buf, out):  # pragma: 
 
 
 # -- Python side ---------------------------------------------------------------------------
+_INT64 = np.dtype(np.int64)
+
+
 def as_cells(indices) -> np.ndarray:
     """``indices`` as C-contiguous int64 cells (N, 3); PlanError for another shape or dtype."""
+    if (type(indices) is np.ndarray and indices.dtype == _INT64 and indices.ndim == 2
+            and indices.shape[1] == 3 and indices.flags.c_contiguous):
+        return indices  # a search's path: the checks below cost a microsecond
     w = np.asarray(indices)
     if w.ndim == 1 and w.shape[0] == 3:
         w = w[None]

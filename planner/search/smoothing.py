@@ -51,10 +51,13 @@ def shortcut(world: World, cells: np.ndarray) -> np.ndarray:
     c = as_cells(cells)
     if len(c) <= 2:
         return c.copy()
+    if not (c.flags.writeable and c.flags.aligned):
+        c = c.copy()  # one compiled type for every call: numba types these flags
     chk = world.checker
     walk = chk.walk
     kept = _scratch(walk, c)
-    keep, n, gen = shortcut_kernel(chk.occupancy, walk, c, kept.sc, kept.gen[0])
+    args = (chk.occupancy, walk, c, kept.sc, kept.gen[0])
+    keep, n, gen = chk.compiled(shortcut_kernel, args)(*args)
     kept.gen[0] = gen
     world.cell_checks += int(n)
     return c[keep]

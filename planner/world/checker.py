@@ -3,6 +3,8 @@ OMPL all use (numba kernels over the world's :class:`~planner.occupancy.grid.Occ
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
+
 import numpy as np
 
 from planner._entry import entry_point
@@ -56,6 +58,7 @@ class ValidityChecker:
         self._point_cells = None  # and of grid.point_cells (see locate_two)
         self._segment = None  # and of walk.motion_free (see segment)
         self._join = None  # (Joiner, compiled entry point of join.join_path): see join
+        self._kernels: dict = {}  # kernel -> its compiled entry point (see compiled)
 
     @property
     def quantizer(self) -> Quantizer:
@@ -69,7 +72,18 @@ class ValidityChecker:
         d = self.__dict__.copy()
         # entry points do not pickle
         d["_free_one"] = d["_point_cell"] = d["_point_cells"] = d["_segment"] = d["_join"] = None
+        d["_kernels"] = {}
         return d
+
+    def compiled(self, kernel, args: Sequence) -> Callable:
+        """The compiled function of numba kernel ``kernel`` for ``args``, looked up once per
+        kernel (:func:`planner._entry.entry_point`): a call skips numba's typing of this
+        world's structs, some microseconds. The caller passes arguments of the same types on
+        every call (the entry point does not check them)."""
+        f = self._kernels.get(kernel)
+        if f is None:
+            f = self._kernels[kernel] = entry_point(kernel, args)
+        return f
 
     def is_valid(self, point) -> bool:
         """The cell containing ``point`` ((3,), m) is in bounds and free (one lookup)."""
