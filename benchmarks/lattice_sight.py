@@ -6,7 +6,7 @@ Usage::
     python benchmarks/lattice_sight.py                  # both tables (office, geb079)
     python benchmarks/lattice_sight.py --maps office    # one map
     python benchmarks/lattice_sight.py --maps DA1 Complex --segments 0   # Warframe maps
-    python benchmarks/lattice_sight.py --segments 20000 --queries 8 --repeat 3
+    python benchmarks/lattice_sight.py --segments 20000 --queries 32 --repeat 3
     python benchmarks/lattice_sight.py --segments 20000 --maps --by-length   # set-up vs cells
     python benchmarks/lattice_sight.py --smoke          # tiny sizes, seconds
 
@@ -81,14 +81,23 @@ def each_map(maps, data: Path, table) -> None:
         table(m)
 
 
-def sight_lines(lat: Lattice, n: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
-    """``n`` random centre-to-centre sight lines of 2 to 40 cells (in index space of
-    ``lat``, around the box centre)."""
+def empty_world(lat: Lattice) -> World:
+    """An empty box of ``lat``, 120 m across around the origin: room for every sight line
+    of :func:`sight_lines` at unit cell volume."""
+    return World(lat, np.zeros((0, 3), np.int64), np.array([[-60.0] * 3, [60.0] * 3]))
+
+
+def sight_lines(lat: Lattice, n: int, seed: int = 0,
+                length: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """``n`` random centre-to-centre sight lines (in index space of ``lat``, around the
+    box centre) of 2 to 40 cell spacings, or of ``length`` cell spacings each; their
+    ends are rounded to cell centres."""
     rng = np.random.default_rng(seed)
     step = 2 * lat.packing_radius
     p = lat.quantize(rng.uniform(-5, 5, (n, 3)) * step)
     d = rng.normal(size=(n, 3))
-    d *= (rng.uniform(2, 40, n) * step / np.linalg.norm(d, axis=1))[:, None]
+    spans = rng.uniform(2, 40, n) if length is None else np.full(n, float(length))
+    d *= (spans * step / np.linalg.norm(d, axis=1))[:, None]
     q = lat.quantize(lat.to_world(p) + d)
     return p, q
 
@@ -111,7 +120,7 @@ def sight_table(n: int, repeat: int) -> None:
     cases = {}
     for name in NAMED_LATTICES:
         lat = Lattice.named(name, 1.0)
-        w = World(lat, np.zeros((0, 3), np.int64), np.array([[-60.0] * 3, [60.0] * 3]))
+        w = empty_world(lat)
         ps, qs = sight_lines(lat, n)
         S.sight_many(w, ps[:10], qs[:10])  # compile / load
         cases[name] = (w, ps.reshape(nb, batch, 3), qs.reshape(nb, batch, 3),
@@ -156,15 +165,10 @@ def length_table(n: int, repeat: int, lengths=(2, 10, 20, 40)) -> None:
           + f" {'set-up':>8s} {'ns/cell':>8s}")
     for name in NAMED_LATTICES:
         lat = Lattice.named(name, 1.0)
-        w = World(lat, np.zeros((0, 3), np.int64), np.array([[-60.0] * 3, [60.0] * 3]))
-        rng = np.random.default_rng(0)
-        step = 2 * lat.packing_radius
+        w = empty_world(lat)
         cells, ns = [], []
         for k in lengths:
-            p = lat.quantize(rng.uniform(-5, 5, (n, 3)) * step)
-            d = rng.normal(size=(n, 3))
-            d *= (k * step / np.linalg.norm(d, axis=1))[:, None]
-            q = lat.quantize(lat.to_world(p) + d)
+            p, q = sight_lines(lat, n, seed=k, length=k)
             S.sight_many(w, p[:10], q[:10])  # compile / load
             best = np.inf
             for _ in range(repeat):
@@ -306,7 +310,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--maps", nargs="*", default=["office", "geb079"],
                     help="maps of the planning table (bundled names, geb079, or Warframe "
                          "names under DATA/warframe)")
-    ap.add_argument("--queries", type=int, default=8, help="queries per map")
+    ap.add_argument("--queries", type=int, default=32,
+                    help="queries per map (one long query can decide a sum over 8)")
     ap.add_argument("--by-length", action="store_true",
                     help="also the sight walk's time per line by line length, split into a "
                          "set-up per line and a cost per cell (2,500 lines per length)")

@@ -436,12 +436,15 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--no-lattice-sight", dest="lattice_sight", action="store_false",
                     help="skip the per-lattice sight walk and planning tables "
                          "(benchmarks/lattice_sight.py)")
+    ap.add_argument("--plan-queries", type=int, default=32,
+                    help="queries per map of the per-lattice planning table (one long query "
+                         "can decide a sum over 8)")
     ap.add_argument("--save-lengths", type=Path, metavar="JSON",
                     help="write each query's Lazy Theta* path length here")
     ap.add_argument("--check-lengths", type=Path, metavar="JSON",
                     help="compare Lazy Theta* path lengths with a --save-lengths file")
     a = ap.parse_args(argv)
-    segments, plan_maps, plan_queries = 20_000, ["office", "geb079", "DA1", "Complex"], 8
+    segments, plan_maps, plan_queries = 20_000, ["office", "geb079", "DA1", "Complex"], a.plan_queries
     if a.smoke:  # tiny sizes; geb079 (five lattice builds) left out
         a.sample, a.compare, a.da1, a.anyangle, a.repeat = 4, 1, 20, 3, 1
         a.maps, a.geb079, a.all_warframe = ["Simple"], False, False
