@@ -9,7 +9,8 @@ world with a few obstacles), so the two expansions it makes (26 nodes generated)
 share: the figure is what every call pays whatever its length (argument checks, endpoint
 checks, the kernel call, building the result). ``plan()`` is timed with its endpoints given
 three ways, as users write them: a tuple of floats (the README's example), a list, and a
-float64 array. The same search with the goal at the start (one expansion, no node
+float64 array; ``shortcut()`` (what ``plan(..., shortcut=True)`` adds) of a four-cell path
+whose ends see each other. The same search with the goal at the start (one expansion, no node
 generated) is the fixed cost with no expansion work at all. Taking turns between this
 world and a second one (the same query on a BCC world of the same box), each ``search()``
 also pays for the switch of world: what a query loop comparing lattices query by query pays.
@@ -89,7 +90,7 @@ def fixed_cost(calls: int = 3000) -> dict:
     reports (``engine``, ``SearchResult.seconds``), of ``search()`` from a cell to itself
     (``same``), of ``search()`` taking turns between two worlds (``turns``, per call) and
     of ``plan()`` with tuple, list and array endpoints (``plan tuple``, ``plan list``,
-    ``plan array``)."""
+    ``plan array``) and of ``shortcut()`` of a four-cell path (``shortcut``)."""
     world, s, g = _query()
     other, s2, g2 = _second(world, s)
 
@@ -101,8 +102,11 @@ def fixed_cost(calls: int = 3000) -> dict:
     ts, tg = tuple(float(v) for v in ps), tuple(float(v) for v in pg)
     ls, lg = list(ts), list(tg)
     ps, pg = np.ascontiguousarray(ps, dtype=np.float64), np.ascontiguousarray(pg, np.float64)
+    # a short path to smooth (the corner x < 20 is free): one sight test keeps its ends
+    path = np.array([s, g, g + np.array([1, 1, 0]), g + np.array([2, 1, 0])])
     for _ in range(50):
         S.search(world, s, g)
+        S.shortcut(world, path)
         plan(world, ts, tg)
         plan(world, ls, lg)
         plan(world, ps, pg)
@@ -111,7 +115,8 @@ def fixed_cost(calls: int = 3000) -> dict:
                      "turns": turns,
                      "plan tuple": lambda: plan(world, ts, tg),
                      "plan list": lambda: plan(world, ls, lg),
-                     "plan array": lambda: plan(world, ps, pg)}, calls)
+                     "plan array": lambda: plan(world, ps, pg),
+                     "shortcut": lambda: S.shortcut(world, path)}, calls)
     out["turns"] /= 2  # two searches per call
     out["engine"] = float(np.median([S.search(world, s, g).seconds for _ in range(BATCH)]))
     return out
@@ -129,7 +134,8 @@ def line(calls: int = 3000) -> str:
             f"{r['engine'] * 1e6:.1f} us; {r['same'] * 1e6:.1f} us from a cell to itself; "
             f"{r['turns'] * 1e6:.1f} us taking turns between two worlds), "
             f"plan() with tuple / list / array endpoints {r['plan tuple'] * 1e6:.1f} / "
-            f"{r['plan list'] * 1e6:.1f} / {r['plan array'] * 1e6:.1f} us (goal <= 15 each)")
+            f"{r['plan list'] * 1e6:.1f} / {r['plan array'] * 1e6:.1f} us (goal <= 15 each); "
+            f"shortcut() of a four-cell path {r['shortcut'] * 1e6:.1f} us")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -147,6 +153,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"search(), two worlds taking turns  {r['turns'] * 1e6:7.2f} us")
         for k in ("tuple", "list", "array"):
             print(f"plan() {k:5s} ends   {r['plan ' + k] * 1e6:7.2f} us   (goal <= 15)")
+        print(f"shortcut(), 4 cells {r['shortcut'] * 1e6:7.2f} us")
         if a.parts:
             print(f"search()'s engine call (SearchResult.seconds, its own clock) "
                   f"{r['engine'] * 1e6:.2f} us; the rest of the call "

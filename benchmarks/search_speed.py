@@ -444,7 +444,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--check-lengths", type=Path, metavar="JSON",
                     help="compare Lazy Theta* path lengths with a --save-lengths file")
     a = ap.parse_args(argv)
-    segments, plan_maps, plan_queries = 20_000, ["office", "geb079", "DA1", "Complex"], a.plan_queries
+    segments, plan_queries = 20_000, a.plan_queries
+    plan_maps = ["office", "geb079", "DA1", "Complex"]
     if a.smoke:  # tiny sizes; geb079 (five lattice builds) left out
         a.sample, a.compare, a.da1, a.anyangle, a.repeat = 4, 1, 20, 3, 1
         a.maps, a.geb079, a.all_warframe = ["Simple"], False, False

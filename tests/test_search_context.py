@@ -1,7 +1,7 @@
 """A thread's search arrays between searches (``planner.search.astar._context``): a query
 loop on one dense grid grows them once, not on every long query; elsewhere a long search's
-arrays are dropped afterwards. A query loop that takes turns between worlds makes each
-world's bound once."""
+arrays are dropped afterwards. A query loop that takes turns between worlds finds each
+world's context as it left it."""
 
 from __future__ import annotations
 
@@ -49,17 +49,74 @@ def test_long_search_arrays_are_dropped_without_room():
     assert ctx.nodes is big
 
 
-def test_taking_turns_between_worlds_makes_each_bound_once():
-    worlds = [_open_box((12, 10, 8)), _open_box((9, 9, 9))]
-    s, g = np.array([1, 1, 1]), np.array([7, 7, 7])
-    for w in worlds:  # (a context that held grown arrays drops them, and its bounds, once)
-        S.search(w, s, g)
-        S.search(w, s, g)
-    ctx = next(c for c in C._CONTEXTS if c.held is not None and c.bound.occ is
-               worlds[-1].checker.occupancy)
-    made = {id(m.occ): m.bound for m in ctx.bounds.values()}
-    assert {id(w.checker.occupancy) for w in worlds} <= made.keys()
+def _last_context():
+    """The context the thread's last search ran in (released last)."""
+    return C._LOCAL.free[-1]
+
+
+def test_taking_turns_between_worlds_finds_each_worlds_context_as_it_left_it():
+    """Lattices compared query by query: each world's searches run in a context of its own,
+    on the bound made for it once, with the answers of a lone search."""
+    worlds = [_open_box((12, 10, 8)), _open_box((9, 9, 9)),
+              World(Lattice.named("bcc", 1.0), np.empty((0, 3), np.int64), [[0, 0, 0], [8] * 3])]
+    ends = [w.lattice.quantize([[1.0, 1, 1], [6.0, 5, 6]]) for w in worlds]
+    alone, ctx, bound = [], [], []
+    for w, (s, g) in zip(worlds, ends, strict=True):
+        alone.append(S.search(w, s, g).cost)
+        ctx.append(_last_context())
+        bound.append(ctx[-1].fast.bound)
+    assert len({id(c) for c in ctx}) == len(worlds)
     for _ in range(3):
-        for w in worlds:
-            assert S.search(w, s, g).found
-            assert ctx.bound.bound is made[id(w.checker.occupancy)]  # the kept one
+        for i, (w, (s, g)) in enumerate(zip(worlds, ends, strict=True)):
+            assert S.search(w, s, g).cost == alone[i]
+            assert _last_context() is ctx[i] and ctx[i].fast.bound is bound[i]
+    assert len(C._LOCAL.free) <= C.CONTEXTS_KEPT
+
+
+def test_taking_turns_between_move_sets_on_one_world_makes_each_bound_once():
+    """One grid's dense slot array stays with one context: searches with another move set
+    on the same world run there and find their bound among the context's kept ones."""
+    w = _open_box((12, 10, 8))
+    s, g = np.array([1, 1, 1]), np.array([7, 7, 7])
+    for nb in ("full", "face"):
+        S.search(w, s, g, neighbors=nb)
+    ctx = _last_context()
+    made = {}
+    for nb in ("full", "face"):
+        S.search(w, s, g, neighbors=nb)
+        made[nb] = ctx.bound.bound
+    assert made["full"] is not made["face"]
+    for _ in range(3):
+        for nb in ("full", "face"):
+            assert S.search(w, s, g, neighbors=nb).found
+            assert _last_context() is ctx and ctx.bound.bound is made[nb]
+
+
+def test_more_worlds_than_the_thread_keeps_contexts_for():
+    """A thread keeps at most CONTEXTS_KEPT free contexts; past that the least recently
+    used is taken over, with the same answers."""
+    worlds = [_open_box((8 + k, 9, 9)) for k in range(C.CONTEXTS_KEPT + 3)]
+    s, g = np.array([1, 1, 1]), np.array([6, 7, 5])
+    want = [S.search(w, s, g).cost for w in worlds]
+    for _ in range(2):
+        assert [S.search(w, s, g).cost for w in worlds] == want
+        assert len(C._LOCAL.free) <= C.CONTEXTS_KEPT
+
+
+def test_reported_memory_does_not_depend_on_the_searches_before(monkeypatch):
+    """A search's peak bytes are what it alone would grow: not the larger sight scratch its
+    context kept from a Lazy Theta* search with longer sight lines before."""
+    from planner.search.astar import driver
+
+    for module in (C, driver):  # one context: it carries the history
+        monkeypatch.setattr(module, "CONTEXTS_KEPT", 1)
+    monkeypatch.setattr(C._LOCAL, "free", [])
+    lat = Lattice.named("bcc", 1.0)
+
+    def box(n):
+        return World(lat, np.empty((0, 3), np.int64), [[0, 0, 0], [n, n, n]])
+
+    ends = lat.quantize([[1.0, 1, 1], [5.0, 4, 3]])
+    first = S.search(box(6), *ends, method="lazy-theta").peak_bytes
+    S.search(box(60), *lat.quantize([[1.0, 1, 1], [55.0, 50, 40]]), method="lazy-theta")
+    assert S.search(box(6), *ends, method="lazy-theta").peak_bytes == first

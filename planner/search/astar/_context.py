@@ -1,8 +1,12 @@
 """Each thread's search arrays, kept between its searches (:mod:`planner.search.astar.driver`).
 
 A :class:`_Context` holds one search's node table, heap, paged slot map, state and scratch;
-a thread keeps up to two free contexts (a search run inside another, such as the goal
-probe, takes a second) and its next search reuses them. A context also keeps the compiled
+a thread keeps up to :data:`CONTEXTS_KEPT` free contexts and its next search reuses them:
+the one its last search on the same world left ready (a query loop that takes turns
+between worlds, lattices compared query by query, finds each world's as it left it), else
+the one holding the dense slot array of the same grid, else a new one while the thread
+keeps fewer, else the least recently used (a search run inside another, such as the goal
+probe, takes another than its caller's). A context also keeps the compiled
 :class:`~planner.search.astar.bound.Bound` of each of the last :data:`BOUNDS_KEPT` worlds it
 searched, until the world's structs' owner is freed (:func:`_unbind`, registered by
 :func:`_settle`).
@@ -25,9 +29,12 @@ from planner.search._nodes import ASTAR_STATE, new_nodes, new_slots
 from planner.search._state import new_state
 from planner.search.astar._pool import give
 
-__all__ = ["KEEP_NODES"]
+__all__ = ["CONTEXTS_KEPT", "KEEP_NODES"]
 
-#: node capacity a thread keeps between searches (larger arrays are dropped after use)
+#: free contexts a thread keeps: a new one costs some 17 us and 280 KB (with the arrays a
+#: long search grew, at most twice the dense slot array it holds: :meth:`_Context.keep`)
+CONTEXTS_KEPT = 8
+#: node capacity a context keeps between searches (larger arrays are dropped after use)
 KEEP_NODES = 1 << 16
 _CAP, _PCAP = 4096, 64  # initial node and page capacity (powers of 2)
 
@@ -164,23 +171,25 @@ _CONTEXTS: weakref.WeakSet = weakref.WeakSet()  # every thread's contexts (see _
 _OWNERS: set[int] = set()  # ids of the owners _unbind watches
 
 
-def _context() -> _Context:
-    """This thread's free context (a new one when a search is already running on it, e.g.
-    the goal probe inside a paused search)."""
-    free = getattr(_LOCAL, "free", None)
-    if free is None:
-        free = _LOCAL.free = []
-    if free:
-        return free.pop()
+def _release(ctx: _Context) -> None:
+    free = _LOCAL.free
+    if len(free) < CONTEXTS_KEPT:
+        free.append(ctx)  # the most recently used last
+
+
+def _free_context(free: list, grid) -> _Context:
+    """For a search that no free context's last search matches (module docstring): the
+    free context holding ``grid``'s dense slot array, else a new one while ``free`` has
+    room to keep it, else the least recently used; taken out of ``free``."""
+    for k in range(len(free) - 1, -1, -1):
+        h = free[k].held
+        if h is not None and h.grid is grid:
+            return free.pop(k)
+    if free and len(free) >= CONTEXTS_KEPT - 1:
+        return free.pop(0)
     ctx = _Context()
     _CONTEXTS.add(ctx)
     return ctx
-
-
-def _release(ctx: _Context) -> None:
-    free = _LOCAL.free
-    if len(free) < 2:
-        free.append(ctx)
 
 
 _NO_SIGHT: list = []
@@ -200,6 +209,24 @@ def _sight(ctx: _Context, walk, span: float):
     if span <= 0 or is_cubic(walk.g):
         return _no_sight()  # cubic sight lines need no scratch
     return kept_scratch(ctx.scratch, walk, span).sc
+
+
+_SCRATCH_BYTES: dict[tuple, tuple] = {}  # (id(walk), span) -> (walk, bytes)
+
+
+def _fresh_scratch_bytes(walk, span: float) -> int:
+    """Bytes of the sight scratch a search alone would make for ``walk`` and sight lines up
+    to ``span`` m: the context's kept one may be larger (made for a longer span before), and
+    a search's reported memory must not depend on what ran before it. One throwaway scratch
+    per walk and span (a world's searches share its span)."""
+    hit = _SCRATCH_BYTES.get((id(walk), span))
+    if hit is not None and hit[0] is walk:
+        return hit[1]
+    n = sum(a.nbytes for a in new_scratch(span, walk))
+    if len(_SCRATCH_BYTES) >= 64:
+        _SCRATCH_BYTES.clear()
+    _SCRATCH_BYTES[(id(walk), span)] = (walk, n)  # holds the walk: its id stays its own
+    return n
 
 
 def _settle(ctx: _Context, owner) -> None:

@@ -2,15 +2,17 @@
 searches, grows them when the kernel asks, and traces the path.
 
 A search's fixed cost is what it pays outside the expansions, so nothing here is allocated
-per call: each thread keeps a :class:`_Context` (node table, heap, paged slot map, state,
-scratch) whose arrays the next search on that thread reuses, and a dense grid's cell -> slot
-array is held by the context that last searched the grid (pooled per grid when it moves on).
-Arrays grown past :data:`KEEP_NODES` for a long search are dropped afterwards, unless they
-fit in the bytes of the dense grid's slot array the context keeps anyway, so an idle thread
-holds at most a short search's memory or twice that array.
+per call: each thread keeps up to :data:`~planner.search.astar._context.CONTEXTS_KEPT`
+:class:`_Context` s (node table, heap, paged slot map, state, scratch) whose arrays its next
+searches reuse, and a dense grid's cell -> slot array is held by the context that last
+searched the grid (pooled per grid when it moves on). Arrays grown past :data:`KEEP_NODES`
+for a long search are dropped afterwards, unless they fit in the bytes of the dense grid's
+slot array the context keeps anyway, so an idle context holds at most a short search's
+memory or twice that array.
 
-A search like the context's last one (same structs, settings and owner: the usual query
-loop) takes :func:`run`'s short path: one compiled call, given the end cells as six
+A search like a free context's last one (same structs, settings and owner: the usual query
+loop, or one world's turn in a loop taking turns between worlds) takes :func:`run`'s short
+path: one compiled call, given the end cells as six
 integers, and the answer. Anything else (another world or move set, grown arrays, a
 pause, a search that needs room) takes the general path, which also sets the short path
 up for the next one.
@@ -40,10 +42,12 @@ from planner.search.astar._context import (
     _CAP,
     _LOCAL,
     _PCAP,
+    CONTEXTS_KEPT,
     KEEP_NODES,
     _Context,
-    _context,
     _Fast,
+    _free_context,
+    _fresh_scratch_bytes,
     _Held,
     _Memo,
     _no_sight,
@@ -107,7 +111,7 @@ def _done(ctx: _Context, f: _Fast, free: list, out: tuple) -> int | None:
     status, _, _, _, n, _ = out
     if status == RUN_GROW or (f.pausing and status == RUN_BUDGET):
         return None
-    if len(free) < 2:
+    if len(free) < CONTEXTS_KEPT:
         free.append(ctx)  # _release
     return f.small if n <= _CAP else _fresh_bytes(n, 0) + f.rest
 
@@ -148,23 +152,41 @@ def run(occ, walk, ms, start, goal, params, span: float, owner=None, dense: bool
         free = _LOCAL.free
     except AttributeError:
         free = _LOCAL.free = []
-    ctx = free.pop() if free else _context()  # this thread's free context
-    f = ctx.fast
-    if (f is not None and f.occ is occ and f.ms is ms and f.params is params
-            and f.owner == id(owner) and f.walk is walk and dense and span <= 0
-            and f.pause_at == pause_at and (keep_going is None) is f.no_probe):
+    k = len(free) - 1 if dense and span <= 0 else -1
+    oid = id(owner)
+    while k >= 0:  # the most recently used first: a query loop's context
+        f = free[k].fast
+        if (f is not None and f.occ is occ and f.ms is ms and f.params is params
+                and f.owner == oid and f.walk is walk and f.pause_at == pause_at
+                and (keep_going is None) is f.no_probe):
+            break
+        k -= 1
+    if k >= 0:
         # the short path (module docstring): the context's arrays, bound and dense slot
         # array are those of its last search, which was like this one
+        ctx = free.pop(k)
         out, peak = _short(ctx, f, free, start, goal)
         if peak is not None:
             return out, peak
         out = _run(ctx, occ, walk, ms, start, goal, params, span, owner, dense, pause_at,
                    keep_going, out, tag)
     else:
+        ctx = _free_context(free, occ.grid)
         out = _run(ctx, occ, walk, ms, start, goal, params, span, owner, dense, pause_at,
                    keep_going, None, tag)
     _settle(ctx, owner)
     return out
+
+
+def _tagged(free: list, owner, tag) -> int:
+    """The index in ``free`` of the context whose last search had ``tag`` and ``owner``
+    (the most recently used first), or -1."""
+    oid = id(owner)
+    for k in range(len(free) - 1, -1, -1):
+        f = free[k].fast
+        if f is not None and f.tag is tag and f.owner == oid:
+            return k
+    return -1
 
 
 def repeat(owner, tag, start, goal, keep_going=None):
@@ -174,12 +196,17 @@ def repeat(owner, tag, start, goal, keep_going=None):
     this thread's last search had another tag or owner (the caller then calls
     :func:`run`, with ``tag``, which sets this up for the next call)."""
     free = getattr(_LOCAL, "free", None)
-    if not free:
+    if not free or tag is None:
         return None
-    f = free[-1].fast
-    if f is None or f.tag is not tag or f.owner != id(owner) or tag is None:
-        return None
-    ctx = free.pop()  # taken while it searches: a search started meanwhile takes another
+    f = free[-1].fast  # a query loop's context, tested before any other
+    if f is not None and f.tag is tag and f.owner == id(owner):
+        k = len(free) - 1
+    else:
+        k = _tagged(free, owner, tag)
+        if k < 0:
+            return None
+        f = free[k].fast
+    ctx = free.pop(k)  # taken while it searches: a search started meanwhile takes another
     out, peak = _short(ctx, f, free, start, goal)
     if peak is not None:
         return out, peak
@@ -206,12 +233,18 @@ def run_points(occ, walk, ms, params, owner, rounding, pts, pause_at: int = 0,
     free = getattr(_LOCAL, "free", None)
     if not free:
         return None
-    ctx = free[-1]
-    f = ctx.fast
-    if not (f is not None and f.occ is occ and f.ms is ms and f.params is params
-            and f.owner == id(owner) and f.walk is walk and f.pause_at == pause_at
-            and (keep_going is None) is f.no_probe):
+    oid = id(owner)
+    k = len(free) - 1
+    while k >= 0:  # the most recently used first: a query loop's context
+        f = free[k].fast
+        if (f is not None and f.occ is occ and f.ms is ms and f.params is params
+                and f.owner == oid and f.walk is walk and f.pause_at == pause_at
+                and (keep_going is None) is f.no_probe):
+            break
+        k -= 1
+    if k < 0:
         return None
+    ctx = free[k]
     _, _, _, ginv, _ = rounding
     p = ctx.points
     if p is not None and p.search is f.search and p.ginv is ginv:
@@ -225,7 +258,7 @@ def run_points(occ, walk, ms, params, owner, rounding, pts, pause_at: int = 0,
             call = entry_point(search_points, (f.bound, f.first, f.pausing, *rounding, *pts))
             _POINTS[key] = (ginv, call)  # holds the array: its id stays its own
         ctx.points = _Points(f.search, ginv, call)  # no world's arrays: none outlives a world
-    free.pop()
+    free.pop(k)
     out = call(f.bound, f.first, f.pausing, *rounding, *pts)
     peak = _done(ctx, f, free, out)
     if peak is not None:
@@ -274,7 +307,7 @@ def _run(ctx, occ, walk, ms, start, goal, params, span, owner, dense, pause_at, 
     # finish cleared the touched cells of the dense array (the context keeps it for reuse)
     # and zeroed the state's page count: the paged map's bytes are those of _PCAP pages
     rest = (0 if dslot is None else dslot.nbytes) + max(nu, 64) + _STATE_BYTES
-    rest += 0 if sc is nos else _nbytes(sc)
+    rest += 0 if sc is nos else _fresh_scratch_bytes(walk, span)
     if len(ctx.nodes.key) > KEEP_NODES or len(ctx.slots.bkeys) > KEEP_NODES // 8:
         ctx.keep(0 if dslot is None else dslot.nbytes)
     bd = ctx.bound
@@ -313,13 +346,6 @@ def _fresh_bytes(n: int, npg: int) -> int:
     cap = _CAP if n <= _CAP else 1 << (n - 1).bit_length()
     pcap = _PCAP if npg <= _PCAP else 1 << (npg - 1).bit_length()
     return cap * _ROW_BYTES + pcap * _PAGE_BYTES
-
-
-def _nbytes(struct) -> int:
-    n = 0
-    for a in struct:
-        n += a.nbytes
-    return n
 
 
 # Compiled entry points (planner._entry): the kernel's per Bound type and parameter types,
