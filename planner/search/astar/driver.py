@@ -152,19 +152,13 @@ def run(occ, walk, ms, start, goal, params, span: float, owner=None, dense: bool
         free = _LOCAL.free
     except AttributeError:
         free = _LOCAL.free = []
-    k = len(free) - 1 if dense and span <= 0 else -1
-    oid = id(owner)
-    while k >= 0:  # the most recently used first: a query loop's context
-        f = free[k].fast
-        if (f is not None and f.occ is occ and f.ms is ms and f.params is params
-                and f.owner == oid and f.walk is walk and f.pause_at == pause_at
-                and (keep_going is None) is f.no_probe):
-            break
-        k -= 1
+    k = (_ready(free, occ, walk, ms, params, owner, pause_at, keep_going)
+         if dense and span <= 0 else -1)
     if k >= 0:
         # the short path (module docstring): the context's arrays, bound and dense slot
         # array are those of its last search, which was like this one
         ctx = free.pop(k)
+        f = ctx.fast
         out, peak = _short(ctx, f, free, start, goal)
         if peak is not None:
             return out, peak
@@ -176,6 +170,20 @@ def run(occ, walk, ms, start, goal, params, span: float, owner=None, dense: bool
                    keep_going, None, tag)
     _settle(ctx, owner)
     return out
+
+
+def _ready(free: list, occ, walk, ms, params, owner, pause_at: int, keep_going) -> int:
+    """The index in ``free`` of the context whose last search was like this one (the same
+    structs, settings and owner: :func:`run`'s short path repeats it), the most recently
+    used first (a query loop's), or -1."""
+    oid = id(owner)
+    for k in range(len(free) - 1, -1, -1):
+        f = free[k].fast
+        if (f is not None and f.occ is occ and f.ms is ms and f.params is params
+                and f.owner == oid and f.walk is walk and f.pause_at == pause_at
+                and (keep_going is None) is f.no_probe):
+            return k
+    return -1
 
 
 def _tagged(free: list, owner, tag) -> int:
@@ -233,18 +241,11 @@ def run_points(occ, walk, ms, params, owner, rounding, pts, pause_at: int = 0,
     free = getattr(_LOCAL, "free", None)
     if not free:
         return None
-    oid = id(owner)
-    k = len(free) - 1
-    while k >= 0:  # the most recently used first: a query loop's context
-        f = free[k].fast
-        if (f is not None and f.occ is occ and f.ms is ms and f.params is params
-                and f.owner == oid and f.walk is walk and f.pause_at == pause_at
-                and (keep_going is None) is f.no_probe):
-            break
-        k -= 1
+    k = _ready(free, occ, walk, ms, params, owner, pause_at, keep_going)
     if k < 0:
         return None
     ctx = free[k]
+    f = ctx.fast
     _, _, _, ginv, _ = rounding
     p = ctx.points
     if p is not None and p.search is f.search and p.ginv is ginv:
