@@ -206,15 +206,11 @@ def repeat(owner, tag, start, goal, keep_going=None):
     free = getattr(_LOCAL, "free", None)
     if not free or tag is None:
         return None
-    f = free[-1].fast  # a query loop's context, tested before any other
-    if f is not None and f.tag is tag and f.owner == id(owner):
-        k = len(free) - 1
-    else:
-        k = _tagged(free, owner, tag)
-        if k < 0:
-            return None
-        f = free[k].fast
+    k = _tagged(free, owner, tag)
+    if k < 0:
+        return None
     ctx = free.pop(k)  # taken while it searches: a search started meanwhile takes another
+    f = ctx.fast
     out, peak = _short(ctx, f, free, start, goal)
     if peak is not None:
         return out, peak
