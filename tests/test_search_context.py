@@ -18,9 +18,11 @@ def _open_box(dims):
     return World(lat, np.empty((0, 3), np.int64), np.array([[0.0] * 3, np.subtract(dims, 1.0)]))
 
 
-def _arrays():
-    """The node keys and heap slots of the context holding a grid (the one that searched)."""
-    ctx = next(c for c in C._CONTEXTS if c.held is not None)
+def _arrays(world):
+    """The node keys and heap slots of the context holding ``world``'s grid (the one that
+    searched it: a thread keeps several contexts)."""
+    grid = world.checker.occupancy.grid
+    ctx = next(c for c in C._CONTEXTS if c.held is not None and c.held.grid is grid)
     return ctx.nodes.key, ctx.heap.slot
 
 
@@ -31,11 +33,11 @@ def test_a_query_loop_on_a_dense_grid_keeps_its_grown_arrays():
     s, g = np.array([80, 80, 50]), np.array([159, 159, 99])
     first = S.search(w, s, g, method="dijkstra", max_expansions=70_000)
     assert first.generated > C.KEEP_NODES
-    nodes, heap = _arrays()
+    nodes, heap = _arrays(w)
     assert len(nodes) > C.KEEP_NODES  # kept: their bytes fit in the dense slot array's
     again = S.search(w, s, g, method="dijkstra", max_expansions=70_000)
     assert again.generated == first.generated and again.expansions == first.expansions
-    assert _arrays()[0] is nodes and _arrays()[1] is heap  # not grown again
+    assert _arrays(w)[0] is nodes and _arrays(w)[1] is heap  # not grown again
 
 
 def test_long_search_arrays_are_dropped_without_room():
