@@ -62,12 +62,20 @@ def load_warframe(name: str, data: Path = harness.DATA) -> tuple[World, np.ndarr
     return World(Lattice.named("cubic", 1.0), blocked, np.array([[0, 0, 0], dims - 1.0])), scen
 
 
+#: tie-breaks among equal f of :func:`python_astar`: the engine's, and the node nearest the
+#: goal in a straight line first (the squared Euclidean distance)
+TIES = ("larger-g", "nearer")
+
+
 def python_astar(world: World, s: np.ndarray, gl: np.ndarray, neighbors: str = "full",
-                 trace: list | None = None):
+                 trace: list | None = None, tie: str = "larger-g"):
     """Plain Python heapq A* over the implicit graph, same moves / rule / heuristic, f grid
-    (1e-9 of the shortest move) and larger-g tie-break as the engine.
+    (1e-9 of the shortest move) and tie-break (``tie``, one of :data:`TIES`; by default the
+    engine's, the larger g first) as the engine.
 
     Returns (cost, expansions); ``trace`` gets ``(f, g)`` (m) of each expansion in order."""
+    if tie not in TIES:
+        raise ValueError(f"tie must be one of {TIES}, not {tie!r}")
     moves, mcost, _, _, _, per_move = S.move_stencils(world.lattice, neighbors, False)
     step = 1e-9 * float(mcost.min())  # the engine's f grid for lattice A*
     hm = S.move_heuristic(world.lattice, neighbors).tolist()
@@ -89,6 +97,13 @@ def python_astar(world: World, s: np.ndarray, gl: np.ndarray, neighbors: str = "
 
     goal = tuple(gl.tolist())
 
+    def second(gv, v):  # the heap's key after f (smaller first)
+        if tie == "larger-g":
+            return -gv
+        d = [goal[0] - v[0], goal[1] - v[1], goal[2] - v[2]]
+        return sum((g_[r][0] * d[0] + g_[r][1] * d[1] + g_[r][2] * d[2]) ** 2
+                   for r in range(3))
+
     def h(c):
         d = (goal[0] - c[0], goal[1] - c[1], goal[2] - c[2])
         return max(0.0, max(f[0] * d[0] + f[1] * d[1] + f[2] * d[2] for f in hm))
@@ -101,11 +116,11 @@ def python_astar(world: World, s: np.ndarray, gl: np.ndarray, neighbors: str = "
     closed = set()
     heap = [(key(h(start)), 0.0, start)]
     while heap:
-        f, minus_g, u = heapq.heappop(heap)
+        f, _, u = heapq.heappop(heap)
         if u in closed:
             continue
         if trace is not None:
-            trace.append((f, -minus_g))
+            trace.append((f, gs[u]))
         if u == goal:
             return gs[u], len(closed) + 1
         closed.add(u)
@@ -117,7 +132,7 @@ def python_astar(world: World, s: np.ndarray, gl: np.ndarray, neighbors: str = "
             gv = gu + cost[m]
             if gv < gs.get(v, math.inf):
                 gs[v] = gv
-                heapq.heappush(heap, (key(gv + h(v)), -gv, v))
+                heapq.heappush(heap, (key(gv + h(v)), second(gv, v), v))
     return math.inf, len(closed)
 
 

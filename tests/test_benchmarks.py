@@ -148,6 +148,26 @@ def test_floor_agrees_with_our_search_on_a_small_map(bench_modules):
     assert (res[:, 1] > 0).all() and (res[:, 2] >= 0).all()
 
 
+def test_plain_python_astar_finds_our_costs_under_either_tie_break(bench_modules):
+    """``plateau.py``'s replay: any order among equal f keeps A* optimal, so the plain-Python
+    A* finds the engine's cost under either tie-break."""
+    import lattice_sight
+    import search_speed
+
+    from planner import search as S
+
+    worlds = lattice_sight.map_worlds("narrow_passage", bench_modules.DATA)
+    world = worlds["bcc"]
+    ends = world.lattice.quantize(lattice_sight.query_points(worlds, 3).reshape(-1, 3))
+    for start, goal in ends.reshape(-1, 2, 3):
+        cost = S.search(world, start, goal).cost
+        for tie in search_speed.TIES:
+            got, expansions = search_speed.python_astar(world, start, goal, tie=tie)
+            assert got == pytest.approx(cost, rel=1e-9) and expansions > 0, tie
+    with pytest.raises(ValueError, match="tie must be one of"):
+        search_speed.python_astar(world, start, goal, tie="smaller-g")
+
+
 def _figures_block(h):
     print(h.ratio_line("ours/floor", [2.0, 4.0, 6.0, 8.0, 2.0, 4.0],
                        [1.0, 2.0, 3.0, 2.0, 1.0, 2.0], goal=">= 0.9"))
