@@ -76,7 +76,8 @@ SOURCE = r"""
 // ARITY 2 (a binary heap), SIDE_HEAP 0 (no plateau heap), BIT_GRID 0 (a byte grid),
 // SLOT_CLOSED 0 (a closed node is known by its record, not by its slot map entry),
 // TOURNAMENT 0 (a sift-down scans the four children in turn instead of comparing the two
-// pairs at once, then their winners, without branches).
+// pairs at once, then their winners, without branches). SPLIT_NODES 1 is no trick but our
+// engine's layout: each node field in an array of its own instead of one 24-byte record.
 #ifndef ARITY
 #define ARITY 4
 #endif
@@ -91,6 +92,9 @@ SOURCE = r"""
 #endif
 #ifndef SLOT_CLOSED
 #define SLOT_CLOSED 1
+#endif
+#ifndef SPLIT_NODES
+#define SPLIT_NODES 0
 #endif
 #if BIT_GRID
 #define FREE(v) ((F->bits[(v) >> 3] >> ((v) & 7)) & 1)
@@ -108,12 +112,30 @@ struct Floor {
     uint8_t* bits;              // bit (byte) v set = free (8 bytes of slack at the end)
     int32_t* slot;              // cell -> node index, -1 untouched, -2 - index when closed
     Node* nodes; int64_t nn, ncap;
+    double* ng; int32_t* nv; int32_t* npos; int16_t *nx, *ny, *nz;   // SPLIT_NODES
     Entry* heap; int64_t hn, hcap;   // main heap: f above the plateau (4-ary)
     Entry* side; int64_t sn, scap;   // plateau heap: f == the current f (binary, larger g)
     int64_t roff[9];            // row offsets of the neighbourhood's 9 rows, minus 1
     int64_t mv[26]; int mda[26], mdb[26], mdc[26]; double mc[26]; uint32_t need[26];
     int64_t bytes;
 };
+
+// A node's fields: one 24-byte record, or (SPLIT_NODES) one array per field.
+#if SPLIT_NODES
+#define NG(n) (F->ng[n])
+#define NV(n) (F->nv[n])
+#define NPOS(n) (F->npos[n])
+#define NX(n) (F->nx[n])
+#define NY(n) (F->ny[n])
+#define NZ(n) (F->nz[n])
+#else
+#define NG(n) (F->nodes[n].g)
+#define NV(n) (F->nodes[n].v)
+#define NPOS(n) (F->nodes[n].pos)
+#define NX(n) (F->nodes[n].x)
+#define NY(n) (F->nodes[n].y)
+#define NZ(n) (F->nodes[n].z)
+#endif
 
 static inline bool before(const Entry& a, const Entry& b) {   // lower f, then larger g
     return a.f < b.f || (a.f == b.f && a.g > b.g);
@@ -130,15 +152,35 @@ template <class T> static T* grow(T* p, int64_t& cap, Floor* F) {
     return (T*)std::realloc(p, n * sizeof(T));
 }
 
+// Room for twice the nodes (the first call: 1024), in the layout SPLIT_NODES picks.
+static void grow_nodes(Floor* F) {
+#if SPLIT_NODES
+    int64_t c = F->ncap, c2;
+    c2 = c; F->ng = grow(F->ng, c2, F);
+    c2 = c; F->nv = grow(F->nv, c2, F);
+    c2 = c; F->npos = grow(F->npos, c2, F);
+    c2 = c; F->nx = grow(F->nx, c2, F);
+    c2 = c; F->ny = grow(F->ny, c2, F);
+    c2 = c; F->nz = grow(F->nz, c2, F);
+    F->ncap = c2;
+#else
+    F->nodes = grow(F->nodes, F->ncap, F);
+#endif
+}
+static inline void set_node(Floor* F, int64_t j, double g, int32_t v, int16_t x, int16_t y,
+                            int16_t z) {
+    NG(j) = g; NV(j) = v; NPOS(j) = SIDE; NX(j) = x; NY(j) = y; NZ(j) = z;
+}
+
 // 4-ary main heap with decrease-key (positions in Node::pos).
 static inline void h_up(Floor* F, int64_t i, const Entry& e) {
     Entry* a = F->heap;
     while (i > 0) {
         int64_t p = (int64_t)((uint64_t)(i - 1) / ARITY);
         if (!before(e, a[p])) break;
-        a[i] = a[p]; F->nodes[a[i].n].pos = (int32_t)i; i = p;
+        a[i] = a[p]; NPOS(a[i].n) = (int32_t)i; i = p;
     }
-    a[i] = e; F->nodes[e.n].pos = (int32_t)i;
+    a[i] = e; NPOS(e.n) = (int32_t)i;
 }
 static inline void h_down(Floor* F, int64_t i, const Entry& e) {
     Entry* a = F->heap; const int64_t n = F->hn;
@@ -155,9 +197,9 @@ static inline void h_down(Floor* F, int64_t i, const Entry& e) {
 #endif
         for (int64_t k = c + 1; k < end; ++k) if (before(a[k], a[best])) best = k;
         if (!before(a[best], e)) break;
-        a[i] = a[best]; F->nodes[a[i].n].pos = (int32_t)i; i = best;
+        a[i] = a[best]; NPOS(a[i].n) = (int32_t)i; i = best;
     }
-    a[i] = e; F->nodes[e.n].pos = (int32_t)i;
+    a[i] = e; NPOS(e.n) = (int32_t)i;
 }
 static inline void h_push(Floor* F, const Entry& e) {
     if (F->hn == F->hcap) F->heap = grow(F->heap, F->hcap, F);
@@ -245,7 +287,8 @@ Floor* floor_new(const uint8_t* free, int64_t na, int64_t nb, int64_t nc) {
 void floor_free(Floor* F) {
     if (!F) return;
     std::free(F->bits); std::free(F->slot); std::free(F->nodes); std::free(F->heap);
-    std::free(F->side); std::free(F);
+    std::free(F->side); std::free(F->ng); std::free(F->nv); std::free(F->npos);
+    std::free(F->nx); std::free(F->ny); std::free(F->nz); std::free(F);
 }
 
 int64_t floor_bytes(const Floor* F) { return F->bytes; }
@@ -273,8 +316,8 @@ int64_t floor_search(Floor* F, int64_t sa, int64_t sb, int64_t sc,
     // f on a 1e-9 grid, as ours: equal-cost paths tie exactly.
     auto fkey = [](double f) { return std::floor(f * 1e9 + 0.5) * 1e-9; };
     F->nn = 0; F->hn = 0; F->sn = 0;
-    if (F->ncap == 0) F->nodes = grow(F->nodes, F->ncap, F);
-    F->nodes[0] = {0.0, s, SIDE, (int16_t)(sa + 1), (int16_t)(sb + 1), (int16_t)(sc + 1), 0};
+    if (F->ncap == 0) grow_nodes(F);
+    set_node(F, 0, 0.0, s, (int16_t)(sa + 1), (int16_t)(sb + 1), (int16_t)(sc + 1));
     F->slot[s] = 0; F->nn = 1;
     double fcur = fkey(h((int32_t)sa + 1, (int32_t)sb + 1, (int32_t)sc + 1));
     if (SIDE_HEAP) s_push(F, {fcur, 0.0, 0, 0}); else h_push(F, {fcur, 0.0, 0, 0});
@@ -285,20 +328,21 @@ int64_t floor_search(Floor* F, int64_t sa, int64_t sb, int64_t sc,
         if (SIDE_HEAP && F->sn &&
             (F->hn == 0 || F->heap[0].f > fcur || F->side[0].g >= F->heap[0].g)) {
             const Entry e = s_pop(F);
-            Node& nd = F->nodes[e.n];
-            if (nd.pos != SIDE || e.g != nd.g) continue;   // stale: closed or bettered
+            if (NPOS(e.n) != SIDE || e.g != NG(e.n)) continue;   // stale: closed or bettered
             n = e.n;
         } else if (F->hn) {
             const Entry e = h_pop(F);
             fcur = e.f; n = e.n;
         } else break;
-        Node cur = F->nodes[n];
-        F->nodes[n].pos = CLOSED; ++exp;
-        if (SLOT_CLOSED) slot[cur.v] = -2 - n;   // a closed neighbour costs no record read
-        if (cur.v == t) { *cost = cur.g; break; }
+        const int32_t cur_v = NV(n);
+        const double cur_g = NG(n);
+        const int16_t cur_x = NX(n), cur_y = NY(n), cur_z = NZ(n);
+        NPOS(n) = CLOSED; ++exp;
+        if (SLOT_CLOSED) slot[cur_v] = -2 - n;   // a closed neighbour costs no record read
+        if (cur_v == t) { *cost = cur_g; break; }
         uint32_t nb = 0;
         for (int r = 0; r < 9; ++r) {
-            const int64_t i = cur.v + F->roff[r];
+            const int64_t i = cur_v + F->roff[r];
 #if BIT_GRID
             uint32_t w; std::memcpy(&w, bits + (i >> 3), 4);
             nb |= ((w >> (i & 7)) & 7u) << (3 * r);
@@ -309,36 +353,36 @@ int64_t floor_search(Floor* F, int64_t sa, int64_t sb, int64_t sc,
         }
         for (int m = 0; m < 26; ++m) {
             if ((nb & F->need[m]) != F->need[m]) continue;
-            const int32_t w = cur.v + (int32_t)F->mv[m];
-            const double ng = cur.g + F->mc[m];
+            const int32_t w = cur_v + (int32_t)F->mv[m];
+            const double ng = cur_g + F->mc[m];
             const int32_t k = slot[w];
             if (SLOT_CLOSED && k < -1) continue;
             if (k < 0) {
-                if (F->nn == F->ncap) F->nodes = grow(F->nodes, F->ncap, F);
-                const int16_t x = cur.x + F->mda[m], y = cur.y + F->mdb[m], z = cur.z + F->mdc[m];
+                if (F->nn == F->ncap) grow_nodes(F);
+                const int16_t x = cur_x + F->mda[m], y = cur_y + F->mdb[m], z = cur_z + F->mdc[m];
                 const int32_t j = (int32_t)F->nn++;
                 slot[w] = j;
                 const double f = fkey(ng + h(x, y, z));
-                F->nodes[j] = {ng, w, SIDE, x, y, z, 0};
+                set_node(F, j, ng, w, x, y, z);
                 if (SIDE_HEAP && f <= fcur) s_push(F, {f, ng, j, 0});
                 else h_push(F, {f, ng, j, 0});
                 continue;
             }
-            Node& nw = F->nodes[k];
-            if (nw.pos == CLOSED || ng >= nw.g) continue;
-            nw.g = ng;
-            const double f = fkey(ng + h(nw.x, nw.y, nw.z));
-            if (nw.pos == SIDE) { s_push(F, {f, ng, k, 0}); continue; }
+            const int32_t kpos = NPOS(k);
+            if (kpos == CLOSED || ng >= NG(k)) continue;
+            NG(k) = ng;
+            const double f = fkey(ng + h(NX(k), NY(k), NZ(k)));
+            if (kpos == SIDE) { s_push(F, {f, ng, k, 0}); continue; }
             if (SIDE_HEAP && f <= fcur) {
-                h_remove(F, nw.pos);
-                F->nodes[k].pos = SIDE;
+                h_remove(F, kpos);
+                NPOS(k) = SIDE;
                 s_push(F, {f, ng, k, 0});
             } else {
-                h_up(F, nw.pos, {f, ng, k, 0});
+                h_up(F, kpos, {f, ng, k, 0});
             }
         }
     }
-    for (int64_t i = 0; i < F->nn; ++i) slot[F->nodes[i].v] = -1;
+    for (int64_t i = 0; i < F->nn; ++i) slot[NV(i)] = -1;
     return exp;
 }
 
@@ -374,6 +418,7 @@ def available() -> bool:
 VARIANTS = {"strongest": (), "binary heap": ("ARITY=2",), "no side heap": ("SIDE_HEAP=0",),
             "byte grid": ("BIT_GRID=0",), "closed in records": ("SLOT_CLOSED=0",),
             "children in turn": ("TOURNAMENT=0",),
+            "nodes in arrays": ("SPLIT_NODES=1",),
             "none of the five": ("ARITY=2", "SIDE_HEAP=0", "BIT_GRID=0", "SLOT_CLOSED=0",
                                  "TOURNAMENT=0")}
 
