@@ -171,8 +171,9 @@ _CONTEXTS: weakref.WeakSet = weakref.WeakSet()  # every thread's contexts (see _
 _OWNERS: set[int] = set()  # ids of the owners _unbind watches
 
 
-def _release(ctx: _Context) -> None:
-    free = _LOCAL.free
+def _release(ctx: _Context, free: list) -> None:
+    """Put ``ctx`` back among the thread's ``free`` contexts while it keeps fewer than
+    :data:`CONTEXTS_KEPT`."""
     if len(free) < CONTEXTS_KEPT:
         free.append(ctx)  # the most recently used last
 
@@ -248,7 +249,7 @@ def _settle(ctx: _Context, owner) -> None:
         if oid not in _OWNERS:
             _OWNERS.add(oid)
             weakref.finalize(owner, _unbind, oid)
-    _release(ctx)  # not after an exception: a context left mid-search is dropped
+    _release(ctx, _LOCAL.free)  # not after an exception: a context left mid-search is dropped
 
 
 def _unbind(owner_id: int) -> None:

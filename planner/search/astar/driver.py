@@ -42,7 +42,6 @@ from planner.search.astar._context import (
     _CAP,
     _LOCAL,
     _PCAP,
-    CONTEXTS_KEPT,
     KEEP_NODES,
     _Context,
     _Fast,
@@ -52,6 +51,7 @@ from planner.search.astar._context import (
     _Memo,
     _no_sight,
     _Points,
+    _release,
     _settle,
     _sight,
 )
@@ -111,8 +111,7 @@ def _done(ctx: _Context, f: _Fast, free: list, out: tuple) -> int | None:
     status, _, _, _, n, _ = out
     if status == RUN_GROW or (f.pausing and status == RUN_BUDGET):
         return None
-    if len(free) < CONTEXTS_KEPT:
-        free.append(ctx)  # _release
+    _release(ctx, free)
     return f.small if n <= _CAP else _fresh_bytes(n, 0) + f.rest
 
 
